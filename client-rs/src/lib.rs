@@ -1,0 +1,1 @@
+//! vas client library.

@@ -1,0 +1,5 @@
+//! The `vas-client` tool.
+
+fn main() {
+    println!("vas-client");
+}

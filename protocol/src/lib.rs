@@ -1,0 +1,1 @@
+//! vas wire types and service names.

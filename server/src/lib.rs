@@ -1,0 +1,7 @@
+//! vas-server: the simulation library behind the `vas-server` binary.
+//!
+//! The modules are the paper's, layered so that data flows one way:
+//! `geometry` ← `collision` ← `sliding`, `grasping` ← `scene` ← `runtime`.
+//! Only `runtime` knows about threads and IPC; every other module is a plain library.
+
+pub mod geometry;

@@ -1,0 +1,5 @@
+//! The `vas-server` command line.
+
+fn main() {
+    println!("vas-server");
+}
