@@ -8,6 +8,7 @@
 //! a character boundary and says so in [`PartDescription::truncated`].
 
 use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
 
 use crate::UnknownCode;
 use crate::pose::WirePose;
@@ -174,7 +175,7 @@ impl TryFrom<u32> for ControlStatus {
 }
 
 /// Counters of the server's input validation, since it started.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize)]
 #[repr(C)]
 pub struct InputStats {
     /// Tracker samples accepted.
