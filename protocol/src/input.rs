@@ -30,9 +30,11 @@ pub struct TrackerSample {
     pub seq: u64,
     /// When the sample was taken, in nanoseconds since the Unix epoch.
     pub timestamp_ns: u64,
-    /// Pose of the hand root (the tracker on the back of the hand) in the world.
+    /// Pose of the hand root (the tracker on the back of the hand) in the cart's frame, i.e. in
+    /// tracking space.
     pub hand: WirePose,
-    /// Pose of the cart, the navigation frame that carries the hand through the scene.
+    /// Pose of the cart in the world: the navigation frame that carries the tracking space (and
+    /// with it the hand) through the scene. The hand root in the world is `cart * hand`.
     pub cart: WirePose,
     /// Which tracker sent the sample (the VRPN sensor number).
     pub sensor_id: u32,
@@ -77,10 +79,17 @@ pub struct TrackerTarget {
     pub stamp: InputStamp,
     /// The sending tracker.
     pub sensor_id: u32,
-    /// Hand root pose in the world.
+    /// Hand root pose in the cart's frame.
     pub hand: Isometry3<f64>,
     /// Cart pose in the world.
     pub cart: Isometry3<f64>,
+}
+
+impl TrackerTarget {
+    /// The hand root in the world: the cart carries the tracking space.
+    pub fn hand_in_world(&self) -> Isometry3<f64> {
+        self.cart * self.hand
+    }
 }
 
 /// A validated glove sample: finite flex values within the joint limits.

@@ -83,7 +83,7 @@ pub struct HandFrame {
     pub glove: InputStamp,
     /// When the frame was published, in nanoseconds since the Unix epoch.
     pub timestamp_ns: u64,
-    /// Pose of the hand root in the world.
+    /// Pose of the hand root in the world (the tracker's cart pose times its hand pose).
     pub root: WirePose,
     /// Joint angles in radians, CyberGlove order.
     pub flex: [f32; FLEX_COUNT],

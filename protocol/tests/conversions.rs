@@ -288,3 +288,15 @@ fn wall_clock_is_after_2020() {
     const JAN_2020_NS: u64 = 1_577_836_800_000_000_000;
     assert!(wall_clock_ns() > JAN_2020_NS);
 }
+
+#[test]
+fn the_cart_carries_the_hand_into_the_world() {
+    let quarter_turn = std::f64::consts::FRAC_1_SQRT_2;
+    let sample = tracker(
+        pose([1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
+        pose([0.0, 0.0, 5.0], [0.0, 0.0, quarter_turn, quarter_turn]),
+    );
+    let world = sample.validate().expect("valid").hand_in_world();
+    // The cart turns a quarter about z, so the hand's offset along x ends up along y.
+    assert!((world.translation.vector - Vector3::new(0.0, 1.0, 5.0)).norm() < 1e-12);
+}
