@@ -5,7 +5,7 @@ pub mod replay;
 pub mod send;
 pub mod watch;
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::time::Duration;
 
 use anyhow::Context;
@@ -19,6 +19,7 @@ pub const CONTROL_TIMEOUT: Duration = Duration::from_secs(5);
 pub fn init_logging() {
     tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
         .with_env_filter(
             EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info")),
         )

@@ -1,10 +1,11 @@
 //! `vas-client replay`: a recording into the server, in real time or in lockstep.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use vas_client::recording::{InputSample, Recording};
-use vas_client::{Client, Wake};
+use vas_client::{Client, Frame, Wake};
 use vas_protocol::{InputStamp, wall_clock_ns};
 
 use super::send::wait_for_hand_frame;
@@ -15,7 +16,8 @@ pub struct ReplayArgs {
     /// The recording to play (JSON Lines, as `vas-client record` writes).
     file: PathBuf,
     /// Send one sample, wait for the hand frame answering it, then send the next, regardless of
-    /// the recorded times; gives the same output every time.
+    /// the recorded times; prints each answer as a JSON line, the same every time but for the
+    /// timestamps.
     #[arg(long)]
     lockstep: bool,
     /// In lockstep, how long to wait for each answer before going on without it, in ms.
@@ -71,6 +73,7 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
     let mut round_trips = Vec::with_capacity(recording.samples.len());
     let mut server_latencies = Vec::with_capacity(recording.samples.len());
     let mut unanswered = 0usize;
+    let mut out = std::io::stdout().lock();
     for recorded in &recording.samples {
         let input = recorded.input.with_timestamp(wall_clock_ns());
         let stamp = InputStamp {
@@ -85,6 +88,8 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
         })?;
         match answer {
             Some(frame) => {
+                serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
+                writeln!(out)?;
                 round_trips.push(sent_at.elapsed());
                 server_latencies.push(Duration::from_nanos(
                     frame.timestamp_ns.saturating_sub(stamp.timestamp_ns),
@@ -104,6 +109,7 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
         input_to_publish = %summary(&mut server_latencies),
         "lockstep replay finished"
     );
+    out.flush()?;
     Ok(())
 }
 

@@ -119,7 +119,8 @@ impl Io {
                 Ok(Some(sample)) => *sample.payload(),
                 Ok(None) => return,
                 Err(error) => {
-                    return self.log_failure(Err(RuntimeError::ipc("receive glove samples", error)));
+                    return self
+                        .log_failure(Err(RuntimeError::ipc("receive glove samples", error)));
                 }
             };
             match self.simulation.apply_glove(&sample) {

@@ -43,10 +43,18 @@ pub enum RuntimeError {
     /// The prefix is not usable by iceoryx2.
     #[error(transparent)]
     Prefix(#[from] PrefixError),
-    /// A service could not be opened (for instance another server already publishes on this
-    /// prefix).
+    /// A service could not be opened (its settings or types do not match).
     #[error(transparent)]
     Service(#[from] ServiceOpenError),
+    /// A port could not be created (for instance a second publisher on an output service: another
+    /// server already runs on this prefix).
+    #[error("cannot create a port on {service}: {reason}")]
+    Port {
+        /// The service.
+        service: &'static str,
+        /// What iceoryx2 reported.
+        reason: String,
+    },
     /// An iceoryx2 operation failed.
     #[error("cannot {action}: {reason}")]
     Ipc {

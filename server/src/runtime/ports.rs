@@ -54,11 +54,16 @@ pub(super) struct Ports {
     control_notifier: Notifier<ipc::Service>,
 }
 
-fn port_error(error: impl std::fmt::Debug) -> RuntimeError {
-    RuntimeError::Ipc {
-        action: "create a port",
+/// A port of `service`, or the error naming the service: e.g. a second publisher where the
+/// service allows one, when another server runs on the same prefix.
+fn port<T>(
+    service: &'static str,
+    created: Result<T, impl std::fmt::Debug>,
+) -> Result<T, RuntimeError> {
+    created.map_err(|error| RuntimeError::Port {
+        service,
         reason: format!("{error:?}"),
-    }
+    })
 }
 
 impl Ports {
@@ -68,52 +73,41 @@ impl Ports {
         node: &Node<ipc::Service>,
         part_count: usize,
     ) -> Result<(Self, Wakeups), RuntimeError> {
-        let tracker = services::open_tracker(node)?;
-        let glove = services::open_glove(node)?;
-        let parts = services::open_parts(node)?;
-        let hand = services::open_hand(node)?;
-        let control = services::open_control(node)?;
+        use services::{CONTROL, GLOVE, HAND, PARTS, TRACKER};
         let wakeup = |name| services::open_wakeup(node, name);
-        let (tracker_wakeup, glove_wakeup) = (wakeup(services::TRACKER)?, wakeup(services::GLOVE)?);
-        let (parts_wakeup, hand_wakeup) = (wakeup(services::PARTS)?, wakeup(services::HAND)?);
-        let control_wakeup = wakeup(services::CONTROL)?;
+        let listener = |name| port(name, wakeup(name)?.listener_builder().create());
+        let notifier = |name| port(name, wakeup(name)?.notifier_builder().create());
         let wakeups = Wakeups {
-            tracker: tracker_wakeup
-                .listener_builder()
-                .create()
-                .map_err(port_error)?,
-            glove: glove_wakeup
-                .listener_builder()
-                .create()
-                .map_err(port_error)?,
-            control: control_wakeup
-                .listener_builder()
-                .create()
-                .map_err(port_error)?,
+            tracker: listener(TRACKER)?,
+            glove: listener(GLOVE)?,
+            control: listener(CONTROL)?,
         };
+        let parts = services::open_parts(node)?
+            .publisher_builder()
+            .initial_max_slice_len(part_count.max(output::INITIAL_MAX_PARTS))
+            .allocation_strategy(AllocationStrategy::PowerOfTwo)
+            .create();
         let ports = Self {
-            tracker: tracker.subscriber_builder().create().map_err(port_error)?,
-            glove: glove.subscriber_builder().create().map_err(port_error)?,
-            parts: parts
-                .publisher_builder()
-                .initial_max_slice_len(part_count.max(output::INITIAL_MAX_PARTS))
-                .allocation_strategy(AllocationStrategy::PowerOfTwo)
-                .create()
-                .map_err(port_error)?,
-            parts_notifier: parts_wakeup
-                .notifier_builder()
-                .create()
-                .map_err(port_error)?,
-            hand: hand.publisher_builder().create().map_err(port_error)?,
-            hand_notifier: hand_wakeup
-                .notifier_builder()
-                .create()
-                .map_err(port_error)?,
-            control: control.server_builder().create().map_err(port_error)?,
-            control_notifier: control_wakeup
-                .notifier_builder()
-                .create()
-                .map_err(port_error)?,
+            tracker: port(
+                TRACKER,
+                services::open_tracker(node)?.subscriber_builder().create(),
+            )?,
+            glove: port(
+                GLOVE,
+                services::open_glove(node)?.subscriber_builder().create(),
+            )?,
+            parts: port(PARTS, parts)?,
+            parts_notifier: notifier(PARTS)?,
+            hand: port(
+                HAND,
+                services::open_hand(node)?.publisher_builder().create(),
+            )?,
+            hand_notifier: notifier(HAND)?,
+            control: port(
+                CONTROL,
+                services::open_control(node)?.server_builder().create(),
+            )?,
+            control_notifier: notifier(CONTROL)?,
         };
         Ok((ports, wakeups))
     }
