@@ -17,7 +17,7 @@ use vas_protocol::{
 };
 
 use crate::ClientError;
-use crate::wait::{Wake, new_waitset, signal_mode, wait_until_ready};
+use crate::wait::{Wake, deadline_after, new_waitset, signal_mode, wait_until_ready};
 
 /// How long a control request waits for a server to appear before it is sent again: a request
 /// sent while no server is connected is never answered.
@@ -331,7 +331,7 @@ impl Client {
 
     /// Asks for the scene: its summary, then every part; `timeout` bounds the whole exchange.
     pub fn scene_info(&self, timeout: Duration) -> Result<SceneInfo, ClientError> {
-        let deadline = Instant::now() + timeout;
+        let deadline = deadline_after(timeout);
         let summary = self.request(ControlRequest::scene_info(), deadline, timeout)?;
         let parts = (0..summary.part_count)
             .map(|id| {
@@ -393,7 +393,7 @@ impl Client {
         request: ControlRequest,
         timeout: Duration,
     ) -> Result<ControlResponse, ClientError> {
-        self.request(request, Instant::now() + timeout, timeout)
+        self.request(request, deadline_after(timeout), timeout)
     }
 
     fn request(

@@ -32,15 +32,12 @@ pub(crate) fn wait_until_ready(
     timeout: Duration,
     mut ready: impl FnMut() -> Result<bool, ClientError>,
 ) -> Result<Wake, ClientError> {
-    let deadline = Instant::now().checked_add(timeout);
+    let deadline = deadline_after(timeout);
     loop {
         if ready()? {
             return Ok(Wake::Ready);
         }
-        let remaining = match deadline {
-            Some(deadline) => deadline.saturating_duration_since(Instant::now()),
-            None => Duration::MAX,
-        };
+        let remaining = deadline.saturating_duration_since(Instant::now());
         if remaining.is_zero() {
             return Ok(Wake::Timeout);
         }
@@ -62,6 +59,14 @@ pub(crate) fn wait_until_ready(
             return Ok(Wake::Terminated);
         }
     }
+}
+
+/// The instant `timeout` from now; a timeout too long to represent (such as `Duration::MAX`,
+/// "wait forever") ends a century from now instead of overflowing.
+pub(crate) fn deadline_after(timeout: Duration) -> Instant {
+    const CENTURY: Duration = Duration::from_secs(100 * 365 * 24 * 3600);
+    let now = Instant::now();
+    now.checked_add(timeout.min(CENTURY)).unwrap_or(now)
 }
 
 /// Creates a WaitSet that reports termination signals or leaves them alone.

@@ -85,7 +85,6 @@ impl Spawned {
         let mut child = Command::new(program)
             .args(args)
             .env("RUST_LOG", "info")
-            .env("NO_COLOR", "1")
             .stdin(Stdio::null())
             .stdout(stdout)
             .stderr(Stdio::piped())

@@ -15,6 +15,9 @@ use vas_client::Client;
 /// How long a control request (scene info) may take before the tool gives up.
 pub const CONTROL_TIMEOUT: Duration = Duration::from_secs(5);
 
+/// The longest answer timeout the tools accept, in milliseconds (an hour).
+pub const MAX_TIMEOUT_MS: u64 = 3_600_000;
+
 /// Logs to stderr (stdout carries the JSON output), filtered by `RUST_LOG`, `info` by default.
 pub fn init_logging() {
     tracing_subscriber::fmt()

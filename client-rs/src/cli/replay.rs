@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use anyhow::Context;
 use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Frame, Wake};
 use vas_protocol::{InputStamp, wall_clock_ns};
@@ -21,7 +22,7 @@ pub struct ReplayArgs {
     #[arg(long)]
     lockstep: bool,
     /// In lockstep, how long to wait for each answer before going on without it, in ms.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
     answer_timeout_ms: u64,
 }
 
@@ -58,7 +59,10 @@ pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
 fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
     let start = Instant::now();
     for (sent, recorded) in recording.samples.iter().enumerate() {
-        let due = start + Duration::from_secs_f64(recorded.time);
+        let due = Duration::try_from_secs_f64(recorded.time)
+            .ok()
+            .and_then(|offset| start.checked_add(offset))
+            .with_context(|| format!("sample {sent}: time {} s is out of range", recorded.time))?;
         if client.sleep(due.saturating_duration_since(Instant::now())) == Wake::Terminated {
             tracing::info!(sent, "replay interrupted");
             return Ok(());

@@ -79,7 +79,7 @@ struct AnswerArgs {
     #[arg(long)]
     answer: bool,
     /// How long to wait for the answer, in milliseconds.
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
     answer_timeout_ms: u64,
 }
 

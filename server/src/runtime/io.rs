@@ -45,9 +45,9 @@ impl InteractionManager {
         })
     }
 
-    /// Serves until a termination signal: wakes on input and control notifications and every
-    /// `publish_period` to publish the parts.
-    pub(super) fn serve(mut self, publish_period: Duration) -> Result<(), RuntimeError> {
+    /// Serves until a termination signal: wakes on input and control notifications, and at the
+    /// scene's publish rate to publish the parts (a scene loaded on request brings its rate).
+    pub(super) fn serve(mut self) -> Result<(), RuntimeError> {
         let waitset = WaitSetBuilder::new()
             .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
             .create::<ipc::Service>()
@@ -62,9 +62,11 @@ impl InteractionManager {
         let _control = waitset
             .attach_notification(&self.wakeups.control)
             .map_err(attach)?;
-        let publish_tick = waitset.attach_interval(publish_period).map_err(attach)?;
-
         let io = &mut self.io;
+        let mut publish_hz = io.simulation.scene().rates.publish_hz;
+        let publish_period = super::publish_period(publish_hz)?;
+        let mut publish_tick = waitset.attach_interval(publish_period).map_err(attach)?;
+
         io.publish_parts();
         tracing::info!(period = ?publish_period, "serving");
         loop {
@@ -84,6 +86,17 @@ impl InteractionManager {
             io.process_tracker_samples();
             io.process_glove_samples();
             io.answer_control_requests();
+            let scene_hz = io.simulation.scene().rates.publish_hz;
+            if scene_hz != publish_hz {
+                publish_hz = scene_hz;
+                match super::publish_period(scene_hz) {
+                    Ok(period) => {
+                        publish_tick = waitset.attach_interval(period).map_err(attach)?;
+                        tracing::info!(?period, "publishing at the loaded scene's rate");
+                    }
+                    Err(error) => tracing::error!("{error}; the publish rate stays"),
+                }
+            }
             if publish_due {
                 io.publish_parts();
                 io.log_failure(io.ports.update_connections());

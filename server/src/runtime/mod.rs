@@ -64,7 +64,7 @@ pub enum RuntimeError {
         reason: String,
     },
     /// The scene's publish rate cannot drive a loop.
-    #[error("the publish rate must be positive and finite, not {hz} Hz")]
+    #[error("the publish rate must be positive, finite and below 1 GHz, not {hz} Hz")]
     PublishRate {
         /// The configured rate.
         hz: f64,
@@ -107,22 +107,25 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     );
 
     let scene = Scene::load(&options.scene)?;
-    let hz = scene.rates.publish_hz;
-    if !(hz.is_finite() && hz > 0.0) {
-        return Err(RuntimeError::PublishRate { hz });
-    }
     tracing::info!(
         scene = scene.name,
         source = %scene.source.display(),
         parts = scene.parts.len(),
-        publish_hz = hz,
+        publish_hz = scene.rates.publish_hz,
         "scene loaded"
     );
     if termination_requested(&node) {
         return Ok(());
     }
-    io::InteractionManager::new(&node, Simulation::new(scene))?
-        .serve(Duration::from_secs_f64(1.0 / hz))
+    io::InteractionManager::new(&node, Simulation::new(scene))?.serve()
+}
+
+/// The interval between parts frames at `hz`, or an error for a rate no loop can run at.
+fn publish_period(hz: f64) -> Result<Duration, RuntimeError> {
+    Duration::try_from_secs_f64(1.0 / hz)
+        .ok()
+        .filter(|period| !period.is_zero())
+        .ok_or(RuntimeError::PublishRate { hz })
 }
 
 fn termination_requested(node: &Node<ipc::Service>) -> bool {
@@ -131,4 +134,21 @@ fn termination_requested(node: &Node<ipc::Service>) -> bool {
         tracing::info!("termination requested before serving; shutting down");
     }
     requested
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn publish_periods_come_from_positive_finite_rates_only() {
+        let period = publish_period(60.0).expect("60 Hz");
+        assert!((period.as_secs_f64() - 1.0 / 60.0).abs() < 1e-9);
+        for hz in [0.0, -5.0, f64::NAN, f64::INFINITY, 1e-300, 1e12] {
+            assert!(
+                matches!(publish_period(hz), Err(RuntimeError::PublishRate { .. })),
+                "{hz} Hz"
+            );
+        }
+    }
 }
