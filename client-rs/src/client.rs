@@ -19,8 +19,8 @@ use vas_protocol::{
 use crate::ClientError;
 use crate::wait::{Wake, deadline_after, new_waitset, signal_mode, wait_until_ready};
 
-/// How long a control request waits for a server to appear before it is sent again: a request
-/// sent while no server is connected is never answered.
+/// How long a control request that reached no server waits before it is sent again (a server
+/// may be starting).
 const CONTROL_RETRY: Duration = Duration::from_millis(20);
 
 /// Options of a [`Client`] connection.
@@ -426,9 +426,10 @@ impl Client {
                 if remaining.is_zero() {
                     return Err(timed_out());
                 }
-                let connected =
-                    pending.number_of_server_connections() > 0 && pending.is_connected();
-                let nap = if connected {
+                // A request that reached a server is never sent again (loading a scene twice
+                // would be wrong); one that reached none is sent again once a server may be up.
+                let delivered = pending.number_of_server_connections() > 0;
+                let nap = if delivered {
                     remaining
                 } else {
                     remaining.min(CONTROL_RETRY)
@@ -436,7 +437,7 @@ impl Client {
                 self.control_listener
                     .timed_wait(|_| {}, nap)
                     .map_err(|error| ClientError::ipc("wait for a control response", error))?;
-                if !connected {
+                if !delivered {
                     break;
                 }
             }
