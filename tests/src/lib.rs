@@ -73,7 +73,8 @@ pub fn unique_prefix(test: &str) -> String {
     format!("vas_t{}_{test}_", std::process::id())
 }
 
-/// A child process whose stderr is collected line by line; killed (SIGKILL) when dropped.
+/// A child process whose stderr is collected line by line; stopped (SIGTERM, then SIGKILL) when
+/// dropped.
 pub struct Spawned {
     child: Child,
     log: Arc<(Mutex<Vec<String>>, Condvar)>,
@@ -164,11 +165,24 @@ impl Spawned {
     }
 }
 
+/// How long a process gets to stop on SIGTERM when a test ends, before it is killed.
+const STOP_GRACE: Duration = Duration::from_secs(5);
+
 impl Drop for Spawned {
+    /// Stops the process with SIGTERM, so that it removes its shared-memory resources, and kills
+    /// it if it does not stop within [`STOP_GRACE`]. (A SIGKILLed node's resources stay until
+    /// another process on its prefix cleans up dead nodes, and a test's prefix is never used
+    /// again.)
     fn drop(&mut self) {
-        if matches!(self.child.try_wait(), Ok(None)) {
-            // Already gone is fine; there is nothing else to do about a failure here.
-            let _ = self.child.kill();
+        if self.is_running() {
+            if let Ok(pid) = libc::pid_t::try_from(self.child.id()) {
+                // SAFETY: as in `signal`; the child is not reaped yet.
+                unsafe { libc::kill(pid, libc::SIGTERM) };
+            }
+            if self.wait_exit(STOP_GRACE).is_none() {
+                // Failing to kill an exited process is fine; nothing else can be done here.
+                let _ = self.child.kill();
+            }
         }
         let _ = self.child.wait();
     }
