@@ -1,1 +1,38 @@
-//! vas client library.
+//! vas client library: what a renderer (or any tool) links to talk to a vas server.
+//!
+//! [`Client`] connects to a server's services on an iceoryx2 prefix, sends tracker and glove
+//! samples, keeps the latest parts and hand frames, waits for new frames on a WaitSet, and asks
+//! the control service for scene information. [`InputTap`] listens to the input streams (what
+//! `vas-client record` writes), and [`recording`] is the JSON Lines recording format.
+//!
+//! ```no_run
+//! use std::time::Duration;
+//! use vas_client::{Client, Wake};
+//!
+//! # fn main() -> Result<(), vas_client::ClientError> {
+//! let mut client = Client::connect(None)?;
+//! let scene = client.scene_info(Duration::from_secs(2))?;
+//! println!("scene {} with {} parts", scene.name, scene.parts.len());
+//! loop {
+//!     if client.wait(Duration::from_millis(100))? == Wake::Ready {
+//!         client.poll()?;
+//!         if let Some(frame) = client.latest_parts() {
+//!             for part in &frame.parts {
+//!                 // draw scene.parts[part.id].mesh_source at part.position, part.rotation
+//!             }
+//!         }
+//!     }
+//! }
+//! # }
+//! ```
+
+mod client;
+mod error;
+pub mod recording;
+mod tap;
+mod wait;
+
+pub use client::{Client, ClientBuilder, Frame, PartInfo, PartsFrame, Received, SceneInfo};
+pub use error::ClientError;
+pub use tap::InputTap;
+pub use wait::Wake;

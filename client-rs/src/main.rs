@@ -1,5 +1,60 @@
-//! The `vas-client` tool.
+//! The `vas-client` tool: watch a server's frames, record and replay input, send samples from
+//! scripts, print the scene.
 
-fn main() {
-    println!("vas-client");
+mod cli;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Talks to a vas server over iceoryx2 shared memory.
+#[derive(Debug, Parser)]
+#[command(name = "vas-client", version, about)]
+struct Args {
+    /// iceoryx2 prefix of the server (its `--prefix`); default: the iceoryx2 configuration's.
+    #[arg(long, global = true)]
+    prefix: Option<String>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Print parts and hand frames as JSON lines on stdout.
+    Watch {
+        /// Stop after this many frames.
+        #[arg(long)]
+        count: Option<u64>,
+    },
+    /// Print the server's scene (parts, meshes, ids) and input counters as JSON.
+    Info,
+    /// Record the tracker and glove input that reaches the server, as JSON Lines.
+    Record(cli::record::RecordArgs),
+    /// Play a recording into the server.
+    Replay(cli::replay::ReplayArgs),
+    /// Send one tracker sample.
+    SendTracker(cli::send::TrackerArgs),
+    /// Send one glove sample.
+    SendGlove(cli::send::GloveArgs),
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    cli::init_logging();
+    let prefix = args.prefix.as_deref();
+    let outcome = match args.command {
+        Command::Watch { count } => cli::watch::run(prefix, count),
+        Command::Info => cli::info(prefix),
+        Command::Record(record) => cli::record::run(prefix, &record),
+        Command::Replay(replay) => cli::replay::run(prefix, &replay),
+        Command::SendTracker(tracker) => cli::send::tracker(prefix, &tracker),
+        Command::SendGlove(glove) => cli::send::glove(prefix, &glove),
+    };
+    match outcome {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            tracing::error!("{error:#}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -1,5 +1,6 @@
 //! The `vas-server` command line.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -7,7 +8,8 @@ use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::write_obj;
-use vas_server::scene::Scene;
+use vas_server::runtime;
+use vas_server::scene::{Scene, default_scene_path};
 
 /// vas: headless virtual-assembly simulation server.
 #[derive(Debug, Parser)]
@@ -19,6 +21,15 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Serve a scene over iceoryx2 until SIGINT or SIGTERM.
+    Run {
+        /// The scene config (default: configs/default.toml).
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// iceoryx2 prefix of every resource, so that servers on different prefixes never meet.
+        #[arg(long)]
+        prefix: Option<String>,
+    },
     /// Write a procedural test object (unit size, centred at the origin) as an OBJ file.
     Shape {
         /// Which object.
@@ -42,8 +53,14 @@ fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
         .init();
     let result = match Cli::parse().command {
+        Command::Run { scene, prefix } => runtime::run(&runtime::RunOptions {
+            scene: scene.unwrap_or_else(default_scene_path),
+            prefix,
+        })
+        .map_err(Into::into),
         Command::Shape {
             kind,
             triangles,

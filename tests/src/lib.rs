@@ -1,1 +1,257 @@
-//! Helpers for the end-to-end tests.
+//! Helpers for the end-to-end tests: the real `vas-server` and `vas-client` binaries as child
+//! processes, each test on its own iceoryx2 prefix.
+//!
+//! Finding the binaries: a test of this crate cannot use `env!("CARGO_BIN_EXE_...")` (that only
+//! names binaries of the crate under test), so [`binary`] runs `cargo build` for the server and
+//! client binaries once per test process, with the profile the tests were built with, and takes
+//! them from the same target directory as the test executable. When they are up to date this
+//! costs one cargo invocation; when the sources changed it rebuilds them, so the tests never run
+//! a stale server.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::{Arc, Condvar, Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+use vas_client::{Client, ClientError};
+
+/// How long a server may take to load its scene and answer its first control request.
+pub const STARTUP_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// How long a test waits for an answer or an event before it fails (generous: a loaded
+/// machine must not fail a test; a passing test never waits this long).
+pub const PATIENCE: Duration = Duration::from_secs(30);
+
+/// The path of a workspace binary (`vas-server`, `vas-client`), built on first use.
+///
+/// Panics (failing the test) if cargo cannot build it: nothing can be tested without it.
+pub fn binary(name: &str) -> PathBuf {
+    static TARGET_DIR: OnceLock<PathBuf> = OnceLock::new();
+    TARGET_DIR.get_or_init(build_binaries).join(name)
+}
+
+fn build_binaries() -> PathBuf {
+    let test_exe = std::env::current_exe().expect("the test executable has a path");
+    // target/<profile dir>/deps/<test executable>
+    let profile_dir = test_exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("the test executable lies in target/<profile>/deps")
+        .to_owned();
+    let profile = match profile_dir.file_name().and_then(|name| name.to_str()) {
+        // `cargo test` builds with the test profile into target/debug; building the binaries
+        // with the same profile reuses the libraries it already compiled.
+        Some("debug") => "test",
+        Some(other) => other,
+        None => panic!("unexpected target directory {}", profile_dir.display()),
+    };
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let status = Command::new(cargo)
+        .args([
+            "build",
+            "--profile",
+            profile,
+            "-p",
+            "vas-server",
+            "-p",
+            "vas-client",
+            "--bins",
+        ])
+        .status()
+        .expect("cargo runs");
+    assert!(
+        status.success(),
+        "building vas-server and vas-client failed"
+    );
+    profile_dir
+}
+
+/// A prefix for one test: the process id keeps concurrent test runs apart, the test name keeps
+/// the tests of one run apart.
+pub fn unique_prefix(test: &str) -> String {
+    format!("vas_t{}_{test}_", std::process::id())
+}
+
+/// A child process whose stderr is collected line by line; stopped (SIGTERM, then SIGKILL) when
+/// dropped.
+pub struct Spawned {
+    child: Child,
+    log: Arc<(Mutex<Vec<String>>, Condvar)>,
+}
+
+impl Spawned {
+    /// Starts `program` with `args`, stdout discarded or piped as asked, stderr collected.
+    pub fn start(program: &Path, args: &[&str], stdout: Stdio) -> Self {
+        let mut child = Command::new(program)
+            .args(args)
+            .env("RUST_LOG", "info")
+            .stdin(Stdio::null())
+            .stdout(stdout)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap_or_else(|error| panic!("cannot start {}: {error}", program.display()));
+        let log = Arc::new((Mutex::new(Vec::new()), Condvar::new()));
+        let stderr = child.stderr.take().expect("stderr is piped");
+        let collector = Arc::clone(&log);
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                let (lines, changed) = &*collector;
+                lines.lock().expect("log lock").push(line);
+                changed.notify_all();
+            }
+        });
+        Self { child, log }
+    }
+
+    /// The process id.
+    pub fn id(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Takes the child's stdout (when it was started with `Stdio::piped()`).
+    pub fn take_stdout(&mut self) -> Option<std::process::ChildStdout> {
+        self.child.stdout.take()
+    }
+
+    /// Everything the process wrote to stderr so far.
+    pub fn log(&self) -> String {
+        self.log.0.lock().expect("log lock").join("\n")
+    }
+
+    /// Waits until a stderr line contains `text`; false on timeout.
+    pub fn wait_for_log(&self, text: &str, timeout: Duration) -> bool {
+        let (lines, changed) = &*self.log;
+        let deadline = Instant::now() + timeout;
+        let mut lines = lines.lock().expect("log lock");
+        loop {
+            if lines.iter().any(|line| line.contains(text)) {
+                return true;
+            }
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            if remaining.is_zero() {
+                return false;
+            }
+            lines = changed.wait_timeout(lines, remaining).expect("log lock").0;
+        }
+    }
+
+    /// Sends a signal (`libc::SIGTERM`, `libc::SIGINT`, `libc::SIGKILL`).
+    pub fn signal(&self, signal: libc::c_int) {
+        let pid = libc::pid_t::try_from(self.child.id()).expect("pids fit pid_t");
+        // SAFETY: kill(2) only reads its arguments; the pid is our own child, not yet reaped
+        // (it is reaped only in `wait_exit` or `Drop`).
+        let result = unsafe { libc::kill(pid, signal) };
+        assert_eq!(result, 0, "kill({pid}, {signal}) failed");
+    }
+
+    /// Whether the process still runs.
+    pub fn is_running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+
+    /// Waits for the process to exit; `None` if it still runs after `timeout`.
+    pub fn wait_exit(&mut self, timeout: Duration) -> Option<ExitStatus> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some(status) = self.child.try_wait().expect("try_wait") {
+                return Some(status);
+            }
+            if Instant::now() >= deadline {
+                return None;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+}
+
+/// How long a process gets to stop on SIGTERM when a test ends, before it is killed.
+const STOP_GRACE: Duration = Duration::from_secs(5);
+
+impl Drop for Spawned {
+    /// Stops the process with SIGTERM, so that it removes its shared-memory resources, and kills
+    /// it if it does not stop within [`STOP_GRACE`]. (A SIGKILLed node's resources stay until
+    /// another process on its prefix cleans up dead nodes, and a test's prefix is never used
+    /// again.)
+    fn drop(&mut self) {
+        if self.is_running() {
+            if let Ok(pid) = libc::pid_t::try_from(self.child.id()) {
+                // SAFETY: as in `signal`; the child is not reaped yet.
+                unsafe { libc::kill(pid, libc::SIGTERM) };
+            }
+            if self.wait_exit(STOP_GRACE).is_none() {
+                // Failing to kill an exited process is fine; nothing else can be done here.
+                let _ = self.child.kill();
+            }
+        }
+        let _ = self.child.wait();
+    }
+}
+
+/// A `vas-server run` on its own prefix.
+pub struct Server {
+    /// The process.
+    pub process: Spawned,
+    prefix: String,
+}
+
+impl Server {
+    /// Starts a server for `test` on the default scene.
+    pub fn start(test: &str) -> Self {
+        Self::start_with(test, &[])
+    }
+
+    /// Starts a server for `test` with extra `run` arguments (e.g. `--scene FILE`).
+    pub fn start_with(test: &str, extra: &[&str]) -> Self {
+        let prefix = unique_prefix(test);
+        let mut args = vec!["run", "--prefix", prefix.as_str()];
+        args.extend_from_slice(extra);
+        let process = Spawned::start(&binary("vas-server"), &args, Stdio::null());
+        Self { process, prefix }
+    }
+
+    /// The server's iceoryx2 prefix.
+    pub fn prefix(&self) -> &str {
+        &self.prefix
+    }
+
+    /// A client on the server's prefix, returned once the server answers control requests.
+    pub fn connect(&mut self) -> Client {
+        let client = Client::connect(Some(&self.prefix)).expect("client connects");
+        self.wait_ready(&client);
+        client
+    }
+
+    /// Waits until the server answers a scene-info request.
+    pub fn wait_ready(&mut self, client: &Client) {
+        match client.scene_info(STARTUP_TIMEOUT) {
+            Ok(_) => {}
+            Err(ClientError::Timeout { .. }) if !self.process.is_running() => {
+                panic!("the server exited during start:\n{}", self.process.log())
+            }
+            Err(error) => panic!(
+                "the server does not answer: {error}\n{}",
+                self.process.log()
+            ),
+        }
+    }
+
+    /// Runs the `vas-client` tool against this server.
+    pub fn client_tool(&self, args: &[&str], stdout: Stdio) -> Spawned {
+        let mut all = vec!["--prefix", self.prefix.as_str()];
+        all.extend_from_slice(args);
+        Spawned::start(&binary("vas-client"), &all, stdout)
+    }
+}
+
+/// The repository's `configs/` directory.
+pub fn configs_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("configs")
+}
+
+/// The directory of the recordings the tests replay.
+pub fn fixtures_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
+}

@@ -1,0 +1,144 @@
+//! `vas-client replay`: a recording into the server, in real time or in lockstep.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use vas_client::recording::{InputSample, Recording};
+use vas_client::{Client, Frame, Wake};
+use vas_protocol::{InputStamp, wall_clock_ns};
+
+use super::send::wait_for_hand_frame;
+
+/// Arguments of `vas-client replay`.
+#[derive(Debug, clap::Args)]
+pub struct ReplayArgs {
+    /// The recording to play (JSON Lines, as `vas-client record` writes).
+    file: PathBuf,
+    /// Send one sample, wait for the hand frame answering it, then send the next, regardless of
+    /// the recorded times; prints each answer as a JSON line, the same every time but for the
+    /// timestamps.
+    #[arg(long)]
+    lockstep: bool,
+    /// In lockstep, how long to wait for each answer before going on without it, in ms.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
+    answer_timeout_ms: u64,
+}
+
+/// Plays the recording. Samples keep their sequence numbers and are stamped with the time they
+/// are sent, so that the frames' stamps measure this replay's latency.
+pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
+    let recording = Recording::load(&args.file)?;
+    let mut client = super::connect(prefix)?;
+    let scene = client.scene_info(super::CONTROL_TIMEOUT)?;
+    if scene.name != recording.header.scene {
+        tracing::warn!(
+            recorded = recording.header.scene,
+            server = scene.name,
+            "the recording was made against another scene"
+        );
+    }
+    tracing::info!(
+        file = %args.file.display(),
+        samples = recording.samples.len(),
+        lockstep = args.lockstep,
+        "replaying"
+    );
+    if args.lockstep {
+        lockstep(
+            &mut client,
+            &recording,
+            Duration::from_millis(args.answer_timeout_ms),
+        )
+    } else {
+        real_time(&client, &recording)
+    }
+}
+
+fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
+    let start = Instant::now();
+    for (sent, recorded) in recording.samples.iter().enumerate() {
+        let due = Duration::try_from_secs_f64(recorded.time)
+            .ok()
+            .and_then(|offset| start.checked_add(offset))
+            .with_context(|| format!("sample {sent}: time {} s is out of range", recorded.time))?;
+        if client.sleep(due.saturating_duration_since(Instant::now())) == Wake::Terminated {
+            tracing::info!(sent, "replay interrupted");
+            return Ok(());
+        }
+        send(client, recorded.input.with_timestamp(wall_clock_ns()))?;
+    }
+    tracing::info!(sent = recording.samples.len(), "replay finished");
+    Ok(())
+}
+
+fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> anyhow::Result<()> {
+    let mut round_trips = Vec::with_capacity(recording.samples.len());
+    let mut server_latencies = Vec::with_capacity(recording.samples.len());
+    let mut unanswered = 0usize;
+    let mut out = std::io::stdout().lock();
+    for recorded in &recording.samples {
+        let input = recorded.input.with_timestamp(wall_clock_ns());
+        let stamp = InputStamp {
+            seq: input.seq(),
+            timestamp_ns: input.timestamp_ns(),
+        };
+        let sent_at = Instant::now();
+        send(client, input)?;
+        let answer = wait_for_hand_frame(client, timeout, |frame| match input {
+            InputSample::Tracker(_) => frame.tracker == stamp,
+            InputSample::Glove(_) => frame.glove == stamp,
+        })?;
+        match answer {
+            Some(frame) => {
+                serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
+                writeln!(out)?;
+                round_trips.push(sent_at.elapsed());
+                server_latencies.push(Duration::from_nanos(
+                    frame.timestamp_ns.saturating_sub(stamp.timestamp_ns),
+                ));
+            }
+            None => {
+                tracing::warn!(seq = stamp.seq, "no answer (rejected input?)");
+                unanswered += 1;
+            }
+        }
+    }
+    tracing::info!(
+        sent = recording.samples.len(),
+        answered = round_trips.len(),
+        unanswered,
+        round_trip = %summary(&mut round_trips),
+        input_to_publish = %summary(&mut server_latencies),
+        "lockstep replay finished"
+    );
+    out.flush()?;
+    Ok(())
+}
+
+fn send(client: &Client, input: InputSample) -> anyhow::Result<()> {
+    match input {
+        InputSample::Tracker(sample) => client.send_tracker(&sample)?,
+        InputSample::Glove(sample) => client.send_glove(&sample)?,
+    }
+    Ok(())
+}
+
+/// Median, 99th percentile and maximum, in microseconds.
+fn summary(durations: &mut [Duration]) -> String {
+    if durations.is_empty() {
+        return "none".to_owned();
+    }
+    durations.sort_unstable();
+    let at = |fraction: f64| {
+        let index = ((durations.len() - 1) as f64 * fraction).round() as usize;
+        durations[index].as_secs_f64() * 1e6
+    };
+    format!(
+        "median {:.1} us, p99 {:.1} us, max {:.1} us",
+        at(0.5),
+        at(0.99),
+        at(1.0)
+    )
+}

@@ -1,0 +1,460 @@
+//! The [`Client`]: the renderer's connection to a vas server.
+
+use std::time::{Duration, Instant};
+
+use iceoryx2::port::client::Client as ControlPort;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use serde::Serialize;
+use vas_protocol::services::{self, config_with_prefix};
+use vas_protocol::{
+    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, GloveSample, HandFrame,
+    InputStats, MAX_PATH_BYTES, PART_MOVABLE, PartState, PartsFrameHeader, SlidingMetaphor,
+    TrackerSample, WirePose, WireText,
+};
+
+use crate::ClientError;
+use crate::wait::{Wake, deadline_after, new_waitset, signal_mode, wait_until_ready};
+
+/// How long a control request that reached no server waits before it is sent again (a server
+/// may be starting).
+const CONTROL_RETRY: Duration = Duration::from_millis(20);
+
+/// Options of a [`Client`] connection.
+#[derive(Debug, Clone, Default)]
+pub struct ClientBuilder {
+    prefix: Option<String>,
+    handle_termination_signals: bool,
+}
+
+impl ClientBuilder {
+    /// Connect on this iceoryx2 prefix (the server's `--prefix`); without one, the prefix of the
+    /// iceoryx2 configuration is used.
+    pub fn prefix(mut self, prefix: impl Into<String>) -> Self {
+        self.prefix = Some(prefix.into());
+        self
+    }
+
+    /// Let iceoryx2 catch SIGINT and SIGTERM, so that [`Client::wait`] and [`Client::sleep`]
+    /// report [`Wake::Terminated`] instead of the process dying. Off by default: a library
+    /// should not take over the signals of the application that links it.
+    pub fn handle_termination_signals(mut self, handle: bool) -> Self {
+        self.handle_termination_signals = handle;
+        self
+    }
+
+    /// Opens the vas services and creates this client's ports.
+    pub fn connect(self) -> Result<Client, ClientError> {
+        let node = create_node(self.prefix.as_deref(), self.handle_termination_signals)?;
+        let tracker = services::open_tracker(&node)?;
+        let glove = services::open_glove(&node)?;
+        let parts = services::open_parts(&node)?;
+        let hand = services::open_hand(&node)?;
+        let control = services::open_control(&node)?;
+        let tracker_wakeup = services::open_wakeup(&node, services::TRACKER)?;
+        let glove_wakeup = services::open_wakeup(&node, services::GLOVE)?;
+        let parts_wakeup = services::open_wakeup(&node, services::PARTS)?;
+        let hand_wakeup = services::open_wakeup(&node, services::HAND)?;
+        let control_wakeup = services::open_wakeup(&node, services::CONTROL)?;
+        Ok(Client {
+            tracker: tracker
+                .publisher_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            tracker_notifier: tracker_wakeup
+                .notifier_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            glove: glove
+                .publisher_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            glove_notifier: glove_wakeup
+                .notifier_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            parts: parts
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            parts_listener: parts_wakeup
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            hand: hand
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            hand_listener: hand_wakeup
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            control: control
+                .client_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            control_notifier: control_wakeup
+                .notifier_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            control_listener: control_wakeup
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            waitset: new_waitset(self.handle_termination_signals)?,
+            latest_parts: None,
+            latest_hand: None,
+            node,
+        })
+    }
+}
+
+/// Creates the node of a client or tap on `prefix`.
+pub(crate) fn create_node(
+    prefix: Option<&str>,
+    handle_signals: bool,
+) -> Result<Node<ipc::Service>, ClientError> {
+    let config = config_with_prefix(prefix)?;
+    let name =
+        NodeName::new("vas-client").map_err(|error| ClientError::ipc("name the node", error))?;
+    NodeBuilder::new()
+        .name(&name)
+        .config(&config)
+        .signal_handling_mode(signal_mode(handle_signals))
+        .create::<ipc::Service>()
+        .map_err(|error| ClientError::ipc("create the iceoryx2 node", error))
+}
+
+/// A parts frame, copied out of shared memory.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PartsFrame {
+    /// Frame number, input stamps, publish time and part count.
+    #[serde(flatten)]
+    pub header: PartsFrameHeader,
+    /// Pose and state of every part, indexed by part id.
+    pub parts: Vec<PartState>,
+}
+
+/// One received output frame.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Frame {
+    /// A parts frame.
+    Parts(PartsFrame),
+    /// A hand frame.
+    Hand(HandFrame),
+}
+
+/// How many frames a [`Client::poll`] received.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Received {
+    /// Parts frames received.
+    pub parts: usize,
+    /// Hand frames received.
+    pub hand: usize,
+}
+
+/// The server's scene, as the control service describes it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SceneInfo {
+    /// The scene's name.
+    pub name: String,
+    /// The file the server loaded it from.
+    pub source: String,
+    /// Every part, indexed by id.
+    pub parts: Vec<PartInfo>,
+    /// The server's input counters at the time of the answer.
+    pub stats: InputStats,
+}
+
+/// One part of the scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PartInfo {
+    /// The id used in parts frames.
+    pub id: u32,
+    /// The part's name.
+    pub name: String,
+    /// Its collision group.
+    pub group: String,
+    /// Its geometry: the mesh path the server resolved, or a procedural shape's description.
+    pub mesh_source: String,
+    /// Whether it can be grasped and moved.
+    pub movable: bool,
+    /// Its pose when the scene was loaded.
+    pub initial_pose: WirePose,
+    /// Whether a name or path was cut to fit the wire.
+    pub truncated: bool,
+}
+
+/// A connection to a vas server: sends input, receives frames, asks the control service.
+///
+/// All ports belong to one iceoryx2 node on the chosen prefix. The client is not `Send`
+/// (iceoryx2 ports are bound to their thread): create it on the thread that uses it.
+pub struct Client {
+    node: Node<ipc::Service>,
+    tracker: Publisher<ipc::Service, TrackerSample, ()>,
+    tracker_notifier: Notifier<ipc::Service>,
+    glove: Publisher<ipc::Service, GloveSample, ()>,
+    glove_notifier: Notifier<ipc::Service>,
+    parts: Subscriber<ipc::Service, [PartState], PartsFrameHeader>,
+    parts_listener: Listener<ipc::Service>,
+    hand: Subscriber<ipc::Service, HandFrame, ()>,
+    hand_listener: Listener<ipc::Service>,
+    control: ControlPort<ipc::Service, ControlRequest, (), ControlResponse, ()>,
+    control_notifier: Notifier<ipc::Service>,
+    control_listener: Listener<ipc::Service>,
+    waitset: WaitSet<ipc::Service>,
+    latest_parts: Option<PartsFrame>,
+    latest_hand: Option<HandFrame>,
+}
+
+impl Client {
+    /// Connects on `prefix` (the server's `--prefix`, or the configured default for `None`),
+    /// leaving signal handling to the application.
+    pub fn connect(prefix: Option<&str>) -> Result<Self, ClientError> {
+        let builder = ClientBuilder::default();
+        match prefix {
+            Some(prefix) => builder.prefix(prefix),
+            None => builder,
+        }
+        .connect()
+    }
+
+    /// Options for a connection.
+    pub fn builder() -> ClientBuilder {
+        ClientBuilder::default()
+    }
+
+    /// Sends a tracker sample and wakes the server.
+    pub fn send_tracker(&self, sample: &TrackerSample) -> Result<(), ClientError> {
+        self.tracker
+            .send_copy(*sample)
+            .map_err(|error| ClientError::ipc("send a tracker sample", error))?;
+        self.tracker_notifier
+            .notify()
+            .map_err(|error| ClientError::ipc("notify the tracker service", error))?;
+        Ok(())
+    }
+
+    /// Sends a glove sample and wakes the server.
+    pub fn send_glove(&self, sample: &GloveSample) -> Result<(), ClientError> {
+        self.glove
+            .send_copy(*sample)
+            .map_err(|error| ClientError::ipc("send a glove sample", error))?;
+        self.glove_notifier
+            .notify()
+            .map_err(|error| ClientError::ipc("notify the glove service", error))?;
+        Ok(())
+    }
+
+    /// Blocks until a parts or hand frame is ready to be received, the timeout passes, or (with
+    /// signal handling on) a termination signal arrives. Frames stay queued for
+    /// [`Client::poll`] or [`Client::receive`].
+    pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
+        let (parts, hand) = (&self.parts, &self.hand);
+        wait_until_ready(
+            &self.waitset,
+            &[&self.parts_listener, &self.hand_listener],
+            timeout,
+            || {
+                let has = |result: Result<bool, _>| {
+                    result.map_err(|error| ClientError::ipc("check a subscriber", error))
+                };
+                Ok(has(parts.has_samples())? || has(hand.has_samples())?)
+            },
+        )
+    }
+
+    /// Receives every queued frame, keeps the newest of each kind for [`Client::latest_parts`]
+    /// and [`Client::latest_hand`], and returns them all in arrival order per kind (parts
+    /// frames first).
+    pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
+        let mut frames = Vec::new();
+        while let Some(sample) = self
+            .parts
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a parts frame", error))?
+        {
+            frames.push(Frame::Parts(PartsFrame {
+                header: *sample.user_header(),
+                parts: sample.payload().to_vec(),
+            }));
+        }
+        while let Some(sample) = self
+            .hand
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a hand frame", error))?
+        {
+            frames.push(Frame::Hand(*sample.payload()));
+        }
+        for frame in &frames {
+            match frame {
+                Frame::Parts(parts) => self.latest_parts = Some(parts.clone()),
+                Frame::Hand(hand) => self.latest_hand = Some(*hand),
+            }
+        }
+        Ok(frames)
+    }
+
+    /// Receives every queued frame, keeping only the newest of each kind.
+    pub fn poll(&mut self) -> Result<Received, ClientError> {
+        let mut received = Received::default();
+        for frame in self.receive()? {
+            match frame {
+                Frame::Parts(_) => received.parts += 1,
+                Frame::Hand(_) => received.hand += 1,
+            }
+        }
+        Ok(received)
+    }
+
+    /// The newest parts frame received so far (by [`Client::poll`] or [`Client::receive`]).
+    pub fn latest_parts(&self) -> Option<&PartsFrame> {
+        self.latest_parts.as_ref()
+    }
+
+    /// The newest hand frame received so far (by [`Client::poll`] or [`Client::receive`]).
+    pub fn latest_hand(&self) -> Option<&HandFrame> {
+        self.latest_hand.as_ref()
+    }
+
+    /// Sleeps for `duration`; [`Wake::Terminated`] if a handled termination signal arrived.
+    pub fn sleep(&self, duration: Duration) -> Wake {
+        match self.node.wait(duration) {
+            Ok(()) => Wake::Timeout,
+            Err(_) => Wake::Terminated,
+        }
+    }
+
+    /// Asks for the scene: its summary, then every part; `timeout` bounds the whole exchange.
+    pub fn scene_info(&self, timeout: Duration) -> Result<SceneInfo, ClientError> {
+        let deadline = deadline_after(timeout);
+        let summary = self.request(ControlRequest::scene_info(), deadline, timeout)?;
+        let parts = (0..summary.part_count)
+            .map(|id| {
+                let part = self
+                    .request(ControlRequest::part_info(id), deadline, timeout)?
+                    .part;
+                Ok(PartInfo {
+                    id: part.id,
+                    name: part.name.as_str()?.to_owned(),
+                    group: part.group.as_str()?.to_owned(),
+                    mesh_source: part.mesh_source.as_str()?.to_owned(),
+                    movable: part.flags & PART_MOVABLE != 0,
+                    initial_pose: part.initial_pose,
+                    truncated: part.truncated != 0,
+                })
+            })
+            .collect::<Result<Vec<_>, ClientError>>()?;
+        Ok(SceneInfo {
+            name: summary.scene_name.as_str()?.to_owned(),
+            source: summary.scene_source.as_str()?.to_owned(),
+            parts,
+            stats: summary.stats,
+        })
+    }
+
+    /// The server's input counters (rejected, clamped and accepted samples).
+    pub fn input_stats(&self, timeout: Duration) -> Result<InputStats, ClientError> {
+        Ok(self.control(ControlRequest::scene_info(), timeout)?.stats)
+    }
+
+    /// Asks the server to load the scene file at `path` (as the server's file system sees it).
+    pub fn load_scene(
+        &self,
+        path: &str,
+        timeout: Duration,
+    ) -> Result<ControlResponse, ClientError> {
+        let path = WireText::<MAX_PATH_BYTES>::new(path)?;
+        self.control(ControlRequest::load_scene(path), timeout)
+    }
+
+    /// Asks the server to put the scene back to its initial state.
+    pub fn reset(&self, timeout: Duration) -> Result<ControlResponse, ClientError> {
+        self.control(ControlRequest::reset(), timeout)
+    }
+
+    /// Asks the server to slide grasped parts with `metaphor`.
+    pub fn set_metaphor(
+        &self,
+        metaphor: SlidingMetaphor,
+        timeout: Duration,
+    ) -> Result<ControlResponse, ClientError> {
+        self.control(ControlRequest::set_metaphor(metaphor), timeout)
+    }
+
+    /// Sends any control request and waits for its answer; a status other than
+    /// [`ControlStatus::Ok`] is a [`ClientError::Refused`].
+    pub fn control(
+        &self,
+        request: ControlRequest,
+        timeout: Duration,
+    ) -> Result<ControlResponse, ClientError> {
+        self.request(request, deadline_after(timeout), timeout)
+    }
+
+    fn request(
+        &self,
+        request: ControlRequest,
+        deadline: Instant,
+        timeout: Duration,
+    ) -> Result<ControlResponse, ClientError> {
+        let kind = ControlRequestKind::try_from(request.kind)?;
+        let timed_out = || ClientError::Timeout {
+            what: format!("the control request {kind:?}"),
+            timeout,
+        };
+        loop {
+            let pending = self
+                .control
+                .send_copy(request)
+                .map_err(|error| ClientError::ipc("send a control request", error))?;
+            self.control_notifier
+                .notify()
+                .map_err(|error| ClientError::ipc("notify the control service", error))?;
+            loop {
+                if let Some(response) = pending
+                    .receive()
+                    .map_err(|error| ClientError::ipc("receive a control response", error))?
+                {
+                    return check_status(kind, *response.payload());
+                }
+                let remaining = deadline.saturating_duration_since(Instant::now());
+                if remaining.is_zero() {
+                    return Err(timed_out());
+                }
+                // A request that reached a server is never sent again (loading a scene twice
+                // would be wrong); one that reached none is sent again once a server may be up.
+                let delivered = pending.number_of_server_connections() > 0;
+                let nap = if delivered {
+                    remaining
+                } else {
+                    remaining.min(CONTROL_RETRY)
+                };
+                self.control_listener
+                    .timed_wait(|_| {}, nap)
+                    .map_err(|error| ClientError::ipc("wait for a control response", error))?;
+                if !delivered {
+                    break;
+                }
+            }
+        }
+    }
+}
+
+fn check_status(
+    kind: ControlRequestKind,
+    response: ControlResponse,
+) -> Result<ControlResponse, ClientError> {
+    match ControlStatus::try_from(response.status)? {
+        ControlStatus::Ok => Ok(response),
+        status => Err(ClientError::Refused {
+            request: kind,
+            status,
+            message: response.message.as_str()?.to_owned(),
+        }),
+    }
+}

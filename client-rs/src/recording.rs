@@ -1,0 +1,257 @@
+//! Recordings: input streams saved as JSON Lines, for replay and regression tests.
+//!
+//! The first line is a [`RecordingHeader`] (format name and version, scene, description); every
+//! further line is a [`RecordedSample`]: the time in seconds since the first sample and either a
+//! tracker or a glove sample, e.g.
+//!
+//! ```text
+//! {"format":"vas-recording","version":1,"scene":"demo","description":"reach and grasp"}
+//! {"time":0.0,"tracker":{"seq":1,"timestamp_ns":...,"hand":{...},"cart":{...},"sensor_id":0}}
+//! {"time":0.011,"glove":{"seq":1,"timestamp_ns":...,"flex":[0.0, ...]}}
+//! ```
+//!
+//! JSON has no NaN or infinity, so samples with non-finite values cannot be recorded.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use vas_protocol::{GloveSample, TrackerSample};
+
+/// The `format` value of every recording header.
+pub const FORMAT: &str = "vas-recording";
+/// The format version this library writes and reads.
+pub const VERSION: u32 = 1;
+
+/// First line of a recording.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordingHeader {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// The format version, [`VERSION`] for recordings this library writes.
+    pub version: u32,
+    /// Name of the scene the input was recorded against.
+    pub scene: String,
+    /// Free text: what the recording shows.
+    pub description: String,
+}
+
+impl RecordingHeader {
+    /// A header of the current format and version.
+    pub fn new(scene: impl Into<String>, description: impl Into<String>) -> Self {
+        Self {
+            format: FORMAT.to_owned(),
+            version: VERSION,
+            scene: scene.into(),
+            description: description.into(),
+        }
+    }
+}
+
+/// One input sample of either stream.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InputSample {
+    /// A tracker sample.
+    Tracker(TrackerSample),
+    /// A glove sample.
+    Glove(GloveSample),
+}
+
+impl InputSample {
+    /// The sample's sequence number (in its own stream).
+    pub fn seq(&self) -> u64 {
+        match self {
+            Self::Tracker(sample) => sample.seq,
+            Self::Glove(sample) => sample.seq,
+        }
+    }
+
+    /// The sample's timestamp in nanoseconds since the Unix epoch.
+    pub fn timestamp_ns(&self) -> u64 {
+        match self {
+            Self::Tracker(sample) => sample.timestamp_ns,
+            Self::Glove(sample) => sample.timestamp_ns,
+        }
+    }
+
+    /// The same sample with another timestamp (a replay stamps samples when it sends them).
+    pub fn with_timestamp(mut self, timestamp_ns: u64) -> Self {
+        match &mut self {
+            Self::Tracker(sample) => sample.timestamp_ns = timestamp_ns,
+            Self::Glove(sample) => sample.timestamp_ns = timestamp_ns,
+        }
+        self
+    }
+
+    /// Whether every value is finite (only such samples can be written as JSON).
+    pub fn is_finite(&self) -> bool {
+        match self {
+            Self::Tracker(sample) => sample.hand.is_finite() && sample.cart.is_finite(),
+            Self::Glove(sample) => sample.flex.iter().all(|v| v.is_finite()),
+        }
+    }
+}
+
+/// One sample line of a recording.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RecordedSample {
+    /// Seconds since the first sample of the recording; never decreasing.
+    pub time: f64,
+    /// The sample.
+    #[serde(flatten)]
+    pub input: InputSample,
+}
+
+/// A recording that cannot be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordingError {
+    /// The file cannot be opened, read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system reported.
+        source: std::io::Error,
+    },
+    /// A line is not a header or sample of this format.
+    #[error("{}:{line}: {reason}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// The line, from 1.
+        line: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A sample with NaN or infinite values cannot be written as JSON.
+    #[error("{}: cannot record a sample with non-finite values (seq {seq})", path.display())]
+    NonFinite {
+        /// The file.
+        path: PathBuf,
+        /// The sample's sequence number.
+        seq: u64,
+    },
+}
+
+/// A whole recording in memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    /// The header line.
+    pub header: RecordingHeader,
+    /// The samples, in file order.
+    pub samples: Vec<RecordedSample>,
+}
+
+impl Recording {
+    /// Reads and checks a recording file: header format and version, one valid sample per
+    /// line, times finite and non-decreasing. Blank lines are skipped.
+    pub fn load(path: &Path) -> Result<Self, RecordingError> {
+        let io_error = |source| RecordingError::Io {
+            path: path.to_owned(),
+            source,
+        };
+        let invalid = |line: usize, reason: String| RecordingError::Invalid {
+            path: path.to_owned(),
+            line,
+            reason,
+        };
+        let reader = BufReader::new(File::open(path).map_err(io_error)?);
+        let mut header = None;
+        let mut samples: Vec<RecordedSample> = Vec::new();
+        for (index, text) in reader.lines().enumerate() {
+            let line = index + 1;
+            let text = text.map_err(io_error)?;
+            if text.trim().is_empty() {
+                continue;
+            }
+            if header.is_none() {
+                let parsed: RecordingHeader = serde_json::from_str(&text)
+                    .map_err(|error| invalid(line, format!("not a recording header: {error}")))?;
+                if parsed.format != FORMAT || parsed.version != VERSION {
+                    return Err(invalid(
+                        line,
+                        format!(
+                            "format {:?} version {} is not {FORMAT:?} version {VERSION}",
+                            parsed.format, parsed.version
+                        ),
+                    ));
+                }
+                header = Some(parsed);
+                continue;
+            }
+            let sample: RecordedSample = serde_json::from_str(&text)
+                .map_err(|error| invalid(line, format!("not a recorded sample: {error}")))?;
+            let previous = samples.last().map_or(0.0, |sample| sample.time);
+            if !sample.time.is_finite() || sample.time < previous {
+                return Err(invalid(
+                    line,
+                    format!(
+                        "time {} is not finite or goes back from {previous}",
+                        sample.time
+                    ),
+                ));
+            }
+            samples.push(sample);
+        }
+        let header = header.ok_or_else(|| invalid(1, "the file is empty".to_owned()))?;
+        Ok(Self { header, samples })
+    }
+}
+
+/// Writes a recording line by line, flushing each line, so that an interrupted recording is
+/// still valid up to its last sample.
+pub struct RecordingWriter {
+    path: PathBuf,
+    out: BufWriter<File>,
+    first_timestamp_ns: Option<u64>,
+    last_time: f64,
+}
+
+impl RecordingWriter {
+    /// Creates (or truncates) the file and writes the header.
+    pub fn create(path: &Path, header: &RecordingHeader) -> Result<Self, RecordingError> {
+        let file = File::create(path).map_err(|source| RecordingError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let mut writer = Self {
+            path: path.to_owned(),
+            out: BufWriter::new(file),
+            first_timestamp_ns: None,
+            last_time: 0.0,
+        };
+        writer.write_line(header)?;
+        Ok(writer)
+    }
+
+    /// Appends a sample; its time is taken from its timestamp relative to the first sample
+    /// (held back to the previous time if the sender's clock stepped back).
+    pub fn write(&mut self, input: &InputSample) -> Result<(), RecordingError> {
+        if !input.is_finite() {
+            return Err(RecordingError::NonFinite {
+                path: self.path.clone(),
+                seq: input.seq(),
+            });
+        }
+        let first = *self.first_timestamp_ns.get_or_insert(input.timestamp_ns());
+        let since_first = input.timestamp_ns().saturating_sub(first) as f64 * 1e-9;
+        self.last_time = since_first.max(self.last_time);
+        self.write_line(&RecordedSample {
+            time: self.last_time,
+            input: *input,
+        })
+    }
+
+    fn write_line(&mut self, value: &impl Serialize) -> Result<(), RecordingError> {
+        let io_error = |source| RecordingError::Io {
+            path: self.path.clone(),
+            source,
+        };
+        serde_json::to_writer(&mut self.out, value).map_err(|error| io_error(error.into()))?;
+        self.out.write_all(b"\n").map_err(io_error)?;
+        self.out.flush().map_err(io_error)
+    }
+}

@@ -1,0 +1,80 @@
+//! The client library over real iceoryx2 services, without a server: what a client sends reaches
+//! an input tap, waits end on data or timeout, and control requests without a server time out.
+
+use std::time::Duration;
+
+use vas_client::recording::InputSample;
+use vas_client::{Client, ClientError, InputTap, Wake};
+use vas_protocol::{FLEX_COUNT, GloveSample, TrackerSample, WirePose};
+
+/// A prefix no other test (or process) uses.
+fn prefix(test: &str) -> String {
+    format!("vas_c{}_{test}_", std::process::id())
+}
+
+const PATIENCE: Duration = Duration::from_secs(5);
+
+#[test]
+fn samples_sent_by_a_client_reach_an_input_tap() {
+    let prefix = prefix("tap");
+    let mut tap = InputTap::connect(Some(&prefix), false).expect("tap");
+    let client = Client::connect(Some(&prefix)).expect("client");
+    let tracker = TrackerSample {
+        seq: 1,
+        timestamp_ns: 10,
+        hand: WirePose {
+            position: [1.0, 2.0, 3.0],
+            rotation: [0.0, 0.0, 0.0, 1.0],
+        },
+        cart: WirePose::IDENTITY,
+        sensor_id: 4,
+    };
+    let glove = GloveSample {
+        seq: 1,
+        timestamp_ns: 20,
+        flex: [0.25; FLEX_COUNT],
+    };
+    client.send_tracker(&tracker).expect("send tracker");
+    client.send_glove(&glove).expect("send glove");
+
+    let mut received = Vec::new();
+    while received.len() < 2 {
+        assert_eq!(
+            tap.wait(PATIENCE).expect("wait"),
+            Wake::Ready,
+            "samples arrive"
+        );
+        received.extend(tap.receive().expect("receive"));
+    }
+    assert_eq!(
+        received,
+        [InputSample::Tracker(tracker), InputSample::Glove(glove)]
+    );
+}
+
+#[test]
+fn waiting_without_frames_times_out() {
+    let mut client = Client::connect(Some(&prefix("idle"))).expect("client");
+    assert_eq!(
+        client.wait(Duration::from_millis(50)).expect("wait"),
+        Wake::Timeout
+    );
+    assert_eq!(client.poll().expect("poll"), Default::default());
+    assert!(client.latest_parts().is_none());
+    assert!(client.latest_hand().is_none());
+}
+
+#[test]
+fn control_requests_without_a_server_time_out() {
+    let client = Client::connect(Some(&prefix("noserver"))).expect("client");
+    let error = client
+        .scene_info(Duration::from_millis(100))
+        .expect_err("no server answers");
+    assert!(matches!(error, ClientError::Timeout { .. }), "{error}");
+}
+
+#[test]
+fn invalid_prefixes_are_refused() {
+    let error = Client::connect(Some("no/slashes/")).err().expect("refused");
+    assert!(matches!(error, ClientError::Prefix(_)), "{error}");
+}

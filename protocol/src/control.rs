@@ -1,0 +1,256 @@
+//! The `vas/control` request-response service: scene information, scene loading, reset, sliding
+//! metaphor, and the input counters.
+//!
+//! Both types have a fixed size so that they travel zero-copy. A scene's part list is therefore
+//! read one part per request ([`ControlRequestKind::PartInfo`]) rather than in one response:
+//! scenes have any number of parts, and a renderer reads them once at start.
+//! Strings are bounded ([`MAX_NAME_BYTES`], [`MAX_PATH_BYTES`]); the server cuts longer names at
+//! a character boundary and says so in [`PartDescription::truncated`].
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+use crate::UnknownCode;
+use crate::pose::WirePose;
+use crate::text::WireText;
+
+/// Capacity of names (scene, part, group) in bytes.
+pub const MAX_NAME_BYTES: usize = 64;
+/// Capacity of paths and mesh sources in bytes.
+pub const MAX_PATH_BYTES: usize = 512;
+/// Capacity of the human-readable status message in bytes.
+pub const MAX_STATUS_MESSAGE_BYTES: usize = 256;
+
+/// What a [`ControlRequest`] asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ControlRequestKind {
+    /// Scene name, source file and part count.
+    SceneInfo = 1,
+    /// One part's description; [`ControlRequest::argument`] is the part id.
+    PartInfo = 2,
+    /// Replace the scene by the file in [`ControlRequest::path`].
+    LoadScene = 3,
+    /// Put every part back to its initial pose and forget the hand state.
+    Reset = 4,
+    /// Select the sliding metaphor; [`ControlRequest::argument`] is a [`SlidingMetaphor`] code.
+    SetMetaphor = 5,
+}
+
+impl TryFrom<u32> for ControlRequestKind {
+    type Error = UnknownCode;
+
+    fn try_from(code: u32) -> Result<Self, Self::Error> {
+        Ok(match code {
+            1 => Self::SceneInfo,
+            2 => Self::PartInfo,
+            3 => Self::LoadScene,
+            4 => Self::Reset,
+            5 => Self::SetMetaphor,
+            _ => {
+                return Err(UnknownCode {
+                    type_name: "ControlRequestKind",
+                    code,
+                });
+            }
+        })
+    }
+}
+
+/// How a grasped part follows the ghost that the hand holds (the paper's three metaphors).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum SlidingMetaphor {
+    /// The position is pulled towards the ghost; the orientation comes from the simulation.
+    RubberBand = 1,
+    /// Position and orientation are both pulled towards the ghost.
+    RubberBandSpiralSpring = 2,
+    /// The part repeats the ghost's motion increment.
+    IncrementalMotion = 3,
+}
+
+impl TryFrom<u32> for SlidingMetaphor {
+    type Error = UnknownCode;
+
+    fn try_from(code: u32) -> Result<Self, Self::Error> {
+        Ok(match code {
+            1 => Self::RubberBand,
+            2 => Self::RubberBandSpiralSpring,
+            3 => Self::IncrementalMotion,
+            _ => {
+                return Err(UnknownCode {
+                    type_name: "SlidingMetaphor",
+                    code,
+                });
+            }
+        })
+    }
+}
+
+/// A request on `vas/control`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("vas::control::ControlRequest::v1")]
+#[repr(C)]
+pub struct ControlRequest {
+    /// A [`ControlRequestKind`] code.
+    pub kind: u32,
+    /// Part id for `PartInfo`, metaphor code for `SetMetaphor`, 0 otherwise.
+    pub argument: u32,
+    /// Scene file for `LoadScene`, as the server sees the file system; empty otherwise.
+    pub path: WireText<MAX_PATH_BYTES>,
+}
+
+impl ControlRequest {
+    /// Ask for the scene summary.
+    pub fn scene_info() -> Self {
+        Self::with_argument(ControlRequestKind::SceneInfo, 0)
+    }
+
+    /// Ask for the description of part `id`.
+    pub fn part_info(id: u32) -> Self {
+        Self::with_argument(ControlRequestKind::PartInfo, id)
+    }
+
+    /// Ask the server to replace its scene by the file at `path`.
+    pub fn load_scene(path: WireText<MAX_PATH_BYTES>) -> Self {
+        Self {
+            path,
+            ..Self::with_argument(ControlRequestKind::LoadScene, 0)
+        }
+    }
+
+    /// Ask the server to put the scene back to its initial state.
+    pub fn reset() -> Self {
+        Self::with_argument(ControlRequestKind::Reset, 0)
+    }
+
+    /// Ask the server to use `metaphor` for sliding.
+    pub fn set_metaphor(metaphor: SlidingMetaphor) -> Self {
+        Self::with_argument(ControlRequestKind::SetMetaphor, metaphor as u32)
+    }
+
+    fn with_argument(kind: ControlRequestKind, argument: u32) -> Self {
+        Self {
+            kind: kind as u32,
+            argument,
+            path: WireText::EMPTY,
+        }
+    }
+}
+
+/// Outcome of a control request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ControlStatus {
+    /// Done; the response fields for the request kind are filled.
+    Ok = 0,
+    /// The request kind or an argument code is unknown.
+    InvalidRequest = 1,
+    /// `PartInfo` named a part id the scene does not have.
+    NoSuchPart = 2,
+    /// `LoadScene` failed; the scene is unchanged and the message says why.
+    SceneLoadFailed = 3,
+    /// The server understands the request but cannot carry it out in this version.
+    Unsupported = 4,
+}
+
+impl TryFrom<u32> for ControlStatus {
+    type Error = UnknownCode;
+
+    fn try_from(code: u32) -> Result<Self, Self::Error> {
+        Ok(match code {
+            0 => Self::Ok,
+            1 => Self::InvalidRequest,
+            2 => Self::NoSuchPart,
+            3 => Self::SceneLoadFailed,
+            4 => Self::Unsupported,
+            _ => {
+                return Err(UnknownCode {
+                    type_name: "ControlStatus",
+                    code,
+                });
+            }
+        })
+    }
+}
+
+/// Counters of the server's input validation, since it started.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+pub struct InputStats {
+    /// Tracker samples accepted.
+    pub tracker_accepted: u64,
+    /// Tracker samples rejected for a NaN or infinite value.
+    pub tracker_rejected_non_finite: u64,
+    /// Tracker samples rejected for a rotation that is not a unit quaternion.
+    pub tracker_rejected_quaternion: u64,
+    /// Glove samples accepted (clamped or not).
+    pub glove_accepted: u64,
+    /// Glove samples rejected for a NaN or infinite value.
+    pub glove_rejected_non_finite: u64,
+    /// Accepted glove samples with at least one value clamped into the joint limits.
+    pub glove_samples_clamped: u64,
+    /// Flex values clamped into the joint limits, over all glove samples.
+    pub glove_values_clamped: u64,
+}
+
+impl InputStats {
+    /// All rejected samples, tracker and glove.
+    pub fn rejected(&self) -> u64 {
+        self.tracker_rejected_non_finite
+            + self.tracker_rejected_quaternion
+            + self.glove_rejected_non_finite
+    }
+}
+
+/// [`PartDescription::flags`] bit: the part can be grasped and moved.
+pub const PART_MOVABLE: u32 = 1 << 0;
+
+/// One part of the scene, as `PartInfo` describes it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[repr(C)]
+pub struct PartDescription {
+    /// The id used in parts frames.
+    pub id: u32,
+    /// [`PART_MOVABLE`] when the part can be grasped.
+    pub flags: u32,
+    /// The part's initial pose in the scene.
+    pub initial_pose: WirePose,
+    /// The part's name in the scene.
+    pub name: WireText<MAX_NAME_BYTES>,
+    /// The collision group the part belongs to.
+    pub group: WireText<MAX_NAME_BYTES>,
+    /// Where the geometry comes from: a mesh path as the server resolved it, or the procedural
+    /// shape's description.
+    pub mesh_source: WireText<MAX_PATH_BYTES>,
+    /// Non-zero when a string above was cut to fit its capacity.
+    pub truncated: u32,
+}
+
+/// The answer to a [`ControlRequest`].
+///
+/// One flat type for every request kind: the fields a kind does not use are zero. Every response
+/// carries the scene summary and the input counters, so any request doubles as a status query.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("vas::control::ControlResponse::v1")]
+#[repr(C)]
+pub struct ControlResponse {
+    /// A [`ControlStatus`] code.
+    pub status: u32,
+    /// The [`ControlRequestKind`] code this answers.
+    pub kind: u32,
+    /// Number of parts in the current scene (ids are `0..part_count`).
+    pub part_count: u32,
+    /// Non-zero when the scene name or source was cut to fit.
+    pub scene_truncated: u32,
+    /// Name of the current scene.
+    pub scene_name: WireText<MAX_NAME_BYTES>,
+    /// File the current scene was loaded from.
+    pub scene_source: WireText<MAX_PATH_BYTES>,
+    /// The part asked for by `PartInfo`; zero otherwise.
+    pub part: PartDescription,
+    /// Input validation counters at the time of the answer.
+    pub stats: InputStats,
+    /// Human-readable detail, mainly for errors.
+    pub message: WireText<MAX_STATUS_MESSAGE_BYTES>,
+}

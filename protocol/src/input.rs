@@ -1,0 +1,256 @@
+//! Input samples (tracker and glove) and their validation.
+//!
+//! The server trusts no input: [`TrackerSample::validate`] rejects non-finite values and
+//! rotations that are not unit quaternions, [`GloveSample::validate`] rejects non-finite flex
+//! values and clamps the others into the joint limits, reporting which were clamped.
+
+use iceoryx2::prelude::ZeroCopySend;
+use nalgebra::Isometry3;
+use serde::{Deserialize, Serialize};
+
+use crate::output::InputStamp;
+use crate::pose::WirePose;
+
+/// Number of flex values of a glove sample (the 22-sensor CyberGlove).
+pub const FLEX_COUNT: usize = 22;
+
+/// How far the norm of a received quaternion may be from 1 before the sample is rejected.
+///
+/// Generous enough for quaternions normalised in single precision by a tracker driver, tight
+/// enough to catch a wrong component order or an unnormalised matrix conversion. Accepted
+/// quaternions are renormalised.
+pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-3;
+
+/// One 6-DOF tracker report: the hand root and the cart (navigation) pose.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::input::TrackerSample::v1")]
+#[repr(C)]
+pub struct TrackerSample {
+    /// Sender's sequence number, from 1, increasing by one per sample.
+    pub seq: u64,
+    /// When the sample was taken, in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+    /// Pose of the hand root (the tracker on the back of the hand) in the cart's frame, i.e. in
+    /// tracking space.
+    pub hand: WirePose,
+    /// Pose of the cart in the world: the navigation frame that carries the tracking space (and
+    /// with it the hand) through the scene. The hand root in the world is `cart * hand`.
+    pub cart: WirePose,
+    /// Which tracker sent the sample (the VRPN sensor number).
+    pub sensor_id: u32,
+}
+
+/// One glove report: the 22 calibrated joint angles.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::input::GloveSample::v1")]
+#[repr(C)]
+pub struct GloveSample {
+    /// Sender's sequence number, from 1, increasing by one per sample.
+    pub seq: u64,
+    /// When the sample was taken, in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+    /// Joint angles in radians, in CyberGlove order ([`FLEX_JOINT_NAMES`]).
+    pub flex: [f32; FLEX_COUNT],
+}
+
+/// Why an input sample was rejected.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum InputRejection {
+    /// A value is NaN or infinite.
+    #[error("{field} is not finite")]
+    NonFinite {
+        /// The offending field, e.g. `hand.position` or `flex[3]`.
+        field: &'static str,
+    },
+    /// A rotation is not a unit quaternion within [`UNIT_QUATERNION_TOLERANCE`].
+    #[error("{field} is not a unit quaternion (norm {norm})")]
+    NotUnitQuaternion {
+        /// The offending field, `hand.rotation` or `cart.rotation`.
+        field: &'static str,
+        /// The norm received.
+        norm: f64,
+    },
+}
+
+/// A validated tracker sample: finite poses with unit rotations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackerTarget {
+    /// Sequence number and timestamp of the sample.
+    pub stamp: InputStamp,
+    /// The sending tracker.
+    pub sensor_id: u32,
+    /// Hand root pose in the cart's frame.
+    pub hand: Isometry3<f64>,
+    /// Cart pose in the world.
+    pub cart: Isometry3<f64>,
+}
+
+impl TrackerTarget {
+    /// The hand root in the world: the cart carries the tracking space.
+    pub fn hand_in_world(&self) -> Isometry3<f64> {
+        self.cart * self.hand
+    }
+}
+
+/// A validated glove sample: finite flex values within the joint limits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GloveTarget {
+    /// Sequence number and timestamp of the sample.
+    pub stamp: InputStamp,
+    /// Joint angles in radians, clamped into [`FLEX_LIMITS_RAD`].
+    pub flex: [f32; FLEX_COUNT],
+    /// Bit `i` set: `flex[i]` was outside its limits and has been clamped.
+    pub clamped: u32,
+}
+
+impl GloveTarget {
+    /// How many flex values were clamped.
+    pub fn clamped_count(&self) -> u32 {
+        self.clamped.count_ones()
+    }
+}
+
+impl TrackerSample {
+    /// Checks the sample: every value finite, both rotations unit quaternions within
+    /// [`UNIT_QUATERNION_TOLERANCE`] (renormalised in the result).
+    pub fn validate(&self) -> Result<TrackerTarget, InputRejection> {
+        Ok(TrackerTarget {
+            stamp: InputStamp {
+                seq: self.seq,
+                timestamp_ns: self.timestamp_ns,
+            },
+            sensor_id: self.sensor_id,
+            hand: validate_pose(&self.hand, "hand.position", "hand.rotation")?,
+            cart: validate_pose(&self.cart, "cart.position", "cart.rotation")?,
+        })
+    }
+}
+
+fn validate_pose(
+    pose: &WirePose,
+    position_field: &'static str,
+    rotation_field: &'static str,
+) -> Result<Isometry3<f64>, InputRejection> {
+    if !pose.position.iter().all(|v| v.is_finite()) {
+        return Err(InputRejection::NonFinite {
+            field: position_field,
+        });
+    }
+    if !pose.rotation.iter().all(|v| v.is_finite()) {
+        return Err(InputRejection::NonFinite {
+            field: rotation_field,
+        });
+    }
+    let norm = pose.quaternion().norm();
+    if (norm - 1.0).abs() > UNIT_QUATERNION_TOLERANCE {
+        return Err(InputRejection::NotUnitQuaternion {
+            field: rotation_field,
+            norm,
+        });
+    }
+    Ok(pose.to_isometry())
+}
+
+impl GloveSample {
+    /// Checks the sample: every flex value finite (else rejected), then clamped into
+    /// [`FLEX_LIMITS_RAD`], with the clamped joints reported in [`GloveTarget::clamped`].
+    pub fn validate(&self) -> Result<GloveTarget, InputRejection> {
+        if let Some(index) = self.flex.iter().position(|v| !v.is_finite()) {
+            return Err(InputRejection::NonFinite {
+                field: FLEX_FIELD_NAMES[index],
+            });
+        }
+        let mut flex = self.flex;
+        let mut clamped = 0u32;
+        for (index, (value, (low, high))) in flex.iter_mut().zip(FLEX_LIMITS_RAD).enumerate() {
+            let limited = value.clamp(low, high);
+            if limited != *value {
+                clamped |= 1 << index;
+                *value = limited;
+            }
+        }
+        Ok(GloveTarget {
+            stamp: InputStamp {
+                seq: self.seq,
+                timestamp_ns: self.timestamp_ns,
+            },
+            flex,
+            clamped,
+        })
+    }
+}
+
+/// The joint each flex value measures, in CyberGlove order.
+pub const FLEX_JOINT_NAMES: [&str; FLEX_COUNT] = [
+    "thumb roll",
+    "thumb inner (MCP)",
+    "thumb outer (IP)",
+    "thumb-index abduction",
+    "index inner (MCP)",
+    "index middle (PIP)",
+    "index outer (DIP)",
+    "middle inner (MCP)",
+    "middle middle (PIP)",
+    "middle outer (DIP)",
+    "middle-index abduction",
+    "ring inner (MCP)",
+    "ring middle (PIP)",
+    "ring outer (DIP)",
+    "ring-middle abduction",
+    "pinky inner (MCP)",
+    "pinky middle (PIP)",
+    "pinky outer (DIP)",
+    "pinky-ring abduction",
+    "palm arch",
+    "wrist flexion (pitch)",
+    "wrist abduction (yaw)",
+];
+
+/// Field names used in rejection reports, one per flex index.
+const FLEX_FIELD_NAMES: [&str; FLEX_COUNT] = [
+    "flex[0]", "flex[1]", "flex[2]", "flex[3]", "flex[4]", "flex[5]", "flex[6]", "flex[7]",
+    "flex[8]", "flex[9]", "flex[10]", "flex[11]", "flex[12]", "flex[13]", "flex[14]", "flex[15]",
+    "flex[16]", "flex[17]", "flex[18]", "flex[19]", "flex[20]", "flex[21]",
+];
+
+const fn degrees(low: f32, high: f32) -> (f32, f32) {
+    let to_radians = std::f32::consts::PI / 180.0;
+    (low * to_radians, high * to_radians)
+}
+
+/// Joint limits `(low, high)` in radians, per flex index: typical limits of a 22-DOF hand.
+///
+/// Finger abduction -20..20 degrees, inner joints -15..90, middle joints 0..90, outer joints
+/// 0..80, thumb roll -60..60, wrist flexion -70..70, wrist abduction -20..40. Two sensors have no
+/// published typical range: the thumb-index abduction gets -20..60 (the thumb spreads much
+/// farther than a finger) and the palm arch 0..60 (it only cups the palm).
+pub const FLEX_LIMITS_RAD: [(f32, f32); FLEX_COUNT] = {
+    let abduction = degrees(-20.0, 20.0);
+    let inner = degrees(-15.0, 90.0);
+    let middle = degrees(0.0, 90.0);
+    let outer = degrees(0.0, 80.0);
+    [
+        degrees(-60.0, 60.0),
+        inner,
+        outer,
+        degrees(-20.0, 60.0),
+        inner,
+        middle,
+        outer,
+        inner,
+        middle,
+        outer,
+        abduction,
+        inner,
+        middle,
+        outer,
+        abduction,
+        inner,
+        middle,
+        outer,
+        abduction,
+        degrees(0.0, 60.0),
+        degrees(-70.0, 70.0),
+        degrees(-20.0, 40.0),
+    ]
+};

@@ -1,0 +1,290 @@
+//! Output frames: parts, hand, events and force.
+//!
+//! Every output names the input it answers with an [`InputStamp`] per input stream (tracker and
+//! glove number their samples independently), so that latency can be traced end to end and a
+//! lockstep replay can wait for the frame answering the sample it sent.
+
+use iceoryx2::prelude::ZeroCopySend;
+use serde::{Deserialize, Serialize};
+
+use crate::UnknownCode;
+use crate::input::FLEX_COUNT;
+use crate::pose::WirePose;
+
+/// The sequence number and timestamp of one input sample; all zero before the first sample.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+pub struct InputStamp {
+    /// The sample's sequence number (0: no sample yet).
+    pub seq: u64,
+    /// The sample's timestamp in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+}
+
+/// User header of a `vas/output/parts` sample; the payload is a slice of [`PartState`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::output::PartsFrameHeader::v1")]
+#[repr(C)]
+pub struct PartsFrameHeader {
+    /// Frame number of the parts stream, from 1.
+    pub frame: u64,
+    /// The latest tracker sample taken into account.
+    pub tracker: InputStamp,
+    /// The latest glove sample taken into account.
+    pub glove: InputStamp,
+    /// When the frame was published, in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+    /// Number of parts in the payload slice.
+    pub part_count: u32,
+}
+
+/// [`PartState::flags`] bit: the part is held by the hand.
+pub const PART_GRASPED: u32 = 1 << 0;
+/// [`PartState::flags`] bit: the part touches another part or the hand.
+pub const PART_TOUCHING: u32 = 1 << 1;
+/// [`PartState::flags`] bit: the part slides along a contact.
+pub const PART_SLIDING: u32 = 1 << 2;
+
+/// The valid pose and state of one part.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::output::PartState::v1")]
+#[repr(C)]
+pub struct PartState {
+    /// The part's id: its index in the scene (see the control service's part info).
+    pub id: u32,
+    /// State bits: [`PART_GRASPED`], [`PART_TOUCHING`], [`PART_SLIDING`].
+    pub flags: u32,
+    /// Position in metres.
+    pub position: [f64; 3],
+    /// Rotation as a unit quaternion in x, y, z, w order.
+    pub rotation: [f64; 4],
+}
+
+impl PartState {
+    /// The part's pose.
+    pub fn pose(&self) -> WirePose {
+        WirePose {
+            position: self.position,
+            rotation: self.rotation,
+        }
+    }
+}
+
+/// The valid hand: root pose, flex vector, touching segments and grasp type.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::output::HandFrame::v1")]
+#[repr(C)]
+pub struct HandFrame {
+    /// Frame number of the hand stream, from 1.
+    pub frame: u64,
+    /// The tracker sample this frame answers (or the latest one, when it answers a glove sample).
+    pub tracker: InputStamp,
+    /// The glove sample this frame answers (or the latest one, when it answers a tracker sample).
+    pub glove: InputStamp,
+    /// When the frame was published, in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+    /// Pose of the hand root in the world (the tracker's cart pose times its hand pose).
+    pub root: WirePose,
+    /// Joint angles in radians, CyberGlove order.
+    pub flex: [f32; FLEX_COUNT],
+    /// Bit [`HandSegment::bit`] set: that segment touches a part.
+    pub touching: u32,
+    /// The recognised grasp, a [`GraspType`] code.
+    pub grasp_type: u32,
+}
+
+/// The segments of the hand, as numbered in [`HandFrame::touching`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum HandSegment {
+    /// The palm.
+    Palm = 0,
+    /// Thumb, segment next to the palm.
+    ThumbProximal = 1,
+    /// Thumb, middle segment.
+    ThumbMiddle = 2,
+    /// Thumb tip segment.
+    ThumbDistal = 3,
+    /// Index finger, segment next to the palm.
+    IndexProximal = 4,
+    /// Index finger, middle segment.
+    IndexMiddle = 5,
+    /// Index finger tip segment.
+    IndexDistal = 6,
+    /// Middle finger, segment next to the palm.
+    MiddleProximal = 7,
+    /// Middle finger, middle segment.
+    MiddleMiddle = 8,
+    /// Middle finger tip segment.
+    MiddleDistal = 9,
+    /// Ring finger, segment next to the palm.
+    RingProximal = 10,
+    /// Ring finger, middle segment.
+    RingMiddle = 11,
+    /// Ring finger tip segment.
+    RingDistal = 12,
+    /// Little finger, segment next to the palm.
+    PinkyProximal = 13,
+    /// Little finger, middle segment.
+    PinkyMiddle = 14,
+    /// Little finger tip segment.
+    PinkyDistal = 15,
+}
+
+impl HandSegment {
+    /// Every segment, in bit order.
+    pub const ALL: [Self; 16] = [
+        Self::Palm,
+        Self::ThumbProximal,
+        Self::ThumbMiddle,
+        Self::ThumbDistal,
+        Self::IndexProximal,
+        Self::IndexMiddle,
+        Self::IndexDistal,
+        Self::MiddleProximal,
+        Self::MiddleMiddle,
+        Self::MiddleDistal,
+        Self::RingProximal,
+        Self::RingMiddle,
+        Self::RingDistal,
+        Self::PinkyProximal,
+        Self::PinkyMiddle,
+        Self::PinkyDistal,
+    ];
+
+    /// The segment's bit in [`HandFrame::touching`].
+    pub fn bit(self) -> u32 {
+        1 << self as u32
+    }
+}
+
+/// The grasp the hand holds, by the paper's analysis and the classes it names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[repr(u32)]
+pub enum GraspType {
+    /// Nothing is touched.
+    None = 0,
+    /// Touching without holding (one segment, or fingers without the thumb).
+    Push = 1,
+    /// Fingers against the thumb, no palm: a precision grasp not classified further.
+    Precision = 2,
+    /// Precision: thumb tip against one finger tip.
+    TipPinch = 3,
+    /// Precision: thumb against index and middle finger (tripod).
+    ThreeJawChuck = 4,
+    /// Precision: thumb against the side of the index finger (lateral).
+    Key = 5,
+    /// Held between two adjacent fingers.
+    Cigarette = 6,
+    /// Three fingers pinching without the palm.
+    ThreePointPinch = 7,
+    /// Fingers wrapped against the palm.
+    Power = 8,
+    /// Resting on the open hand (cradling).
+    Gravity = 9,
+}
+
+impl TryFrom<u32> for GraspType {
+    type Error = UnknownCode;
+
+    fn try_from(code: u32) -> Result<Self, Self::Error> {
+        Ok(match code {
+            0 => Self::None,
+            1 => Self::Push,
+            2 => Self::Precision,
+            3 => Self::TipPinch,
+            4 => Self::ThreeJawChuck,
+            5 => Self::Key,
+            6 => Self::Cigarette,
+            7 => Self::ThreePointPinch,
+            8 => Self::Power,
+            9 => Self::Gravity,
+            _ => {
+                return Err(UnknownCode {
+                    type_name: "GraspType",
+                    code,
+                });
+            }
+        })
+    }
+}
+
+/// [`SimEvent::other`] value naming the hand rather than a part.
+pub const HAND_PART_ID: u32 = u32::MAX;
+
+/// What a [`SimEvent`] reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[repr(u32)]
+pub enum EventKind {
+    /// The hand grasped `part` with `grasp_type`.
+    Grasp = 1,
+    /// The hand released `part`.
+    Release = 2,
+    /// `part` and `other` started touching.
+    ContactBegin = 3,
+    /// `part` and `other` stopped touching.
+    ContactEnd = 4,
+}
+
+impl TryFrom<u32> for EventKind {
+    type Error = UnknownCode;
+
+    fn try_from(code: u32) -> Result<Self, Self::Error> {
+        Ok(match code {
+            1 => Self::Grasp,
+            2 => Self::Release,
+            3 => Self::ContactBegin,
+            4 => Self::ContactEnd,
+            _ => {
+                return Err(UnknownCode {
+                    type_name: "EventKind",
+                    code,
+                });
+            }
+        })
+    }
+}
+
+/// A discrete simulation event on `vas/output/events`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::output::SimEvent::v1")]
+#[repr(C)]
+pub struct SimEvent {
+    /// Number of the hand frame during which the event happened.
+    pub frame: u64,
+    /// The tracker sample that led to the event.
+    pub tracker: InputStamp,
+    /// The glove sample that led to the event.
+    pub glove: InputStamp,
+    /// When the event was published, in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+    /// An [`EventKind`] code.
+    pub kind: u32,
+    /// A [`GraspType`] code for grasp events, 0 otherwise.
+    pub grasp_type: u32,
+    /// The part the event is about.
+    pub part: u32,
+    /// The other part of a contact, or [`HAND_PART_ID`].
+    pub other: u32,
+}
+
+/// Force and torque a force-feedback device should render, on `vas/output/force`.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::output::ForceFrame::v1")]
+#[repr(C)]
+pub struct ForceFrame {
+    /// Number of the hand frame the force belongs to.
+    pub frame: u64,
+    /// The tracker sample the force answers.
+    pub tracker: InputStamp,
+    /// The glove sample the force answers.
+    pub glove: InputStamp,
+    /// When the frame was published, in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+    /// Force on the hand root in newtons, world frame.
+    pub force: [f64; 3],
+    /// Torque about the hand root in newton metres, world frame.
+    pub torque: [f64; 3],
+}

@@ -1,0 +1,264 @@
+//! Service names and the quality-of-service settings of every vas service.
+//!
+//! Server and clients open each service with `open_or_create` and these exact settings, so that
+//! either side may start first. Every publish-subscribe service has an event service of the same
+//! name: a writer notifies it after each send, and readers wait on it instead of polling. The
+//! control service has one too, notified by the client after a request and by the server after
+//! its responses.
+//!
+//! The `open_*` functions below are the only place these settings are applied, so that the server
+//! and every client open identical services.
+
+use iceoryx2::config::Config;
+use iceoryx2::node::Node;
+use iceoryx2::prelude::{FileName, SemanticString, ServiceName};
+use iceoryx2::service::Service;
+use iceoryx2::service::port_factory::{event, publish_subscribe, request_response};
+
+use crate::{
+    ControlRequest, ControlResponse, ForceFrame, GloveSample, HandFrame, PartState,
+    PartsFrameHeader, SimEvent, TrackerSample,
+};
+
+/// Tracker samples ([`crate::TrackerSample`]), clients to server.
+pub const TRACKER: &str = "vas/input/tracker";
+/// Glove samples ([`crate::GloveSample`]), clients to server.
+pub const GLOVE: &str = "vas/input/glove";
+/// Parts frames: a [`crate::PartsFrameHeader`] user header over a slice of [`crate::PartState`].
+pub const PARTS: &str = "vas/output/parts";
+/// Hand frames ([`crate::HandFrame`]).
+pub const HAND: &str = "vas/output/hand";
+/// Simulation events ([`crate::SimEvent`]).
+pub const EVENTS: &str = "vas/output/events";
+/// Force feedback ([`crate::ForceFrame`]).
+pub const FORCE: &str = "vas/output/force";
+/// Control requests and responses ([`crate::ControlRequest`], [`crate::ControlResponse`]).
+pub const CONTROL: &str = "vas/control";
+
+/// Settings of an input service (tracker, glove).
+pub mod input {
+    /// Devices, replays and scripts may feed the same stream.
+    pub const MAX_PUBLISHERS: usize = 8;
+    /// The server, plus recorders.
+    pub const MAX_SUBSCRIBERS: usize = 8;
+    /// Samples buffered per subscriber; with safe overflow the oldest are dropped first, so a
+    /// stalled server resumes with recent input rather than stale input.
+    pub const SUBSCRIBER_BUFFER: usize = 64;
+    /// Inputs have no history: an old sample is no target.
+    pub const HISTORY: usize = 0;
+    /// Nodes that may take part in the service.
+    pub const MAX_NODES: usize = 20;
+}
+
+/// Settings of an output service (parts, hand, events, force).
+pub mod output {
+    /// One server publishes: a second server on the same prefix fails to start.
+    pub const MAX_PUBLISHERS: usize = 1;
+    /// Renderers, watchers, recorders and tests.
+    pub const MAX_SUBSCRIBERS: usize = 16;
+    /// Frames buffered per subscriber; readers want the latest frame, older ones are dropped.
+    pub const SUBSCRIBER_BUFFER: usize = 16;
+    /// A reader that (re)connects gets the latest frame at once (parts and hand).
+    pub const HISTORY: usize = 1;
+    /// Events are not state: a late reader gets no history of them.
+    pub const EVENTS_HISTORY: usize = 0;
+    /// Nodes that may take part in the service.
+    pub const MAX_NODES: usize = 24;
+    /// Initial capacity of a parts frame, in parts; the publisher grows it for larger scenes.
+    pub const INITIAL_MAX_PARTS: usize = 64;
+}
+
+/// Settings of the control service.
+pub mod control {
+    /// One server answers.
+    pub const MAX_SERVERS: usize = 1;
+    /// Renderers, tools and tests.
+    pub const MAX_CLIENTS: usize = 16;
+    /// Requests one client may have outstanding.
+    pub const MAX_ACTIVE_REQUESTS_PER_CLIENT: usize = 4;
+    /// Responses buffered per request (each request gets exactly one).
+    pub const MAX_RESPONSE_BUFFER: usize = 2;
+    /// Nodes that may take part in the service.
+    pub const MAX_NODES: usize = 24;
+}
+
+/// Settings of the event service paired with each service above.
+pub mod wakeup {
+    /// The writers of the paired service, plus the control clients.
+    pub const MAX_NOTIFIERS: usize = 24;
+    /// The readers of the paired service.
+    pub const MAX_LISTENERS: usize = 24;
+    /// Nodes that may take part in the service.
+    pub const MAX_NODES: usize = 48;
+}
+
+/// A service that could not be opened or created.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("cannot open the service {service}: {reason}")]
+pub struct ServiceOpenError {
+    /// The service name.
+    pub service: &'static str,
+    /// What iceoryx2 reported.
+    pub reason: String,
+}
+
+/// A prefix that iceoryx2 cannot use in resource names.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("invalid iceoryx2 prefix {prefix:?}: {reason}")]
+pub struct PrefixError {
+    /// The prefix given.
+    pub prefix: String,
+    /// What iceoryx2 reported.
+    pub reason: String,
+}
+
+/// The iceoryx2 configuration for a prefix: the global configuration, with every resource name
+/// starting with `prefix` when one is given, so that servers (and tests) on different prefixes
+/// never meet.
+pub fn config_with_prefix(prefix: Option<&str>) -> Result<Config, PrefixError> {
+    let mut config = Config::global_config().clone();
+    if let Some(prefix) = prefix {
+        config.global.prefix = FileName::new(prefix.as_bytes()).map_err(|error| PrefixError {
+            prefix: prefix.to_owned(),
+            reason: format!("{error:?}"),
+        })?;
+    }
+    Ok(config)
+}
+
+/// The tracker input service.
+pub type TrackerService<S> = publish_subscribe::PortFactory<S, TrackerSample, ()>;
+/// The glove input service.
+pub type GloveService<S> = publish_subscribe::PortFactory<S, GloveSample, ()>;
+/// The parts output service: a frame header over a slice of part states.
+pub type PartsService<S> = publish_subscribe::PortFactory<S, [PartState], PartsFrameHeader>;
+/// The hand output service.
+pub type HandService<S> = publish_subscribe::PortFactory<S, HandFrame, ()>;
+/// The events output service.
+pub type EventsService<S> = publish_subscribe::PortFactory<S, SimEvent, ()>;
+/// The force output service.
+pub type ForceService<S> = publish_subscribe::PortFactory<S, ForceFrame, ()>;
+/// The control service.
+pub type ControlService<S> =
+    request_response::PortFactory<S, ControlRequest, (), ControlResponse, ()>;
+
+fn service_name(name: &'static str) -> Result<ServiceName, ServiceOpenError> {
+    ServiceName::new(name).map_err(|error| ServiceOpenError {
+        service: name,
+        reason: format!("{error:?}"),
+    })
+}
+
+fn open_failed(name: &'static str, error: impl std::fmt::Display) -> ServiceOpenError {
+    ServiceOpenError {
+        service: name,
+        reason: error.to_string(),
+    }
+}
+
+fn open_input<S: Service, T>(
+    node: &Node<S>,
+    name: &'static str,
+) -> Result<publish_subscribe::PortFactory<S, T, ()>, ServiceOpenError>
+where
+    T: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend,
+{
+    node.service_builder(&service_name(name)?)
+        .publish_subscribe::<T>()
+        .max_publishers(input::MAX_PUBLISHERS)
+        .max_subscribers(input::MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(input::SUBSCRIBER_BUFFER)
+        .history_size(input::HISTORY)
+        .max_nodes(input::MAX_NODES)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|error| open_failed(name, error))
+}
+
+fn open_output<S: Service, T>(
+    node: &Node<S>,
+    name: &'static str,
+    history: usize,
+) -> Result<publish_subscribe::PortFactory<S, T, ()>, ServiceOpenError>
+where
+    T: std::fmt::Debug + iceoryx2::prelude::ZeroCopySend,
+{
+    node.service_builder(&service_name(name)?)
+        .publish_subscribe::<T>()
+        .max_publishers(output::MAX_PUBLISHERS)
+        .max_subscribers(output::MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(output::SUBSCRIBER_BUFFER)
+        .history_size(history)
+        .max_nodes(output::MAX_NODES)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|error| open_failed(name, error))
+}
+
+/// Opens (or creates) the tracker input service.
+pub fn open_tracker<S: Service>(node: &Node<S>) -> Result<TrackerService<S>, ServiceOpenError> {
+    open_input(node, TRACKER)
+}
+
+/// Opens (or creates) the glove input service.
+pub fn open_glove<S: Service>(node: &Node<S>) -> Result<GloveService<S>, ServiceOpenError> {
+    open_input(node, GLOVE)
+}
+
+/// Opens (or creates) the parts output service.
+pub fn open_parts<S: Service>(node: &Node<S>) -> Result<PartsService<S>, ServiceOpenError> {
+    node.service_builder(&service_name(PARTS)?)
+        .publish_subscribe::<[PartState]>()
+        .user_header::<PartsFrameHeader>()
+        .max_publishers(output::MAX_PUBLISHERS)
+        .max_subscribers(output::MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(output::SUBSCRIBER_BUFFER)
+        .history_size(output::HISTORY)
+        .max_nodes(output::MAX_NODES)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|error| open_failed(PARTS, error))
+}
+
+/// Opens (or creates) the hand output service.
+pub fn open_hand<S: Service>(node: &Node<S>) -> Result<HandService<S>, ServiceOpenError> {
+    open_output(node, HAND, output::HISTORY)
+}
+
+/// Opens (or creates) the events output service.
+pub fn open_events<S: Service>(node: &Node<S>) -> Result<EventsService<S>, ServiceOpenError> {
+    open_output(node, EVENTS, output::EVENTS_HISTORY)
+}
+
+/// Opens (or creates) the force output service.
+pub fn open_force<S: Service>(node: &Node<S>) -> Result<ForceService<S>, ServiceOpenError> {
+    open_output(node, FORCE, output::HISTORY)
+}
+
+/// Opens (or creates) the control service.
+pub fn open_control<S: Service>(node: &Node<S>) -> Result<ControlService<S>, ServiceOpenError> {
+    node.service_builder(&service_name(CONTROL)?)
+        .request_response::<ControlRequest, ControlResponse>()
+        .max_servers(control::MAX_SERVERS)
+        .max_clients(control::MAX_CLIENTS)
+        .max_active_requests_per_client(control::MAX_ACTIVE_REQUESTS_PER_CLIENT)
+        .max_response_buffer_size(control::MAX_RESPONSE_BUFFER)
+        .max_nodes(control::MAX_NODES)
+        .open_or_create()
+        .map_err(|error| open_failed(CONTROL, error))
+}
+
+/// Opens (or creates) the event service paired with the service called `name` (one of the
+/// names above), through which its writers wake its readers.
+pub fn open_wakeup<S: Service>(
+    node: &Node<S>,
+    name: &'static str,
+) -> Result<event::PortFactory<S>, ServiceOpenError> {
+    node.service_builder(&service_name(name)?)
+        .event()
+        .max_notifiers(wakeup::MAX_NOTIFIERS)
+        .max_listeners(wakeup::MAX_LISTENERS)
+        .max_nodes(wakeup::MAX_NODES)
+        .open_or_create()
+        .map_err(|error| open_failed(name, error))
+}

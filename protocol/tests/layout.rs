@@ -1,0 +1,94 @@
+//! Pins the size and alignment of every wire type: a layout change must fail here, so that it
+//! cannot reach the wire without a new `::vN` type name.
+
+use std::mem::{align_of, offset_of, size_of};
+
+use vas_protocol::*;
+
+fn assert_layout<T>(size: usize, align: usize) {
+    let name = std::any::type_name::<T>();
+    assert_eq!(size_of::<T>(), size, "size of {name}");
+    assert_eq!(align_of::<T>(), align, "alignment of {name}");
+}
+
+#[test]
+fn input_types_keep_their_layout() {
+    assert_layout::<WirePose>(56, 8);
+    assert_layout::<TrackerSample>(136, 8);
+    assert_layout::<GloveSample>(104, 8);
+    assert_eq!(offset_of!(TrackerSample, hand), 16);
+    assert_eq!(offset_of!(TrackerSample, cart), 72);
+    assert_eq!(offset_of!(TrackerSample, sensor_id), 128);
+    assert_eq!(offset_of!(GloveSample, flex), 16);
+}
+
+#[test]
+fn output_types_keep_their_layout() {
+    assert_layout::<InputStamp>(16, 8);
+    assert_layout::<PartsFrameHeader>(56, 8);
+    assert_layout::<PartState>(64, 8);
+    assert_layout::<HandFrame>(200, 8);
+    assert_layout::<SimEvent>(64, 8);
+    assert_layout::<ForceFrame>(96, 8);
+    assert_eq!(offset_of!(PartsFrameHeader, part_count), 48);
+    assert_eq!(offset_of!(PartState, position), 8);
+    assert_eq!(offset_of!(HandFrame, root), 48);
+    assert_eq!(offset_of!(HandFrame, flex), 104);
+    assert_eq!(offset_of!(HandFrame, grasp_type), 196);
+    assert_eq!(offset_of!(ForceFrame, torque), 72);
+}
+
+#[test]
+fn control_types_keep_their_layout() {
+    assert_layout::<WireText<MAX_NAME_BYTES>>(68, 4);
+    assert_layout::<WireText<MAX_PATH_BYTES>>(516, 4);
+    assert_layout::<WireText<MAX_STATUS_MESSAGE_BYTES>>(260, 4);
+    assert_layout::<ControlRequest>(524, 4);
+    assert_layout::<InputStats>(56, 8);
+    assert_layout::<PartDescription>(720, 8);
+    assert_layout::<ControlResponse>(1640, 8);
+    assert_eq!(offset_of!(ControlResponse, part), 600);
+    assert_eq!(offset_of!(ControlResponse, stats), 1320);
+}
+
+#[test]
+fn string_capacities_are_pinned() {
+    assert_eq!(
+        (MAX_NAME_BYTES, MAX_PATH_BYTES, MAX_STATUS_MESSAGE_BYTES),
+        (64, 512, 256)
+    );
+    assert_eq!(FLEX_COUNT, 22);
+}
+
+#[test]
+fn payload_type_names_are_versioned() {
+    use iceoryx2::prelude::ZeroCopySend;
+    // SAFETY: `type_name` only returns the name given in the derive attribute.
+    let names = unsafe {
+        [
+            <TrackerSample as ZeroCopySend>::type_name(),
+            <GloveSample as ZeroCopySend>::type_name(),
+            <PartsFrameHeader as ZeroCopySend>::type_name(),
+            <PartState as ZeroCopySend>::type_name(),
+            <HandFrame as ZeroCopySend>::type_name(),
+            <SimEvent as ZeroCopySend>::type_name(),
+            <ForceFrame as ZeroCopySend>::type_name(),
+            <ControlRequest as ZeroCopySend>::type_name(),
+            <ControlResponse as ZeroCopySend>::type_name(),
+        ]
+    };
+    assert_eq!(
+        names,
+        [
+            "vas::input::TrackerSample::v1",
+            "vas::input::GloveSample::v1",
+            "vas::output::PartsFrameHeader::v1",
+            "vas::output::PartState::v1",
+            "vas::output::HandFrame::v1",
+            "vas::output::SimEvent::v1",
+            "vas::output::ForceFrame::v1",
+            "vas::control::ControlRequest::v1",
+            "vas::control::ControlResponse::v1",
+        ]
+    );
+}

@@ -1,0 +1,154 @@
+//! The runtime: the iceoryx2 ports, the loop that drives the simulation, clean start and stop.
+//!
+//! This is the only module that knows about threads and IPC. Today one thread, the interaction
+//! manager ([`io`]), owns every port: it validates input into the plain [`Simulation`] state,
+//! publishes frames, and answers control requests. The grasping, sliding and collision loops
+//! will run on their own threads beside it and meet it at rendezvous; the ports stay on this
+//! thread (iceoryx2 ports are not `Send`).
+//!
+//! Output services: `vas/output/parts` is published at the scene's `rates.publish_hz`;
+//! `vas/output/hand` once per accepted input sample, answering it. The input counters
+//! (rejected, clamped) are logged and returned in every `vas/control` response (`stats`).
+
+mod control;
+mod io;
+mod ports;
+pub mod simulation;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use iceoryx2::prelude::*;
+use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
+
+use crate::scene::{Scene, SceneError};
+pub use simulation::Simulation;
+
+/// What `vas-server run` serves, and where.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunOptions {
+    /// The scene file to load.
+    pub scene: PathBuf,
+    /// iceoryx2 prefix of every resource, so that servers (and tests) on different prefixes
+    /// never meet; `None` uses the iceoryx2 configuration's.
+    pub prefix: Option<String>,
+}
+
+/// Why the server could not start or had to stop.
+#[derive(Debug, thiserror::Error)]
+pub enum RuntimeError {
+    /// The scene could not be loaded.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The prefix is not usable by iceoryx2.
+    #[error(transparent)]
+    Prefix(#[from] PrefixError),
+    /// A service could not be opened (its settings or types do not match).
+    #[error(transparent)]
+    Service(#[from] ServiceOpenError),
+    /// A port could not be created (for instance a second publisher on an output service: another
+    /// server already runs on this prefix).
+    #[error("cannot create a port on {service}: {reason}")]
+    Port {
+        /// The service.
+        service: &'static str,
+        /// What iceoryx2 reported.
+        reason: String,
+    },
+    /// An iceoryx2 operation failed.
+    #[error("cannot {action}: {reason}")]
+    Ipc {
+        /// What the server was doing.
+        action: &'static str,
+        /// What iceoryx2 reported.
+        reason: String,
+    },
+    /// The scene's publish rate cannot drive a loop.
+    #[error("the publish rate must be positive, finite and below 1 GHz, not {hz} Hz")]
+    PublishRate {
+        /// The configured rate.
+        hz: f64,
+    },
+}
+
+impl RuntimeError {
+    /// A [`RuntimeError::Ipc`] for `action` from any iceoryx2 error.
+    fn ipc(action: &'static str, error: impl std::fmt::Debug) -> Self {
+        Self::Ipc {
+            action,
+            reason: format!("{error:?}"),
+        }
+    }
+}
+
+/// Runs the server until SIGINT or SIGTERM: cleans up the resources of dead nodes, loads the
+/// scene, opens the services, serves. Returns `Ok` on a clean shutdown.
+pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
+    let config = config_with_prefix(options.prefix.as_deref())?;
+    let name =
+        NodeName::new("vas-server").map_err(|error| RuntimeError::ipc("name the node", error))?;
+    let node = NodeBuilder::new()
+        .name(&name)
+        .config(&config)
+        .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
+        .create::<ipc::Service>()
+        .map_err(|error| RuntimeError::ipc("create the iceoryx2 node", error))?;
+    // The first wait installs the SIGINT/SIGTERM handlers, so that a signal during the scene
+    // loading below still ends the server cleanly.
+    if termination_requested(&node) {
+        return Ok(());
+    }
+    let cleanup = node.try_cleanup_dead_nodes();
+    tracing::info!(
+        prefix = options.prefix.as_deref().unwrap_or("(iceoryx2 default)"),
+        dead_nodes_cleaned = cleanup.cleanups,
+        dead_nodes_left = cleanup.failed_cleanups,
+        "node created"
+    );
+
+    let scene = Scene::load(&options.scene)?;
+    tracing::info!(
+        scene = scene.name,
+        source = %scene.source.display(),
+        parts = scene.parts.len(),
+        publish_hz = scene.rates.publish_hz,
+        "scene loaded"
+    );
+    if termination_requested(&node) {
+        return Ok(());
+    }
+    io::InteractionManager::new(&node, Simulation::new(scene))?.serve()
+}
+
+/// The interval between parts frames at `hz`, or an error for a rate no loop can run at.
+fn publish_period(hz: f64) -> Result<Duration, RuntimeError> {
+    Duration::try_from_secs_f64(1.0 / hz)
+        .ok()
+        .filter(|period| !period.is_zero())
+        .ok_or(RuntimeError::PublishRate { hz })
+}
+
+fn termination_requested(node: &Node<ipc::Service>) -> bool {
+    let requested = node.wait(Duration::ZERO).is_err();
+    if requested {
+        tracing::info!("termination requested before serving; shutting down");
+    }
+    requested
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn publish_periods_come_from_positive_finite_rates_only() {
+        let period = publish_period(60.0).expect("60 Hz");
+        assert!((period.as_secs_f64() - 1.0 / 60.0).abs() < 1e-9);
+        for hz in [0.0, -5.0, f64::NAN, f64::INFINITY, 1e-300, 1e12] {
+            assert!(
+                matches!(publish_period(hz), Err(RuntimeError::PublishRate { .. })),
+                "{hz} Hz"
+            );
+        }
+    }
+}

@@ -1,0 +1,450 @@
+//! End to end: the real `vas-server` binary, the client library and the `vas-client` tool, each
+//! test on its own iceoryx2 prefix so that the tests run in parallel without meeting.
+
+use std::io::{BufRead, BufReader};
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+use vas_client::recording::{InputSample, Recording, RecordingHeader, RecordingWriter};
+use vas_client::{Client, ClientError, Frame, PartsFrame, Wake};
+use vas_protocol::{
+    ControlStatus, FLEX_COUNT, FLEX_LIMITS_RAD, GloveSample, HandFrame, InputStamp,
+    SlidingMetaphor, TrackerSample, WirePose, wall_clock_ns,
+};
+use vas_server::scene::{Scene, default_scene_path};
+use vas_tests::{PATIENCE, Server, configs_dir, fixtures_dir};
+
+fn tracker(seq: u64, position: [f64; 3]) -> TrackerSample {
+    TrackerSample {
+        seq,
+        timestamp_ns: wall_clock_ns(),
+        hand: WirePose {
+            position,
+            rotation: [0.0, 0.0, 0.0, 1.0],
+        },
+        cart: WirePose::IDENTITY,
+        sensor_id: 0,
+    }
+}
+
+/// Waits for frames and receives them, failing the test after [`PATIENCE`].
+fn next_frames(client: &mut Client, what: &str) -> Vec<Frame> {
+    assert_eq!(
+        client.wait(PATIENCE).expect("wait"),
+        Wake::Ready,
+        "timed out waiting for {what}"
+    );
+    client.receive().expect("receive")
+}
+
+/// Receives frames until `wanted` picks one, failing the test after [`PATIENCE`].
+fn wait_for<T>(client: &mut Client, what: &str, mut wanted: impl FnMut(&Frame) -> Option<T>) -> T {
+    let deadline = Instant::now() + PATIENCE;
+    loop {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        if let Some(found) = next_frames(client, what).iter().find_map(&mut wanted) {
+            return found;
+        }
+    }
+}
+
+fn hand_answering(client: &mut Client, stamp: InputStamp) -> HandFrame {
+    wait_for(client, "the answering hand frame", |frame| match frame {
+        Frame::Hand(hand) if hand.tracker == stamp || hand.glove == stamp => Some(*hand),
+        _ => None,
+    })
+}
+
+fn stamp_of(sample: &TrackerSample) -> InputStamp {
+    InputStamp {
+        seq: sample.seq,
+        timestamp_ns: sample.timestamp_ns,
+    }
+}
+
+#[test]
+fn scene_info_and_parts_frames_match_the_scene_config() {
+    let mut server = Server::start("sceneinfo");
+    let mut client = server.connect();
+    let scene = Scene::load(&default_scene_path()).expect("the default scene loads");
+
+    let info = client.scene_info(PATIENCE).expect("scene info");
+    assert_eq!(info.name, scene.name);
+    assert_eq!(info.parts.len(), scene.parts.len());
+    for (id, (described, part)) in info.parts.iter().zip(&scene.parts).enumerate() {
+        assert_eq!(described.id as usize, id);
+        assert_eq!(described.name, part.name);
+        assert_eq!(described.group, part.group);
+        assert_eq!(described.mesh_source, part.mesh_source);
+        assert_eq!(described.movable, part.movable);
+        assert!(!described.truncated);
+        let pose = described.initial_pose.to_isometry();
+        assert!((pose.translation.vector - part.pose.translation.vector).norm() < 1e-12);
+        assert!(pose.rotation.angle_to(&part.pose.rotation) < 1e-9);
+    }
+
+    let frame: PartsFrame = wait_for(&mut client, "a parts frame", |frame| match frame {
+        Frame::Parts(parts) => Some(parts.clone()),
+        Frame::Hand(_) => None,
+    });
+    assert_eq!(frame.header.part_count as usize, scene.parts.len());
+    assert_eq!(frame.parts.len(), scene.parts.len());
+    for (state, part) in frame.parts.iter().zip(&scene.parts) {
+        let pose = state.pose().to_isometry();
+        assert!((pose.translation.vector - part.pose.translation.vector).norm() < 1e-12);
+    }
+}
+
+#[test]
+fn a_tracker_sample_is_answered_by_a_hand_frame_carrying_its_seq() {
+    let mut server = Server::start("answer");
+    let mut client = server.connect();
+    let mut sample = tracker(42, [0.1, -0.2, 0.3]);
+    sample.cart.position = [0.0, 0.0, 1.0];
+    client.send_tracker(&sample).expect("send");
+
+    let frame = hand_answering(&mut client, stamp_of(&sample));
+    assert_eq!(frame.tracker.seq, 42);
+    assert_eq!(frame.root.position, [0.1, -0.2, 1.3], "cart * hand");
+    assert!(frame.timestamp_ns >= sample.timestamp_ns);
+    assert_eq!(client.latest_hand(), Some(&frame));
+    let stats = client.input_stats(PATIENCE).expect("stats");
+    assert_eq!(stats.tracker_accepted, 1);
+}
+
+#[test]
+fn glove_values_beyond_the_joint_limits_are_clamped_and_counted() {
+    let mut server = Server::start("clamp");
+    let mut client = server.connect();
+    let mut flex = [0.2f32; FLEX_COUNT];
+    flex[5] = 3.0;
+    let sample = GloveSample {
+        seq: 7,
+        timestamp_ns: wall_clock_ns(),
+        flex,
+    };
+    client.send_glove(&sample).expect("send");
+    let stamp = InputStamp {
+        seq: 7,
+        timestamp_ns: sample.timestamp_ns,
+    };
+    let frame = hand_answering(&mut client, stamp);
+    assert_eq!(frame.flex[5], FLEX_LIMITS_RAD[5].1);
+    assert_eq!(frame.flex[4], 0.2);
+    let stats = client.input_stats(PATIENCE).expect("stats");
+    assert_eq!((stats.glove_accepted, stats.glove_values_clamped), (1, 1));
+}
+
+#[test]
+fn a_nan_sample_is_rejected_and_counted_and_the_server_keeps_answering() {
+    let mut server = Server::start("nan");
+    let mut client = server.connect();
+    let nan = tracker(1, [f64::NAN, 0.0, 0.0]);
+    let mut unnormalised = tracker(2, [0.0; 3]);
+    unnormalised.hand.rotation = [0.0, 0.0, 0.0, 2.0];
+    let valid = tracker(3, [0.5, 0.5, 0.5]);
+    for sample in [&nan, &unnormalised, &valid] {
+        client.send_tracker(sample).expect("send");
+    }
+
+    // Frames arrive in order: every hand frame up to the answer to seq 3 must answer it.
+    let mut answered = Vec::new();
+    wait_for(
+        &mut client,
+        "the answer to the valid sample",
+        |frame| match frame {
+            Frame::Hand(hand) => {
+                answered.push(hand.tracker.seq);
+                (hand.tracker == stamp_of(&valid)).then_some(())
+            }
+            Frame::Parts(_) => None,
+        },
+    );
+    assert_eq!(answered, [3], "rejected samples get no hand frame");
+    let stats = client.input_stats(PATIENCE).expect("stats");
+    assert_eq!(stats.tracker_rejected_non_finite, 1);
+    assert_eq!(stats.tracker_rejected_quaternion, 1);
+    assert_eq!(stats.tracker_accepted, 1);
+    assert!(
+        server.process.wait_for_log("input rejected", PATIENCE),
+        "the rejection is logged"
+    );
+
+    let after = tracker(4, [0.0, 0.1, 0.0]);
+    client.send_tracker(&after).expect("send");
+    assert_eq!(hand_answering(&mut client, stamp_of(&after)).tracker.seq, 4);
+}
+
+/// Writes a recording of `count` tracker samples 1 ms apart.
+fn long_recording(path: &std::path::Path, count: u64) {
+    let mut writer = RecordingWriter::create(path, &RecordingHeader::new("demo", "a slow sweep"))
+        .expect("create");
+    for seq in 1..=count {
+        let mut sample = tracker(seq, [seq as f64 * 1e-4, 0.0, 1.0]);
+        sample.timestamp_ns = seq * 1_000_000;
+        writer.write(&InputSample::Tracker(sample)).expect("write");
+    }
+}
+
+#[test]
+fn a_killed_client_leaves_the_server_running_and_a_new_client_gets_the_latest_frame() {
+    const SAMPLES: u64 = 20_000;
+    let mut server = Server::start("sigkill");
+    let mut observer = server.connect();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = dir.path().join("sweep.jsonl");
+    long_recording(&recording, SAMPLES);
+
+    let mut replay = server.client_tool(
+        &["replay", recording.to_str().expect("utf-8")],
+        Stdio::null(),
+    );
+    let seen = wait_for(&mut observer, "the replay's frames", |frame| match frame {
+        Frame::Hand(hand) if hand.tracker.seq >= 20 => Some(hand.tracker.seq),
+        _ => None,
+    });
+    replay.signal(libc::SIGKILL);
+    assert!(replay.wait_exit(PATIENCE).is_some(), "the replay dies");
+
+    assert!(
+        server.process.is_running(),
+        "the server survives its client's death"
+    );
+    let mut newcomer = Client::connect(Some(server.prefix())).expect("connect");
+    let latest = wait_for(
+        &mut newcomer,
+        "the hand frame from history",
+        |frame| match frame {
+            Frame::Hand(hand) => Some(*hand),
+            Frame::Parts(_) => None,
+        },
+    );
+    assert!(
+        (seen..=SAMPLES).contains(&latest.tracker.seq),
+        "history holds the latest answer ({} after {seen})",
+        latest.tracker.seq
+    );
+    newcomer
+        .scene_info(PATIENCE)
+        .expect("the server still answers");
+    let sample = tracker(SAMPLES + 1, [0.0; 3]);
+    newcomer.send_tracker(&sample).expect("send");
+    assert_eq!(
+        hand_answering(&mut newcomer, stamp_of(&sample)).tracker.seq,
+        SAMPLES + 1
+    );
+    assert!(server.process.is_running());
+}
+
+fn stops_cleanly_on(signal: libc::c_int, test: &str) {
+    let mut server = Server::start(test);
+    server.connect();
+    server.process.signal(signal);
+    let status = server
+        .process
+        .wait_exit(Duration::from_secs(10))
+        .expect("the server stops within 10 s");
+    assert!(
+        status.success(),
+        "exit status {status}:\n{}",
+        server.process.log()
+    );
+    assert!(server.process.log().contains("shutting down"));
+}
+
+#[test]
+fn sigterm_stops_the_server_promptly_and_successfully() {
+    stops_cleanly_on(libc::SIGTERM, "sigterm");
+}
+
+#[test]
+fn sigint_stops_the_server_promptly_and_successfully() {
+    stops_cleanly_on(libc::SIGINT, "sigint");
+}
+
+#[test]
+fn a_second_server_on_the_same_prefix_is_refused() {
+    let mut first = Server::start("twice");
+    first.connect();
+    let mut second = vas_tests::Spawned::start(
+        &vas_tests::binary("vas-server"),
+        &["run", "--prefix", first.prefix()],
+        Stdio::null(),
+    );
+    let status = second
+        .wait_exit(PATIENCE)
+        .expect("the second server gives up");
+    assert!(!status.success());
+    assert!(
+        second.log().contains("vas/"),
+        "names the service: {}",
+        second.log()
+    );
+    assert!(first.process.is_running());
+}
+
+#[test]
+fn control_requests_load_scenes_reset_and_set_the_metaphor() {
+    let mut server = Server::start("control");
+    let client = server.connect();
+    let missing = configs_dir().join("missing.toml");
+    match client.load_scene(missing.to_str().expect("utf-8"), PATIENCE) {
+        Err(ClientError::Refused {
+            status, message, ..
+        }) => {
+            assert_eq!(status, ControlStatus::SceneLoadFailed);
+            assert!(message.contains("missing.toml"), "{message}");
+        }
+        other => panic!("loading a missing scene must be refused, got {other:?}"),
+    }
+    let peg = configs_dir().join("peg_in_hole.toml");
+    let expected = Scene::load(&peg).expect("loads");
+    client
+        .load_scene(peg.to_str().expect("utf-8"), PATIENCE)
+        .expect("load");
+    let info = client.scene_info(PATIENCE).expect("scene info");
+    assert_eq!(info.name, expected.name);
+    assert_eq!(info.parts.len(), expected.parts.len());
+    client.reset(PATIENCE).expect("reset");
+    client
+        .set_metaphor(SlidingMetaphor::RubberBandSpiralSpring, PATIENCE)
+        .expect("set metaphor");
+}
+
+#[test]
+fn watch_prints_frames_as_json_lines() {
+    let mut server = Server::start("watch");
+    server.connect();
+    let mut watch = server.client_tool(&["watch", "--count", "5"], Stdio::piped());
+    let stdout = watch.take_stdout().expect("piped");
+    let lines: Vec<String> = BufReader::new(stdout)
+        .lines()
+        .map_while(Result::ok)
+        .collect();
+    let status = watch
+        .wait_exit(PATIENCE)
+        .expect("watch ends after 5 frames");
+    assert!(status.success(), "{}", watch.log());
+    assert_eq!(lines.len(), 5);
+    let mut frames = Vec::new();
+    for line in &lines {
+        let json: serde_json::Value = serde_json::from_str(line).expect("a JSON line");
+        frames.push(json["parts"]["frame"].as_u64().expect("a parts frame"));
+    }
+    assert!(
+        frames.windows(2).all(|pair| pair[0] < pair[1]),
+        "{frames:?}"
+    );
+}
+
+#[test]
+fn record_writes_the_samples_clients_send() {
+    let mut server = Server::start("record");
+    let client = server.connect();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("take.jsonl");
+    let mut recorder = server.client_tool(
+        &[
+            "record",
+            file.to_str().expect("utf-8"),
+            "--count",
+            "3",
+            "--description",
+            "three",
+        ],
+        Stdio::null(),
+    );
+    assert!(
+        recorder.wait_for_log("recording", PATIENCE),
+        "{}",
+        recorder.log()
+    );
+    let first = tracker(1, [0.1, 0.0, 0.0]);
+    let glove = GloveSample {
+        seq: 1,
+        timestamp_ns: first.timestamp_ns + 1,
+        flex: [0.3; FLEX_COUNT],
+    };
+    let second = TrackerSample {
+        timestamp_ns: first.timestamp_ns + 2,
+        ..tracker(2, [0.2, 0.0, 0.0])
+    };
+    client.send_tracker(&first).expect("send");
+    client.send_glove(&glove).expect("send");
+    client.send_tracker(&second).expect("send");
+    let status = recorder
+        .wait_exit(PATIENCE)
+        .expect("the recorder stops after 3 samples");
+    assert!(status.success(), "{}", recorder.log());
+
+    let recording = Recording::load(&file).expect("a valid recording");
+    assert_eq!(recording.header, RecordingHeader::new("demo", "three"));
+    let inputs: Vec<_> = recording
+        .samples
+        .iter()
+        .map(|sample| sample.input)
+        .collect();
+    assert_eq!(
+        inputs,
+        [
+            InputSample::Tracker(first),
+            InputSample::Glove(glove),
+            InputSample::Tracker(second)
+        ]
+    );
+}
+
+/// Replays the fixture in lockstep and returns the answers the tool prints, without their
+/// timestamps (which differ from run to run).
+fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
+    let fixture = fixtures_dir().join("reach_and_close.jsonl");
+    let expected = Recording::load(&fixture)
+        .expect("the fixture loads")
+        .samples
+        .len();
+    let mut server = Server::start(test);
+    server.connect();
+    let mut replay = server.client_tool(
+        &["replay", "--lockstep", fixture.to_str().expect("utf-8")],
+        Stdio::piped(),
+    );
+    let stdout = replay.take_stdout().expect("piped");
+    let answers: Vec<serde_json::Value> = BufReader::new(stdout)
+        .lines()
+        .map_while(Result::ok)
+        .map(|line| {
+            let mut frame: serde_json::Value = serde_json::from_str(&line).expect("a JSON line");
+            let hand = frame["hand"].as_object_mut().expect("a hand frame");
+            hand.remove("timestamp_ns");
+            for stream in ["tracker", "glove"] {
+                hand[stream]
+                    .as_object_mut()
+                    .expect("a stamp")
+                    .remove("timestamp_ns");
+            }
+            frame
+        })
+        .collect();
+    let status = replay.wait_exit(PATIENCE).expect("the replay ends");
+    assert!(status.success(), "{}", replay.log());
+    assert!(
+        replay
+            .log()
+            .contains(&format!("answered={expected} unanswered=0")),
+        "{}",
+        replay.log()
+    );
+    assert_eq!(answers.len(), expected, "one answer per sample");
+    answers
+}
+
+#[test]
+fn a_lockstep_replay_answers_every_sample_the_same_way_twice() {
+    let once = lockstep_answers("lockstep1");
+    assert_eq!(once, lockstep_answers("lockstep2"));
+    // The fixture closes the fingers: the last answer is a bent hand.
+    let flex = once.last().expect("answers")["hand"]["flex"][5]
+        .as_f64()
+        .expect("a number");
+    assert!(flex > 0.5, "{flex}");
+}
