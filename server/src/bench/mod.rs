@@ -1,0 +1,3 @@
+//! Benchmark procedures of BENCHMARKS.md, shared by the `vas-server bench` subcommands and tests.
+
+pub mod report;
