@@ -5,4 +5,5 @@
 //! Only `runtime` knows about threads and IPC; every other module is a plain library.
 
 pub mod bench;
+pub mod collision;
 pub mod geometry;
