@@ -69,4 +69,4 @@ pub trait MeshCollider: Send + Sync {
 }
 
 #[cfg(test)]
-mod oracle_tests;
+pub(crate) mod oracle_tests;
