@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
+use vas_server::bench;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::write_obj;
 
@@ -30,6 +31,19 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Run a benchmark of BENCHMARKS.md.
+    Bench {
+        #[command(subcommand)]
+        benchmark: BenchCommand,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum BenchCommand {
+    /// B1: the tumbling pair (the paper's Figure 3 with --figure).
+    Tumble(bench::tumble::TumbleArgs),
+    /// B2: random poses of one mesh against another (FCL's procedure).
+    Random(bench::random::RandomArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +57,10 @@ fn main() -> ExitCode {
             triangles,
             out,
         } => write_shape(kind, triangles, &out),
+        Command::Bench { benchmark } => match benchmark {
+            BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
+            BenchCommand::Random(args) => bench::random::run_cli(&args),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -159,29 +159,40 @@ impl OrientationSet {
 
     /// The generic vertex supporting direction `u` (non-zero, any length) and the coefficients
     /// expressing `u` in its three normals; the coefficients are non-negative (rounding clamped).
-    ///
-    /// The vertex is the one whose normal cone contains `u`: looked up among the few candidates
-    /// of `u`'s cube-map cell, else searched among all vertices.
     pub fn support_cone(&self, u: &Vector3<f64>) -> SupportCone {
-        let cell = cube_cell(u);
-        let candidates =
-            &self.cell_vertices[self.cell_start[cell] as usize..self.cell_start[cell + 1] as usize];
+        let mut no_hint = u8::MAX;
+        self.support_cone_hinted(u, &mut no_hint)
+    }
+
+    /// [`Self::support_cone`], trying first the generic vertex `hint` (the answer for a nearby
+    /// direction, e.g. the same axis at the previous query: temporal coherence), then the few
+    /// candidates of `u`'s cube-map cell, then all vertices. `hint` is set to the vertex found.
+    pub fn support_cone_hinted(&self, u: &Vector3<f64>, hint: &mut u8) -> SupportCone {
         let tolerance = -1e-12 * u.abs().max();
-        let found = candidates.iter().find_map(|&v| {
-            let vertex = &self.vertices[v as usize];
-            let lambda = vertex.coefficients * u;
-            (lambda.min() >= tolerance).then_some((vertex, lambda))
-        });
-        let (vertex, lambda) = found.unwrap_or_else(|| {
-            let best = self
-                .vertices
-                .iter()
-                .max_by(|a, b| u.dot(&a.position).total_cmp(&u.dot(&b.position)))
-                .expect("a generic DOP has vertices");
-            (best, best.coefficients * u)
-        });
+        let contains = |v: u8| {
+            let lambda = self.vertices.get(v as usize)?.coefficients * u;
+            (lambda.min() >= tolerance).then_some((v, lambda))
+        };
+        let (v, lambda) = contains(*hint)
+            .or_else(|| {
+                let cell = cube_cell(u);
+                self.cell_vertices
+                    [self.cell_start[cell] as usize..self.cell_start[cell + 1] as usize]
+                    .iter()
+                    .find_map(|&v| contains(v))
+            })
+            .unwrap_or_else(|| {
+                let best = (0..self.vertices.len())
+                    .max_by(|&a, &b| {
+                        u.dot(&self.vertices[a].position)
+                            .total_cmp(&u.dot(&self.vertices[b].position))
+                    })
+                    .expect("a generic DOP has vertices");
+                (best as u8, self.vertices[best].coefficients * u)
+            });
+        *hint = v;
         SupportCone {
-            planes: vertex.planes,
+            planes: self.vertices[v as usize].planes,
             lambda: [lambda.x.max(0.0), lambda.y.max(0.0), lambda.z.max(0.0)],
         }
     }
@@ -344,6 +355,8 @@ mod tests {
                     rng.random_range(-1.0..1.0),
                 );
                 let cone = set.support_cone(&u);
+                let mut hint = rng.random_range(0..set.generic_vertex_count() as u8);
+                assert_eq!(set.support_cone_hinted(&u, &mut hint), cone);
                 let rebuilt: Vector3<f64> = (0..3)
                     .map(|l| set.normal(cone.planes[l] as usize) * cone.lambda[l])
                     .sum();
