@@ -503,7 +503,8 @@ fn round_up(x: f64) -> f32 {
 /// nodes are disjoint along axis i exactly when `a[i] + out[i] < 0`.
 pub(crate) trait Realign<const K: usize>: Sync {
     /// Writes the re-aligned offsets of node `node` of `b`.
-    fn realign(&self, b: &DopTree, node: usize, out: &mut [f32; K]);
+    /// With `FUSED`, multiply-adds are fused (only where the CPU has FMA, or they become calls).
+    fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]);
 }
 
 /// The paper's O(k) re-alignment: each new offset is `Σ λ d_j + n . t` over the three planes of
@@ -512,10 +513,10 @@ pub(crate) trait Realign<const K: usize>: Sync {
 /// Stored densely, one column of coefficients per plane of B, so that re-aligning a node is k_B
 /// vector multiply-adds of `K` lanes (no gathers; vectorises well).
 pub(crate) struct AffineRealign<const K: usize> {
-    /// `columns[j][i]`: coefficient of B's offset j in the re-aligned offset of slot i.
-    columns: [[f32; K]; MAX_K],
-    /// Number of B's orientations (columns in use).
-    b_k: usize,
+    /// `columns[j][i]`: coefficient of B's offset j in the re-aligned offset of slot i (on the
+    /// heap: a query moves this struct around, and copying k_B x K floats costs more than
+    /// allocating them).
+    columns: Vec<[f32; K]>,
     base: [f32; K],
 }
 
@@ -528,7 +529,7 @@ impl<const K: usize> AffineRealign<K> {
         translation: &Vector3<f64>,
         hints: &mut ConeHints,
     ) -> Self {
-        let mut columns = [[0f32; K]; MAX_K];
+        let mut columns = vec![[0f32; K]; b.k];
         let mut base = [0f32; K];
         let mut lambda_sum_max = 0.0f64;
         for i in 0..K {
@@ -550,11 +551,7 @@ impl<const K: usize> AffineRealign<K> {
         for x in &mut base {
             *x += margin;
         }
-        AffineRealign {
-            columns,
-            b_k: b.k,
-            base,
-        }
+        AffineRealign { columns, base }
     }
 }
 
@@ -565,50 +562,99 @@ pub(crate) fn rounding_margin(scale: f64) -> f32 {
 
 impl<const K: usize> Realign<K> for AffineRealign<K> {
     #[inline(always)]
-    fn realign(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
-        let mut e = self.base;
-        for (column, &d) in self.columns[..self.b_k].iter().zip(b.node_offsets(node)) {
-            for i in 0..K {
-                e[i] += column[i] * d;
+    fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
+        // Four independent accumulators: one chain of k multiply-adds would be latency bound.
+        let mut acc = [self.base, [0.0; K], [0.0; K], [0.0; K]];
+        let columns = &self.columns[..];
+        let d = b.node_offsets(node);
+        let mut groups = columns.chunks_exact(4).zip(d.chunks_exact(4));
+        for (group, offsets) in &mut groups {
+            for lane in 0..4 {
+                multiply_add::<K, FUSED>(&mut acc[lane], &group[lane], offsets[lane]);
             }
         }
-        *out = e;
+        let done = columns.len() - columns.len() % 4;
+        for (column, &offset) in columns[done..].iter().zip(&d[done..]) {
+            multiply_add::<K, FUSED>(&mut acc[0], column, offset);
+        }
+        for i in 0..K {
+            out[i] = (acc[0][i] + acc[1][i]) + (acc[2][i] + acc[3][i]);
+        }
+    }
+}
+
+/// `acc += column * d`, lane by lane (fused where `FUSED`).
+#[inline(always)]
+fn multiply_add<const K: usize, const FUSED: bool>(acc: &mut [f32; K], column: &[f32; K], d: f32) {
+    for i in 0..K {
+        acc[i] = if FUSED {
+            column[i].mul_add(d, acc[i])
+        } else {
+            acc[i] + column[i] * d
+        };
     }
 }
 
 /// True when A's node offsets `a` and B's re-aligned opposite offsets `e` overlap on every axis.
 #[inline(always)]
 fn dops_overlap<const K: usize>(a: &[f32; K], e: &[f32; K]) -> bool {
-    let mut overlap = true;
+    overlap_slack(a, e) >= 0.0
+}
+
+/// The least `a_i + e_i`: how deeply the DOPs overlap along their tightest axis (negative when
+/// they are disjoint).
+#[inline(always)]
+fn overlap_slack<const K: usize>(a: &[f32; K], e: &[f32; K]) -> f32 {
+    let mut least = f32::INFINITY;
     for i in 0..K {
-        overlap &= a[i] + e[i] >= 0.0;
+        let s = a[i] + e[i];
+        least = if s < least { s } else { least };
     }
-    overlap
+    least
+}
+
+/// This query's view of the per-thread re-alignment cache.
+struct RealignCache<'a> {
+    stamp: u32,
+    tags: &'a mut [(u32, u32)],
+    realigned: &'a mut [f32],
 }
 
 /// Per-thread buffers reused across queries: the re-alignment cache (stamped per query) and the
 /// traversal stack.
-#[derive(Default)]
+///
+/// The cache is direct-mapped with [`CACHE_SLOTS`] entries (B node `n` goes to slot
+/// `n % CACHE_SLOTS`), small enough to stay in the core's L2 cache whatever the tree size; an
+/// entry is valid when its tag holds this query's stamp and the node.
 struct Scratch {
     stamp: u32,
-    stamps: Vec<u32>,
+    /// Per slot: (stamp of the query that filled it, B node it holds).
+    tags: Vec<(u32, u32)>,
     realigned: Vec<f32>,
     stack: Vec<(u32, u32)>,
 }
 
+/// Entries of the per-thread re-alignment cache (a power of two).
+const CACHE_SLOTS: usize = 4096;
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch {
+            stamp: 0,
+            tags: vec![(0, 0); CACHE_SLOTS],
+            realigned: vec![0.0; CACHE_SLOTS * MAX_K],
+            stack: Vec::new(),
+        }
+    }
+}
+
 impl Scratch {
-    /// Starts a query over a B tree of `nodes` nodes with re-aligned DOPs of `k` offsets.
-    fn begin(&mut self, nodes: usize, k: usize) {
+    /// Starts a query: a new stamp invalidates every cache entry.
+    fn begin(&mut self) {
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
-            self.stamps.fill(0);
+            self.tags.fill((0, 0));
             self.stamp = 1;
-        }
-        if self.stamps.len() < nodes {
-            self.stamps.resize(nodes, 0);
-        }
-        if self.realigned.len() < nodes * k {
-            self.realigned.resize(nodes * k, 0.0);
         }
         self.stack.clear();
     }
@@ -732,7 +778,8 @@ impl<R> TreePair<'_, R> {
     }
 
     /// Depth-first traversal from one node pair with this thread's re-alignment cache, compiled
-    /// for AVX2 where the CPU has it (the interval tests and re-alignments are vector code).
+    /// for AVX2 and FMA where the CPU has them (the interval tests and re-alignments are vector
+    /// code).
     fn sequential<const ALL: bool, const K: usize>(
         &self,
         start: (u32, u32),
@@ -745,17 +792,19 @@ impl<R> TreePair<'_, R> {
     {
         with_scratch(|scratch| {
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports AVX2, checked just above.
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU supports AVX2 and FMA, checked just above.
                 return unsafe { self.traverse_avx2::<ALL, K>(scratch, start, stats, out, stop) };
             }
-            self.traverse::<ALL, K>(scratch, start, stats, out, stop)
+            self.traverse::<ALL, K, false>(scratch, start, stats, out, stop)
         })
     }
 
-    /// [`Self::traverse`] compiled with AVX2 enabled.
+    /// [`Self::traverse`] compiled with AVX2 and FMA enabled.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     fn traverse_avx2<const ALL: bool, const K: usize>(
         &self,
         scratch: &mut Scratch,
@@ -767,12 +816,12 @@ impl<R> TreePair<'_, R> {
     where
         R: Realign<K>,
     {
-        self.traverse::<ALL, K>(scratch, start, stats, out, stop)
+        self.traverse::<ALL, K, true>(scratch, start, stats, out, stop)
     }
 
     /// The traversal itself: a stack of node pairs, B's nodes re-aligned once per query.
     #[inline(always)]
-    fn traverse<const ALL: bool, const K: usize>(
+    fn traverse<const ALL: bool, const K: usize, const FUSED: bool>(
         &self,
         scratch: &mut Scratch,
         start: (u32, u32),
@@ -783,33 +832,32 @@ impl<R> TreePair<'_, R> {
     where
         R: Realign<K>,
     {
-        scratch.begin(self.b.nodes.len(), K);
+        scratch.begin();
         let stamp = scratch.stamp;
         let Scratch {
-            stamps,
+            tags,
             realigned,
             stack,
             ..
         } = scratch;
+        let mut cache = RealignCache {
+            stamp,
+            tags,
+            realigned,
+        };
         let mut hit = false;
+        if self.slack::<K, FUSED>(&mut cache, start, stats) < 0.0 {
+            return false;
+        }
+        // The stack holds node pairs already known to overlap. Children pairs are tested when
+        // generated and the one overlapping more deeply is visited first: a first hit is found
+        // sooner.
         stack.push(start);
         while let Some((ia, ib)) = stack.pop() {
             if let Some(stop) = stop
                 && stop.load(Ordering::Relaxed)
             {
                 break;
-            }
-            let slot = ib as usize * K;
-            let e: &mut [f32; K] = (&mut realigned[slot..slot + K]).try_into().unwrap();
-            if stamps[ib as usize] != stamp {
-                stamps[ib as usize] = stamp;
-                self.realigner.realign(self.b, ib as usize, e);
-                stats.realignments += 1;
-            }
-            stats.bv_tests += 1;
-            let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
-            if !dops_overlap(da, e) {
-                continue;
             }
             stats.nodes_visited += 1;
             let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
@@ -826,10 +874,47 @@ impl<R> TreePair<'_, R> {
                 continue;
             }
             let [first, second] = self.children(ia, ib);
-            stack.push(second);
-            stack.push(first);
+            let first_slack = self.slack::<K, FUSED>(&mut cache, first, stats);
+            let second_slack = self.slack::<K, FUSED>(&mut cache, second, stats);
+            let (deeper, shallower) = if first_slack >= second_slack {
+                ((first, first_slack), (second, second_slack))
+            } else {
+                ((second, second_slack), (first, first_slack))
+            };
+            if shallower.1 >= 0.0 {
+                stack.push(shallower.0);
+            }
+            if deeper.1 >= 0.0 {
+                stack.push(deeper.0);
+            }
         }
         hit
+    }
+
+    /// The overlap slack of a node pair: the least `a_i + e_i` over the axes, negative exactly
+    /// when some axis separates them. B's node is re-aligned unless cached for this query.
+    #[inline(always)]
+    fn slack<const K: usize, const FUSED: bool>(
+        &self,
+        cache: &mut RealignCache<'_>,
+        (ia, ib): (u32, u32),
+        stats: &mut QueryStats,
+    ) -> f32
+    where
+        R: Realign<K>,
+    {
+        let slot = ib as usize % CACHE_SLOTS;
+        let e: &mut [f32; K] = (&mut cache.realigned[slot * K..(slot + 1) * K])
+            .try_into()
+            .unwrap();
+        if cache.tags[slot] != (cache.stamp, ib) {
+            cache.tags[slot] = (cache.stamp, ib);
+            self.realigner.realign::<FUSED>(self.b, ib as usize, e);
+            stats.realignments += 1;
+        }
+        stats.bv_tests += 1;
+        let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
+        overlap_slack(da, e)
     }
 
     /// Splits the traversal into rayon tasks down to `depth`, then traverses sequentially.
@@ -854,7 +939,7 @@ impl<R> TreePair<'_, R> {
             return found;
         }
         let mut e = [0f32; K];
-        self.realigner.realign(self.b, ib as usize, &mut e);
+        self.realigner.realign::<false>(self.b, ib as usize, &mut e);
         found.stats.realignments += 1;
         found.stats.bv_tests += 1;
         let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
