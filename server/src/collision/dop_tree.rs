@@ -195,9 +195,9 @@ fn with_affine<const ALL: bool>(
     }
 }
 
-/// Cheap start of a query: along the single orientation of A closest to the direction from A's
-/// centre to B's, first B's bounding sphere, then B's re-aligned root offset (one support cone
-/// instead of k) are tested against A's root. Pairs far apart end here.
+/// Cheap start of a query: along the few orientations of A closest to the direction from A's
+/// centre to B's, B's bounding sphere and then B's root re-aligned along that orientation only
+/// (one support cone instead of k) are tested against A's root. Pairs far apart end here.
 fn roots_separated_along_offset(
     a: &DopTree,
     b: &DopTree,
@@ -206,40 +206,47 @@ fn roots_separated_along_offset(
 ) -> bool {
     let centre_b = b_to_a * b.bounding_centre;
     let offset = centre_b - a.bounding_centre;
-    let Some((axis, along)) = a
-        .set
-        .axes()
-        .iter()
-        .enumerate()
-        .map(|(i, axis)| (i, axis.dot(&offset)))
-        .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
-    else {
-        return false;
-    };
-    // Slot `axis` compares A's maximum along +axis with B's minimum; slot `axis + k/2` the reverse.
-    let slot = if along >= 0.0 { axis } else { axis + a.k / 2 };
-    let a_max = a.node_offsets(0)[slot] as f64;
-    let direction = -a.set.normal(slot);
-    if a_max < -direction.dot(&centre_b.coords) - b.bounding_radius {
-        return true;
+    // Slot i compares A's maximum along n_i with B's minimum along n_i: promising when B lies
+    // far along n_i.
+    let mut probes = [(f64::MIN, 0usize); ROOT_PROBES];
+    for i in 0..a.k {
+        let score = a.set.normal(i).dot(&offset);
+        if score > probes[ROOT_PROBES - 1].0 {
+            probes[ROOT_PROBES - 1] = (score, i);
+            probes.sort_by(|x, y| y.0.total_cmp(&x.0));
+        }
     }
-    let cone = b.set.support_cone_hinted(
-        &b_to_a.rotation.inverse_transform_vector(&direction),
-        &mut hints[slot],
-    );
+    let translation = &b_to_a.translation.vector;
     let d = b.node_offsets(0);
-    let b_support = (0..3)
-        .map(|l| cone.lambda[l] * d[cone.planes[l] as usize] as f64)
-        .sum::<f64>()
-        + direction.dot(&b_to_a.translation.vector);
-    // Rounding of the f32 offsets is covered by the margin, as in the traversal.
-    let margin = rounding_margin(
-        cone.lambda.iter().sum::<f64>() * b.max_abs_offset() as f64
-            + b_to_a.translation.vector.norm()
-            + a.max_abs_offset() as f64,
-    ) as f64;
-    a_max + b_support + margin < 0.0
+    for &(_, slot) in &probes {
+        let a_max = a.node_offsets(0)[slot] as f64;
+        let direction = -a.set.normal(slot);
+        if a_max < -direction.dot(&centre_b.coords) - b.bounding_radius {
+            return true;
+        }
+        let cone = b.set.support_cone_hinted(
+            &b_to_a.rotation.inverse_transform_vector(&direction),
+            &mut hints[slot],
+        );
+        let b_support = (0..3)
+            .map(|l| cone.lambda[l] * d[cone.planes[l] as usize] as f64)
+            .sum::<f64>()
+            + direction.dot(translation);
+        // The offsets are f32: the same margin as in the traversal covers their rounding.
+        let margin = rounding_margin(
+            cone.lambda.iter().sum::<f64>() * b.max_abs_offset() as f64
+                + translation.norm()
+                + a.max_abs_offset() as f64,
+        ) as f64;
+        if a_max + b_support + margin < 0.0 {
+            return true;
+        }
+    }
+    false
 }
+
+/// Number of orientations tried by [`roots_separated_along_offset`] before a full query.
+const ROOT_PROBES: usize = 3;
 
 /// Per orientation slot of A, the generic vertex of B's set that supported it at the previous
 /// query on this thread: the first candidate tried (temporal coherence of poses).
@@ -532,15 +539,23 @@ impl<const K: usize> AffineRealign<K> {
         let mut columns = vec![[0f32; K]; b.k];
         let mut base = [0f32; K];
         let mut lambda_sum_max = 0.0f64;
-        for i in 0..K {
+        let r = rotation;
+        for (i, hint) in hints.iter_mut().enumerate().take(K) {
             let direction = -a.set.normal(i);
+            // u = Rᵀ direction, written out: nalgebra's generic product is slower here.
+            let u = Vector3::new(
+                r[(0, 0)] * direction.x + r[(1, 0)] * direction.y + r[(2, 0)] * direction.z,
+                r[(0, 1)] * direction.x + r[(1, 1)] * direction.y + r[(2, 1)] * direction.z,
+                r[(0, 2)] * direction.x + r[(1, 2)] * direction.y + r[(2, 2)] * direction.z,
+            );
             let cone = b
                 .set
-                .support_cone_hinted(&rotation.tr_mul(&direction), &mut hints[i]);
+                .cone_if_contains(*hint, &u)
+                .unwrap_or_else(|| b.set.support_cone_hinted(&u, hint));
             for l in 0..3 {
                 columns[cone.planes[l] as usize][i] = cone.lambda[l] as f32;
             }
-            lambda_sum_max = lambda_sum_max.max(cone.lambda.iter().sum());
+            lambda_sum_max = lambda_sum_max.max(cone.lambda[0] + cone.lambda[1] + cone.lambda[2]);
             base[i] = direction.dot(translation) as f32;
         }
         let margin = rounding_margin(

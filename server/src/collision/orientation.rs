@@ -164,6 +164,19 @@ impl OrientationSet {
         self.support_cone_hinted(u, &mut no_hint)
     }
 
+    /// The cone of generic vertex `v` if it contains the unit direction `u` (the fast path of a
+    /// query whose rotation changed little since the previous one).
+    #[inline]
+    pub fn cone_if_contains(&self, v: u8, u: &Vector3<f64>) -> Option<SupportCone> {
+        let vertex = self.vertices.get(v as usize)?;
+        let c = &vertex.coefficients;
+        let lambda = [0, 1, 2].map(|r| c[(r, 0)] * u.x + c[(r, 1)] * u.y + c[(r, 2)] * u.z);
+        (lambda[0] >= -1e-12 && lambda[1] >= -1e-12 && lambda[2] >= -1e-12).then(|| SupportCone {
+            planes: vertex.planes,
+            lambda: lambda.map(|l| l.max(0.0)),
+        })
+    }
+
     /// [`Self::support_cone`], trying first the generic vertex `hint` (the answer for a nearby
     /// direction, e.g. the same axis at the previous query: temporal coherence), then the few
     /// candidates of `u`'s cube-map cell, then all vertices. `hint` is set to the vertex found.
