@@ -519,12 +519,23 @@ pub(crate) trait Realign<const K: usize>: Sync {
 ///
 /// Stored densely, one column of coefficients per plane of B, so that re-aligning a node is k_B
 /// vector multiply-adds of `K` lanes (no gathers; vectorises well).
+///
+/// Leaves are handled exactly instead: their few triangle corners are moved into A's frame and
+/// projected on A's directions, which costs about as much as the affine combination and gives
+/// the tightest enclosing DOP (a leaf's DOP is flat, far from the generic structure, so the affine
+/// bound is loose there).
 pub(crate) struct AffineRealign<const K: usize> {
     /// `columns[j][i]`: coefficient of B's offset j in the re-aligned offset of slot i (on the
     /// heap: a query moves this struct around, and copying k_B x K floats costs more than
     /// allocating them).
     columns: Vec<[f32; K]>,
     base: [f32; K],
+    /// Directions of the slots (`-n_i`, A's frame) by component, for projecting leaf corners.
+    directions: [[f32; K]; 3],
+    rotation: Matrix3<f64>,
+    translation: Vector3<f64>,
+    /// Bound on the f32 rounding of a projected leaf corner.
+    leaf_margin: f32,
 }
 
 impl<const K: usize> AffineRealign<K> {
@@ -566,7 +577,23 @@ impl<const K: usize> AffineRealign<K> {
         for x in &mut base {
             *x += margin;
         }
-        AffineRealign { columns, base }
+        let mut directions = [[0f32; K]; 3];
+        for i in 0..K {
+            let direction = -a.set.normal(i);
+            for c in 0..3 {
+                directions[c][i] = direction[c] as f32;
+            }
+        }
+        // A moved corner is within |t| + |centre_B| + radius_B of A's origin.
+        let reach = translation.norm() + b.bounding_centre.coords.norm() + b.bounding_radius;
+        AffineRealign {
+            columns,
+            base,
+            directions,
+            rotation: *rotation,
+            translation: *translation,
+            leaf_margin: rounding_margin(reach),
+        }
     }
 }
 
@@ -578,6 +605,25 @@ pub(crate) fn rounding_margin(scale: f64) -> f32 {
 impl<const K: usize> Realign<K> for AffineRealign<K> {
     #[inline(always)]
     fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
+        let leaf = &b.nodes[node];
+        if leaf.is_leaf() {
+            *out = [f32::MIN; K];
+            for triangle in &b.triangles[leaf.first as usize..(leaf.first + leaf.count) as usize] {
+                for corner in triangle {
+                    let y = (self.rotation * corner.coords + self.translation).cast::<f32>();
+                    for i in 0..K {
+                        let p = self.directions[0][i] * y.x
+                            + self.directions[1][i] * y.y
+                            + self.directions[2][i] * y.z;
+                        out[i] = if p > out[i] { p } else { out[i] };
+                    }
+                }
+            }
+            for x in out.iter_mut() {
+                *x += self.leaf_margin;
+            }
+            return;
+        }
         // Four independent accumulators: one chain of k multiply-adds would be latency bound.
         let mut acc = [self.base, [0.0; K], [0.0; K], [0.0; K]];
         let columns = &self.columns[..];
