@@ -577,13 +577,8 @@ impl<const K: usize> AffineRealign<K> {
         for x in &mut base {
             *x += margin;
         }
-        let mut directions = [[0f32; K]; 3];
-        for i in 0..K {
-            let direction = -a.set.normal(i);
-            for c in 0..3 {
-                directions[c][i] = direction[c] as f32;
-            }
-        }
+        let directions: [[f32; K]; 3] =
+            std::array::from_fn(|c| std::array::from_fn(|i| -a.set.normal(i)[c] as f32));
         // A moved corner is within |t| + |centre_B| + radius_B of A's origin.
         let reach = translation.norm() + b.bounding_centre.coords.norm() + b.bounding_radius;
         AffineRealign {
@@ -611,11 +606,10 @@ impl<const K: usize> Realign<K> for AffineRealign<K> {
             for triangle in &b.triangles[leaf.first as usize..(leaf.first + leaf.count) as usize] {
                 for corner in triangle {
                     let y = (self.rotation * corner.coords + self.translation).cast::<f32>();
-                    for i in 0..K {
-                        let p = self.directions[0][i] * y.x
-                            + self.directions[1][i] * y.y
-                            + self.directions[2][i] * y.z;
-                        out[i] = if p > out[i] { p } else { out[i] };
+                    let [dx, dy, dz] = &self.directions;
+                    for (i, o) in out.iter_mut().enumerate() {
+                        let p = dx[i] * y.x + dy[i] * y.y + dz[i] * y.z;
+                        *o = if p > *o { p } else { *o };
                     }
                 }
             }
