@@ -10,8 +10,8 @@ use serde::Serialize;
 
 use super::report::{LinePlot, Series, write_json, write_svg_line_plot};
 use super::tumble::{
-    Algo, AlgoResult, BuildResult, BuiltCollider, build_results, build_table, results_table,
-    run_poses,
+    Algo, AlgoResult, BuildResult, BuiltCollider, build_results, build_table, print_disagreements,
+    results_table, run_poses,
 };
 use crate::collision::OrientationSet;
 use crate::geometry::{TriMesh, parse_mesh_spec};
@@ -161,6 +161,7 @@ pub fn run_cli(args: &RandomArgs) -> Result<()> {
     print!("{}", results_table(&report.results).render());
     print!("{}", build_table(&report.build).render());
     println!("mismatches: {}", report.mismatches);
+    print_disagreements(&report.results);
     if let Some(path) = &args.json {
         write_json(path, &report)?;
     }

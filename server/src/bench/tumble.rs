@@ -161,6 +161,8 @@ pub struct AlgoResult {
     pub tri_tests: f64,
     /// Time per query at percentiles 0, 1, ..., 100, microseconds.
     pub percentiles_us: Vec<f64>,
+    /// Poses at which this algorithm's answer differs from the first algorithm's.
+    pub disagreements: usize,
 }
 
 /// Build cost of one algorithm.
@@ -192,6 +194,7 @@ pub fn run_poses(
     let mut times = vec![vec![Duration::MAX; poses.len()]; colliders.len()];
     let mut stats = vec![QueryStats::default(); colliders.len()];
     let mut hits = vec![0usize; colliders.len()];
+    let mut disagreements = vec![0usize; colliders.len()];
     let mut mismatches = 0;
     let overhead = timer_overhead();
     for round in 0..rounds.max(1) {
@@ -211,6 +214,9 @@ pub fn run_poses(
             }
             if round == 0 {
                 mismatches += answers.iter().any(|&h| h != answers[0]) as usize;
+                for (count, &answer) in disagreements.iter_mut().zip(&answers) {
+                    *count += (answer != answers[0]) as usize;
+                }
             }
         }
     }
@@ -237,6 +243,7 @@ pub fn run_poses(
                 nodes_visited: stats[i].nodes_visited as f64 / n,
                 tri_tests: stats[i].tri_tests as f64 / n,
                 percentiles_us,
+                disagreements: disagreements[i],
             }
         })
         .collect();
@@ -523,6 +530,7 @@ pub fn run_cli(args: &TumbleArgs) -> Result<()> {
     print!("{}", results_table(&report.results).render());
     print!("{}", build_table(&report.build).render());
     println!("mismatches: {}", report.mismatches);
+    print_disagreements(&report.results);
     if let Some(path) = &args.json {
         write_json(path, &report)?;
     }
@@ -577,6 +585,20 @@ fn run_figure_cli(args: &TumbleArgs, orientations: OrientationSet) -> Result<()>
         write_svg_line_plot(path, &figure3_plot(&points))?;
     }
     Ok(())
+}
+
+/// Names the algorithms that disagreed with the first one, and at how many poses.
+pub fn print_disagreements(results: &[AlgoResult]) {
+    for r in results.iter().filter(|r| r.disagreements > 0) {
+        let at = r
+            .distance
+            .map(|d| format!(" at d = {d}"))
+            .unwrap_or_default();
+        println!(
+            "  {} disagreed with {} at {} poses{at}",
+            r.algo, results[0].algo, r.disagreements
+        );
+    }
 }
 
 /// Build time and memory as a table.
