@@ -1017,11 +1017,19 @@ impl<R> TreePair<'_, R> {
             let first_slack = self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, first, stats);
             let second_slack =
                 self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, second, stats);
-            let (deeper, shallower) = if first_slack >= second_slack {
-                ((first, first_slack), (second, second_slack))
-            } else {
-                ((second, second_slack), (first, first_slack))
+            // Relative depth: overlap over the size of the pair's smaller node.
+            let relative = |(ia, ib): (u32, u32), slack: f32| {
+                let size = self.a.nodes[ia as usize]
+                    .size
+                    .min(self.b.nodes[ib as usize].size);
+                slack / size.max(f32::MIN_POSITIVE)
             };
+            let (deeper, shallower) =
+                if relative(first, first_slack) >= relative(second, second_slack) {
+                    ((first, first_slack), (second, second_slack))
+                } else {
+                    ((second, second_slack), (first, first_slack))
+                };
             if shallower.1 >= 0.0 {
                 stack.push(shallower.0);
             }
