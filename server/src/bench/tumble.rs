@@ -1,0 +1,703 @@
+//! B1, the tumbling pair (the paper's Figure 3), and the machinery it shares with B2: a set of
+//! exact colliders built over two meshes, run on the same poses, timed per query, with their
+//! answers compared at every pose.
+//!
+//! Procedure: both meshes are centred on their bounding-box centre and scaled to fit [-1, 1]^3.
+//! A stays at the identity; B is at translation (d, 0, 0) with rotation Rz(a)·Rx(a),
+//! a = 2π s / steps, for s = 0 .. steps-1, at every distance d. One first-hit query per step and
+//! algorithm; the algorithms take turns at each step, so that machine noise hits them alike.
+
+use std::fmt;
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, bail};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use serde::Serialize;
+
+use super::report::{
+    LinePlot, Series, Table, TimingSummary, format_number, timer_overhead, write_json,
+    write_svg_line_plot,
+};
+use crate::collision::{
+    DopTree, KdopBruteForceTree, MeshCollider, ObbTree, OrientationSet, ParryMesh, QueryStats,
+};
+use crate::geometry::shapes::{self, ShapeKind};
+use crate::geometry::{TriMesh, parse_mesh_spec};
+
+/// The default distances of B1.
+pub const DEFAULT_DISTANCES: [f64; 9] = [3.0, 2.5, 2.0, 1.75, 1.5, 1.25, 1.0, 0.75, 0.5];
+
+/// The default number of steps per distance.
+pub const DEFAULT_STEPS: usize = 5000;
+
+/// An exact collision algorithm that the benchmarks compare.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Algo {
+    /// The DOP-tree with O(k) re-alignment.
+    Doptree,
+    /// The DOP-tree, one query's traversal split across threads.
+    DoptreePar,
+    /// The k-DOP tree re-aligned by brute force (QuickCD).
+    KdopBruteforce,
+    /// The OBB-tree (RAPID).
+    Obbtree,
+    /// parry3d's mesh-mesh intersection test.
+    Parry,
+}
+
+impl Algo {
+    /// The four algorithms of the paper's comparison plus the peer (the default of `--algos`).
+    pub const DEFAULT: [Algo; 4] = [
+        Algo::Doptree,
+        Algo::KdopBruteforce,
+        Algo::Obbtree,
+        Algo::Parry,
+    ];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Algo::Doptree => "doptree",
+            Algo::DoptreePar => "doptree-par",
+            Algo::KdopBruteforce => "kdop-bruteforce",
+            Algo::Obbtree => "obbtree",
+            Algo::Parry => "parry",
+        }
+    }
+}
+
+/// A first-hit query of one algorithm over a fixed pair of meshes.
+type Query = Box<dyn Fn(&Isometry3<f64>, &mut QueryStats) -> bool + Send + Sync>;
+
+/// One algorithm built over meshes A and B.
+pub struct BuiltCollider {
+    /// Which algorithm.
+    pub algo: Algo,
+    /// Time to build both structures.
+    pub build_time: Duration,
+    /// Bytes per triangle of both structures (0 where unknown, for parry).
+    pub bytes_per_triangle: f64,
+    query: Query,
+}
+
+impl BuiltCollider {
+    /// Builds `algo` over `a` and `b`; DOP-based algorithms use `set`.
+    pub fn new(algo: Algo, a: &TriMesh, b: &TriMesh, set: &OrientationSet) -> Self {
+        let triangles = (a.triangles().len() + b.triangles().len()) as f64;
+        let start = Instant::now();
+        let (query, bytes): (Query, usize) = match algo {
+            Algo::Doptree | Algo::DoptreePar => {
+                let (ta, tb) = (
+                    DopTree::with_orientations(a, set),
+                    DopTree::with_orientations(b, set),
+                );
+                let bytes = ta.bytes() + tb.bytes();
+                let query: Query = if algo == Algo::Doptree {
+                    Box::new(move |pose, stats| ta.intersects(&tb, pose, stats))
+                } else {
+                    Box::new(move |pose, stats| ta.intersects_parallel(&tb, pose, stats))
+                };
+                (query, bytes)
+            }
+            Algo::KdopBruteforce => {
+                let (ta, tb) = (
+                    KdopBruteForceTree::with_orientations(a, set),
+                    KdopBruteForceTree::with_orientations(b, set),
+                );
+                let bytes = ta.tree().bytes() + tb.tree().bytes();
+                (
+                    Box::new(move |pose, stats| ta.intersects(&tb, pose, stats)),
+                    bytes,
+                )
+            }
+            Algo::Obbtree => {
+                let (ta, tb) = (ObbTree::build(a), ObbTree::build(b));
+                let bytes = ta.bytes() + tb.bytes();
+                (
+                    Box::new(move |pose, stats| ta.intersects(&tb, pose, stats)),
+                    bytes,
+                )
+            }
+            Algo::Parry => {
+                let (ta, tb) = (ParryMesh::build(a), ParryMesh::build(b));
+                (
+                    Box::new(move |pose, stats| ta.intersects(&tb, pose, stats)),
+                    0,
+                )
+            }
+        };
+        BuiltCollider {
+            algo,
+            build_time: start.elapsed(),
+            bytes_per_triangle: bytes as f64 / triangles,
+            query,
+        }
+    }
+}
+
+/// Timings and counters of one algorithm over one set of poses.
+#[derive(Debug, Clone, Serialize)]
+pub struct AlgoResult {
+    /// Algorithm name.
+    pub algo: String,
+    /// Distance of B1 (none for B2).
+    pub distance: Option<f64>,
+    /// Mean time per query, microseconds.
+    pub mean_us: f64,
+    /// Median time per query, microseconds.
+    pub median_us: f64,
+    /// Largest time of one query, microseconds.
+    pub max_us: f64,
+    /// Fraction of poses in collision.
+    pub hit_fraction: f64,
+    /// Mean bounding-volume tests per query.
+    pub bv_tests: f64,
+    /// Mean re-alignments per query.
+    pub realignments: f64,
+    /// Mean node pairs opened per query.
+    pub nodes_visited: f64,
+    /// Mean triangle tests per query.
+    pub tri_tests: f64,
+    /// Time per query at percentiles 0, 1, ..., 100, microseconds.
+    pub percentiles_us: Vec<f64>,
+    /// Poses at which this algorithm's answer differs from the first algorithm's.
+    pub disagreements: usize,
+}
+
+/// Build cost of one algorithm.
+#[derive(Debug, Clone, Serialize)]
+pub struct BuildResult {
+    /// Algorithm name.
+    pub algo: String,
+    /// Time to build the structures of both meshes, milliseconds.
+    pub build_ms: f64,
+    /// Bytes per triangle of both structures (0 where unknown).
+    pub bytes_per_triangle: f64,
+}
+
+/// Runs every collider on every pose, in turns; returns per-algorithm results and the number of
+/// poses at which the algorithms did not all give the same answer.
+///
+/// The whole pose sequence is run `rounds` times and each pose's time is its fastest round: on a
+/// shared machine a query preempted by another process costs milliseconds, which would swamp
+/// means of microseconds; a preemption rarely hits the same query in every round. Replaying the
+/// sequence (rather than repeating a query at once) keeps the caches and the temporal coherence
+/// the same as in one pass. Answers and counters come from the first round. Times exclude the
+/// cost of reading the clock (see [`timer_overhead`]).
+pub fn run_poses(
+    colliders: &[BuiltCollider],
+    poses: &[Isometry3<f64>],
+    distance: Option<f64>,
+    rounds: usize,
+) -> (Vec<AlgoResult>, usize) {
+    let mut times = vec![vec![Duration::MAX; poses.len()]; colliders.len()];
+    let mut stats = vec![QueryStats::default(); colliders.len()];
+    let mut hits = vec![0usize; colliders.len()];
+    let mut disagreements = vec![0usize; colliders.len()];
+    let mut mismatches = 0;
+    let overhead = timer_overhead();
+    for round in 0..rounds.max(1) {
+        for (p, pose) in poses.iter().enumerate() {
+            let mut answers = Vec::with_capacity(colliders.len());
+            for (i, collider) in colliders.iter().enumerate() {
+                let mut round_stats = QueryStats::default();
+                let start = Instant::now();
+                let hit = (collider.query)(pose, &mut round_stats);
+                let elapsed = start.elapsed().saturating_sub(overhead);
+                times[i][p] = times[i][p].min(elapsed);
+                if round == 0 {
+                    stats[i] += round_stats;
+                    hits[i] += hit as usize;
+                    answers.push(hit);
+                }
+            }
+            if round == 0 {
+                mismatches += answers.iter().any(|&h| h != answers[0]) as usize;
+                for (count, &answer) in disagreements.iter_mut().zip(&answers) {
+                    *count += (answer != answers[0]) as usize;
+                }
+            }
+        }
+    }
+    let n = poses.len().max(1) as f64;
+    let results = colliders
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let timing = TimingSummary::from_durations(&times[i]);
+            let mut sorted: Vec<f64> = times[i].iter().map(|t| t.as_secs_f64() * 1e6).collect();
+            sorted.sort_by(f64::total_cmp);
+            let percentiles_us = (0..=100)
+                .map(|p| sorted[(p * (sorted.len() - 1)) / 100])
+                .collect();
+            AlgoResult {
+                algo: c.algo.name().to_string(),
+                distance,
+                mean_us: timing.mean_us,
+                median_us: timing.median_us,
+                max_us: timing.max_us,
+                hit_fraction: hits[i] as f64 / n,
+                bv_tests: stats[i].bv_tests as f64 / n,
+                realignments: stats[i].realignments as f64 / n,
+                nodes_visited: stats[i].nodes_visited as f64 / n,
+                tri_tests: stats[i].tri_tests as f64 / n,
+                percentiles_us,
+                disagreements: disagreements[i],
+            }
+        })
+        .collect();
+    (results, mismatches)
+}
+
+/// Parameters of B1.
+#[derive(Debug, Clone)]
+pub struct TumbleConfig {
+    /// Steps per distance.
+    pub steps: usize,
+    /// Distances d of B's centre from A's.
+    pub distances: Vec<f64>,
+    /// Algorithms to compare.
+    pub algos: Vec<Algo>,
+    /// Orientation set of the DOP-based algorithms.
+    pub orientations: OrientationSet,
+    /// Passes over the poses; each query's time is its fastest pass (see [`run_poses`]).
+    pub rounds: usize,
+}
+
+/// The JSON document of B1.
+#[derive(Debug, Clone, Serialize)]
+pub struct TumbleReport {
+    /// Always "tumble".
+    pub benchmark: &'static str,
+    /// Steps per distance.
+    pub steps: usize,
+    /// Triangles of A.
+    pub triangles_a: usize,
+    /// Triangles of B.
+    pub triangles_b: usize,
+    /// DOP orientations used.
+    pub k: usize,
+    /// Passes over the poses (each query's time is its fastest pass).
+    pub rounds: usize,
+    /// Steps (over all distances) where the algorithms disagreed.
+    pub mismatches: usize,
+    /// One entry per algorithm and distance.
+    pub results: Vec<AlgoResult>,
+    /// Build time and memory per algorithm.
+    pub build: Vec<BuildResult>,
+}
+
+/// B's pose at step `s` of `steps` at distance `d`.
+pub fn tumble_pose(d: f64, s: usize, steps: usize) -> Isometry3<f64> {
+    let a = std::f64::consts::TAU * s as f64 / steps as f64;
+    let rotation = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a)
+        * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), a);
+    Isometry3::from_parts(Translation3::new(d, 0.0, 0.0), rotation)
+}
+
+/// Runs B1 on meshes `a` and `b` (normalised here).
+pub fn run_tumble(a: &TriMesh, b: &TriMesh, config: &TumbleConfig) -> Result<TumbleReport> {
+    if config.steps == 0 || config.distances.is_empty() || config.algos.is_empty() {
+        bail!("the tumbling benchmark needs at least one step, one distance and one algorithm");
+    }
+    let (a, b) = (a.normalized_to_unit_box(), b.normalized_to_unit_box());
+    let colliders: Vec<BuiltCollider> = config
+        .algos
+        .iter()
+        .map(|&algo| BuiltCollider::new(algo, &a, &b, &config.orientations))
+        .collect();
+    let mut results = Vec::new();
+    let mut mismatches = 0;
+    for &d in &config.distances {
+        let poses: Vec<_> = (0..config.steps)
+            .map(|s| tumble_pose(d, s, config.steps))
+            .collect();
+        let (mut r, m) = run_poses(&colliders, &poses, Some(d), config.rounds);
+        results.append(&mut r);
+        mismatches += m;
+    }
+    Ok(TumbleReport {
+        benchmark: "tumble",
+        steps: config.steps,
+        triangles_a: a.triangles().len(),
+        triangles_b: b.triangles().len(),
+        k: config.orientations.k(),
+        rounds: config.rounds,
+        mismatches,
+        results,
+        build: build_results(&colliders),
+    })
+}
+
+/// Build time and bytes per triangle of each collider.
+pub fn build_results(colliders: &[BuiltCollider]) -> Vec<BuildResult> {
+    colliders
+        .iter()
+        .map(|c| BuildResult {
+            algo: c.algo.name().to_string(),
+            build_ms: c.build_time.as_secs_f64() * 1e3,
+            bytes_per_triangle: c.bytes_per_triangle,
+        })
+        .collect()
+}
+
+/// The results as a table: one row per algorithm and distance, with the DOP-tree's speed-up over
+/// each other algorithm measured in the same run.
+pub fn results_table(results: &[AlgoResult]) -> Table {
+    let mut table = Table::new([
+        "algo",
+        "d",
+        "mean_us",
+        "median_us",
+        "max_us",
+        "hit",
+        "bv_tests",
+        "realign",
+        "tri_tests",
+        "doptree_x",
+    ]);
+    for r in results {
+        let doptree = results
+            .iter()
+            .find(|o| o.algo == Algo::Doptree.name() && o.distance == r.distance);
+        let ratio = doptree
+            .map(|o| format!("{:.1}", r.mean_us / o.mean_us))
+            .unwrap_or_default();
+        table.push_row([
+            r.algo.clone(),
+            r.distance.map(|d| d.to_string()).unwrap_or_default(),
+            format_number(r.mean_us),
+            format_number(r.median_us),
+            format_number(r.max_us),
+            format!("{:.0}%", 100.0 * r.hit_fraction),
+            format_number(r.bv_tests),
+            format_number(r.realignments),
+            format_number(r.tri_tests),
+            ratio,
+        ]);
+    }
+    table
+}
+
+/// One object of the Figure 3 sweep: its family (curve) name and mesh.
+pub struct FigureObject {
+    /// Curve the object belongs to ("sphere", "torus", ..., or "real").
+    pub family: String,
+    /// Label of the object (for the table).
+    pub label: String,
+    /// The mesh, used as both A and B.
+    pub mesh: TriMesh,
+}
+
+/// One point of Figure 3: mean time per query of one algorithm on one object, over all distances.
+#[derive(Debug, Clone, Serialize)]
+pub struct FigurePoint {
+    /// Curve family of the object.
+    pub family: String,
+    /// Object label.
+    pub label: String,
+    /// Triangles of the object.
+    pub triangles: usize,
+    /// Algorithm name.
+    pub algo: String,
+    /// Mean time per query over every distance and step, microseconds.
+    pub mean_us: f64,
+    /// Steps where the algorithms disagreed.
+    pub mismatches: usize,
+}
+
+/// Runs B1 on every object (both copies the same mesh) and averages over distances.
+pub fn figure3(objects: &[FigureObject], config: &TumbleConfig) -> Result<Vec<FigurePoint>> {
+    let mut points = Vec::new();
+    for object in objects {
+        let report = run_tumble(&object.mesh, &object.mesh, config)?;
+        for algo in &config.algos {
+            let rows: Vec<&AlgoResult> = report
+                .results
+                .iter()
+                .filter(|r| r.algo == algo.name())
+                .collect();
+            let mean_us = rows.iter().map(|r| r.mean_us).sum::<f64>() / rows.len() as f64;
+            points.push(FigurePoint {
+                family: object.family.clone(),
+                label: object.label.clone(),
+                triangles: report.triangles_a,
+                algo: algo.name().to_string(),
+                mean_us,
+                mismatches: report.mismatches,
+            });
+        }
+    }
+    Ok(points)
+}
+
+/// Figure 3 as a log-log line plot: one curve per algorithm and object family.
+pub fn figure3_plot(points: &[FigurePoint]) -> LinePlot {
+    let mut series: Vec<Series> = Vec::new();
+    for p in points {
+        let name = format!("{} / {}", p.algo, p.family);
+        match series.iter_mut().find(|s| s.name == name) {
+            Some(s) => s.points.push((p.triangles as f64, p.mean_us)),
+            None => series.push(Series {
+                name,
+                points: vec![(p.triangles as f64, p.mean_us)],
+            }),
+        }
+    }
+    for s in &mut series {
+        s.points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    LinePlot {
+        title: "Tumbling pair: mean time per query".into(),
+        x_label: "triangles per object".into(),
+        y_label: "microseconds per query".into(),
+        log_x: true,
+        log_y: true,
+        series,
+    }
+}
+
+/// Command-line arguments of `vas-server bench tumble`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TumbleArgs {
+    /// Mesh A (and B unless --mesh-b): a file or shape:KIND:TRIANGLES. With --figure, real
+    /// meshes to add to the sweep (repeatable).
+    #[arg(long, required_unless_present = "figure")]
+    pub mesh: Vec<String>,
+    /// Mesh B (default: a copy of A).
+    #[arg(long)]
+    pub mesh_b: Option<String>,
+    /// Steps per distance (default 5000, or 300 with --figure).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Distances d, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES)]
+    pub distances: Vec<f64>,
+    /// Algorithms to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = Algo::DEFAULT)]
+    pub algos: Vec<Algo>,
+    /// Number of DOP orientations (6, 14, 18, 24 or 26).
+    #[arg(long, default_value_t = crate::collision::orientation::DEFAULT_K)]
+    pub k: usize,
+    /// Passes over the poses; each query's time is its fastest pass (robust to preemption).
+    #[arg(long, default_value_t = 3)]
+    pub rounds: usize,
+    /// Write the results as JSON to this file.
+    #[arg(long)]
+    pub json: Option<std::path::PathBuf>,
+    /// Draw an SVG plot: time per query against distance, or Figure 3 with --figure.
+    #[arg(long)]
+    pub svg: Option<std::path::PathBuf>,
+    /// Run the Figure 3 sweep: sphere, hyperboloid and torus at each of --figure-sizes
+    /// triangles, plus the --mesh files.
+    #[arg(long)]
+    pub figure: bool,
+    /// Triangle counts of the procedural objects in the Figure 3 sweep.
+    #[arg(long, value_delimiter = ',', default_values_t = [1_000usize, 5_000, 10_000, 50_000, 100_000])]
+    pub figure_sizes: Vec<usize>,
+}
+
+impl fmt::Display for Algo {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// `vas-server bench tumble`: runs B1 (or the Figure 3 sweep), prints the table, writes files.
+pub fn run_cli(args: &TumbleArgs) -> Result<()> {
+    let orientations = OrientationSet::new(args.k)?;
+    if args.figure {
+        return run_figure_cli(args, orientations);
+    }
+    let a = parse_mesh_spec(&args.mesh[0])?;
+    let b = match &args.mesh_b {
+        Some(spec) => parse_mesh_spec(spec)?,
+        None => a.clone(),
+    };
+    let config = TumbleConfig {
+        steps: args.steps.unwrap_or(DEFAULT_STEPS),
+        distances: args.distances.clone(),
+        algos: args.algos.clone(),
+        orientations,
+        rounds: args.rounds,
+    };
+    let report = run_tumble(&a, &b, &config)?;
+    println!(
+        "tumbling pair: {} x {} triangles, {} steps per distance, k = {}, fastest of {} rounds",
+        report.triangles_a, report.triangles_b, report.steps, report.k, report.rounds
+    );
+    print!("{}", results_table(&report.results).render());
+    print!("{}", build_table(&report.build).render());
+    println!("mismatches: {}", report.mismatches);
+    print_disagreements(&report.results);
+    if let Some(path) = &args.json {
+        write_json(path, &report)?;
+    }
+    if let Some(path) = &args.svg {
+        write_svg_line_plot(path, &distance_plot(&report.results))?;
+    }
+    Ok(())
+}
+
+/// The Figure 3 sweep from the command line.
+fn run_figure_cli(args: &TumbleArgs, orientations: OrientationSet) -> Result<()> {
+    let mut objects = Vec::new();
+    for kind in [ShapeKind::Sphere, ShapeKind::Hyperboloid, ShapeKind::Torus] {
+        for &n in &args.figure_sizes {
+            objects.push(FigureObject {
+                family: kind.name().to_string(),
+                label: format!("{kind} {n}"),
+                mesh: shapes::build(kind, n),
+            });
+        }
+    }
+    for spec in &args.mesh {
+        objects.push(FigureObject {
+            family: "real".to_string(),
+            label: spec.clone(),
+            mesh: parse_mesh_spec(spec)?,
+        });
+    }
+    let config = TumbleConfig {
+        steps: args.steps.unwrap_or(300),
+        distances: args.distances.clone(),
+        algos: args.algos.clone(),
+        orientations,
+        rounds: args.rounds,
+    };
+    let points = figure3(&objects, &config)?;
+    let mut table = Table::new(["object", "triangles", "algo", "mean_us", "mismatches"]);
+    for p in &points {
+        table.push_row([
+            p.label.clone(),
+            p.triangles.to_string(),
+            p.algo.clone(),
+            format_number(p.mean_us),
+            p.mismatches.to_string(),
+        ]);
+    }
+    print!("{}", table.render());
+    if let Some(path) = &args.json {
+        write_json(path, &points)?;
+    }
+    if let Some(path) = &args.svg {
+        write_svg_line_plot(path, &figure3_plot(&points))?;
+    }
+    Ok(())
+}
+
+/// Names the algorithms that disagreed with the first one, and at how many poses.
+pub fn print_disagreements(results: &[AlgoResult]) {
+    for r in results.iter().filter(|r| r.disagreements > 0) {
+        let at = r
+            .distance
+            .map(|d| format!(" at d = {d}"))
+            .unwrap_or_default();
+        println!(
+            "  {} disagreed with {} at {} poses{at}",
+            r.algo, results[0].algo, r.disagreements
+        );
+    }
+}
+
+/// Build time and memory as a table.
+pub fn build_table(build: &[BuildResult]) -> Table {
+    let mut table = Table::new(["algo", "build_ms", "bytes_per_triangle"]);
+    for b in build {
+        table.push_row([
+            b.algo.clone(),
+            format_number(b.build_ms),
+            format_number(b.bytes_per_triangle),
+        ]);
+    }
+    table
+}
+
+/// Mean time per query against distance, one curve per algorithm (log time axis).
+fn distance_plot(results: &[AlgoResult]) -> LinePlot {
+    let mut series: Vec<Series> = Vec::new();
+    for r in results {
+        let point = (r.distance.unwrap_or_default(), r.mean_us.max(1e-3));
+        match series.iter_mut().find(|s| s.name == r.algo) {
+            Some(s) => s.points.push(point),
+            None => series.push(Series {
+                name: r.algo.clone(),
+                points: vec![point],
+            }),
+        }
+    }
+    for s in &mut series {
+        s.points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    LinePlot {
+        title: "Tumbling pair: mean time per query".into(),
+        x_label: "distance d".into(),
+        y_label: "microseconds per query".into(),
+        log_x: false,
+        log_y: true,
+        series,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::oracle_tests::torus;
+
+    #[test]
+    fn tumble_runs_every_algorithm_without_mismatch() {
+        let mesh = torus(0.35, 20, 10);
+        let config = TumbleConfig {
+            steps: 40,
+            distances: vec![2.5, 1.0],
+            algos: vec![
+                Algo::Doptree,
+                Algo::DoptreePar,
+                Algo::KdopBruteforce,
+                Algo::Obbtree,
+                Algo::Parry,
+            ],
+            orientations: OrientationSet::default(),
+            rounds: 2,
+        };
+        let report = run_tumble(&mesh, &mesh, &config).unwrap();
+        assert_eq!(report.mismatches, 0);
+        assert_eq!(report.results.len(), 10);
+        let far = &report.results[0];
+        let near = report
+            .results
+            .iter()
+            .find(|r| r.distance == Some(1.0))
+            .unwrap();
+        assert!(far.hit_fraction < near.hit_fraction);
+        assert!(near.hit_fraction > 0.9, "a torus through a torus at d = 1");
+        let json = serde_json::to_value(&report).unwrap();
+        for key in [
+            "algo",
+            "distance",
+            "mean_us",
+            "max_us",
+            "hit_fraction",
+            "bv_tests",
+            "realignments",
+            "tri_tests",
+        ] {
+            assert!(json["results"][0].get(key).is_some(), "{key}");
+        }
+        assert!(
+            results_table(&report.results)
+                .render()
+                .contains("kdop-bruteforce")
+        );
+    }
+
+    #[test]
+    fn algorithm_names_round_trip() {
+        use clap::ValueEnum;
+        for algo in Algo::value_variants() {
+            assert_eq!(Algo::from_str(algo.name(), false).unwrap(), *algo);
+        }
+        assert!(Algo::from_str("rapid", false).is_err());
+    }
+}

@@ -1,0 +1,1124 @@
+//! The DOP-tree: a bounding-volume tree of k-DOPs over a triangle mesh, and the simultaneous
+//! traversal of two such trees with lazy O(k) re-alignment (the paper's §2.1).
+//!
+//! Layout, chosen for the traversal's memory traffic: node offsets are `f32`, `k` contiguous per
+//! node (so the interval test is one vectorised pass); the two children of a node are adjacent;
+//! nodes are numbered depth first; leaves hold one triangle (by default) stored by value.
+//! Offsets are rounded outwards to `f32`, and every re-aligned offset gets a margin that bounds
+//! its `f32` rounding, so no overlap is ever missed; the triangle test is exact in `f64`.
+//!
+//! Build: top-down with a binned surface heuristic (see `TreeBuilder::partition`). Every
+//! node's offsets are the extremes of its triangles, so every plane touches the geometry (no
+//! completely redundant half-space, the condition of the affine re-alignment).
+//!
+//! Query, in B's pose in A's frame:
+//! 1. a few of A's root slabs nearest the direction from A to B are tested against B's bounding
+//!    sphere and B's root re-aligned along that slab only: far pairs end here, in tens of ns;
+//! 2. otherwise the support cone of each of A's k directions in B's orientation set is found
+//!    (first trying last query's vertex: temporal coherence), giving the affine map from B's
+//!    offsets to re-aligned ones, stored densely for vector multiply-adds;
+//! 3. depth-first traversal: B's nodes are re-aligned lazily, once per query (a small
+//!    direct-mapped cache), leaves exactly from their corners; children pairs are tested when
+//!    generated and the deeper overlap is visited first; pairs that A's axes barely fail to
+//!    separate are also tested along B's axes (A's node re-aligned into B's frame).
+//!
+//! The traversal is compiled twice, portable and with AVX2/FMA, chosen at run time.
+
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
+
+use super::orientation::OrientationSet;
+use super::triangle::{Triangle, triangles_intersect};
+use super::{MeshCollider, QueryStats};
+use crate::geometry::TriMesh;
+
+/// Default number of triangles per leaf (the fastest in the tumbling benchmark).
+pub const DEFAULT_LEAF_SIZE: usize = 1;
+
+/// Depth to which the parallel traversal splits the node-pair tree into rayon tasks (up to
+/// 2^depth tasks). Measured: a first-hit query of a few microseconds gets slower in parallel
+/// (task hand-over costs more than the work); the split pays for long traversals such as all
+/// pairs of two meshes in deep contact.
+const PARALLEL_DEPTH: u32 = 6;
+
+/// One tree node: a leaf (`count > 0`) owns triangles `first..first + count`; an inner node
+/// (`count == 0`) has children `first` and `first + 1`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Node {
+    first: u32,
+    count: u32,
+    /// Largest slab width of the node's DOP: the traversal descends the larger node.
+    size: f32,
+}
+
+impl Node {
+    fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+}
+
+/// A DOP-tree over one mesh: built once, shared read-only (it is `Send + Sync`).
+#[derive(Debug, Clone)]
+pub struct DopTree {
+    set: OrientationSet,
+    k: usize,
+    nodes: Vec<Node>,
+    /// `k` offsets per node: `offsets[node * k + i] >= max over the node's triangles of n_i . x`.
+    offsets: Vec<f32>,
+    /// Triangles in leaf order.
+    triangles: Vec<Triangle>,
+    /// Original index (in the mesh) of each triangle in leaf order.
+    triangle_ids: Vec<u32>,
+    /// Largest absolute offset in the tree (bounds rounding errors of re-alignment).
+    max_abs_offset: f32,
+    /// Centre and radius of a sphere enclosing the mesh (for the cheap first test of a query).
+    bounding_centre: Point3<f64>,
+    bounding_radius: f64,
+}
+
+impl DopTree {
+    /// Builds the tree over `mesh` with orientation set `set` and at most `leaf_size` (>= 1)
+    /// triangles per leaf.
+    pub fn with_options(mesh: &TriMesh, set: &OrientationSet, leaf_size: usize) -> Self {
+        TreeBuilder::new(mesh, set, leaf_size.max(1)).build()
+    }
+
+    /// Builds the tree with orientation set `set` and the default leaf size.
+    pub fn with_orientations(mesh: &TriMesh, set: &OrientationSet) -> Self {
+        DopTree::with_options(mesh, set, DEFAULT_LEAF_SIZE)
+    }
+
+    /// The orientation set the tree was built with.
+    pub fn orientations(&self) -> &OrientationSet {
+        &self.set
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Heap bytes used by the tree (nodes, offsets, triangles and their ids).
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node>()
+            + self.offsets.len() * size_of::<f32>()
+            + self.triangles.len() * (size_of::<Triangle>() + size_of::<u32>())
+    }
+
+    /// The `k` offsets of node `index`.
+    pub(crate) fn node_offsets(&self, index: usize) -> &[f32] {
+        &self.offsets[index * self.k..(index + 1) * self.k]
+    }
+
+    /// Largest absolute offset of any node.
+    pub(crate) fn max_abs_offset(&self) -> f32 {
+        self.max_abs_offset
+    }
+
+    /// Like [`MeshCollider::intersects`], with the traversal split across rayon's threads
+    /// (dynamic load balancing by work stealing); worth it when one pair dominates.
+    pub fn intersects_parallel(
+        &self,
+        other: &DopTree,
+        b_to_a: &Isometry3<f64>,
+        stats: &mut QueryStats,
+    ) -> bool {
+        let mut unused = Vec::new();
+        with_affine::<false>(self, other, b_to_a, stats, &mut unused, true)
+    }
+
+    /// Like [`MeshCollider::intersecting_pairs`], split across rayon's threads; the pairs come
+    /// out in no particular order.
+    pub fn intersecting_pairs_parallel(
+        &self,
+        other: &DopTree,
+        b_to_a: &Isometry3<f64>,
+        out: &mut Vec<[u32; 2]>,
+        stats: &mut QueryStats,
+    ) {
+        with_affine::<true>(self, other, b_to_a, stats, out, true);
+    }
+}
+
+impl MeshCollider for DopTree {
+    fn build(mesh: &TriMesh) -> Self {
+        DopTree::with_orientations(mesh, &OrientationSet::default())
+    }
+
+    fn intersects(&self, other: &Self, b_to_a: &Isometry3<f64>, stats: &mut QueryStats) -> bool {
+        let mut unused = Vec::new();
+        with_affine::<false>(self, other, b_to_a, stats, &mut unused, false)
+    }
+
+    fn intersecting_pairs(
+        &self,
+        other: &Self,
+        b_to_a: &Isometry3<f64>,
+        out: &mut Vec<[u32; 2]>,
+        stats: &mut QueryStats,
+    ) {
+        with_affine::<true>(self, other, b_to_a, stats, out, false);
+    }
+}
+
+/// Runs a query with the O(k) affine re-alignment, dispatching on A's k.
+fn with_affine<const ALL: bool>(
+    a: &DopTree,
+    b: &DopTree,
+    b_to_a: &Isometry3<f64>,
+    stats: &mut QueryStats,
+    out: &mut Vec<[u32; 2]>,
+    parallel: bool,
+) -> bool {
+    fn run<const K: usize, const ALL: bool>(
+        a: &DopTree,
+        b: &DopTree,
+        b_to_a: &Isometry3<f64>,
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        parallel: bool,
+    ) -> bool {
+        let mut hints = CONE_HINTS.get();
+        let separated = roots_separated_along_offset(a, b, b_to_a, &mut hints);
+        let pair = (!separated).then(|| {
+            TreePair::new(a, b, b_to_a, |rotation, translation| {
+                AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
+            })
+        });
+        CONE_HINTS.set(hints);
+        match pair {
+            Some(pair) => pair.run::<ALL, K>(stats, out, parallel),
+            None => {
+                stats.bv_tests += 1;
+                false
+            }
+        }
+    }
+    match a.k {
+        6 => run::<6, ALL>(a, b, b_to_a, stats, out, parallel),
+        14 => run::<14, ALL>(a, b, b_to_a, stats, out, parallel),
+        18 => run::<18, ALL>(a, b, b_to_a, stats, out, parallel),
+        24 => run::<24, ALL>(a, b, b_to_a, stats, out, parallel),
+        26 => run::<26, ALL>(a, b, b_to_a, stats, out, parallel),
+        k => unreachable!("orientation sets have a supported k, not {k}"),
+    }
+}
+
+/// Cheap start of a query: along the few orientations of A closest to the direction from A's
+/// centre to B's, B's bounding sphere and then B's root re-aligned along that orientation only
+/// (one support cone instead of k) are tested against A's root. Pairs far apart end here.
+fn roots_separated_along_offset(
+    a: &DopTree,
+    b: &DopTree,
+    b_to_a: &Isometry3<f64>,
+    hints: &mut ConeHints,
+) -> bool {
+    let centre_b = b_to_a * b.bounding_centre;
+    let offset = centre_b - a.bounding_centre;
+    // Slot i compares A's maximum along n_i with B's minimum along n_i: promising when B lies
+    // far along n_i.
+    let mut probes = [(f64::MIN, 0usize); ROOT_PROBES];
+    for i in 0..a.k {
+        let score = a.set.normal(i).dot(&offset);
+        if score > probes[ROOT_PROBES - 1].0 {
+            probes[ROOT_PROBES - 1] = (score, i);
+            probes.sort_by(|x, y| y.0.total_cmp(&x.0));
+        }
+    }
+    let translation = &b_to_a.translation.vector;
+    let d = b.node_offsets(0);
+    for &(_, slot) in &probes {
+        let a_max = a.node_offsets(0)[slot] as f64;
+        let direction = -a.set.normal(slot);
+        if a_max < -direction.dot(&centre_b.coords) - b.bounding_radius {
+            return true;
+        }
+        let cone = b.set.support_cone_hinted(
+            &b_to_a.rotation.inverse_transform_vector(&direction),
+            &mut hints[slot],
+        );
+        let b_support = (0..3)
+            .map(|l| cone.lambda[l] * d[cone.planes[l] as usize] as f64)
+            .sum::<f64>()
+            + direction.dot(translation);
+        // The offsets are f32: the same margin as in the traversal covers their rounding.
+        let margin = rounding_margin(
+            cone.lambda.iter().sum::<f64>() * b.max_abs_offset() as f64
+                + translation.norm()
+                + a.max_abs_offset() as f64,
+        ) as f64;
+        if a_max + b_support + margin < 0.0 {
+            return true;
+        }
+    }
+    false
+}
+
+/// Number of orientations tried by [`roots_separated_along_offset`] before a full query.
+const ROOT_PROBES: usize = 3;
+
+/// Per orientation slot of A, the generic vertex of B's set that supported it at the previous
+/// query on this thread: the first candidate tried (temporal coherence of poses).
+type ConeHints = [u8; MAX_K];
+
+/// The largest supported k.
+const MAX_K: usize = 26;
+
+thread_local! {
+    static CONE_HINTS: std::cell::Cell<ConeHints> = const { std::cell::Cell::new([u8::MAX; MAX_K]) };
+    static REVERSE_CONE_HINTS: std::cell::Cell<ConeHints> =
+        const { std::cell::Cell::new([u8::MAX; MAX_K]) };
+}
+
+/// Top-down construction state.
+struct TreeBuilder<'a> {
+    set: &'a OrientationSet,
+    leaf_size: usize,
+    k: usize,
+    triangles: Vec<Triangle>,
+    /// `k` support values per triangle, in mesh order, rounded up to `f32`.
+    triangle_dops: Vec<f32>,
+    /// Centroid of each triangle, in mesh order.
+    centroids: Vec<Point3<f64>>,
+    order: Vec<u32>,
+    nodes: Vec<Node>,
+    offsets: Vec<f32>,
+}
+
+impl<'a> TreeBuilder<'a> {
+    fn new(mesh: &TriMesh, set: &'a OrientationSet, leaf_size: usize) -> Self {
+        let k = set.k();
+        let triangles: Vec<Triangle> = (0..mesh.triangles().len())
+            .map(|i| mesh.triangle(i))
+            .collect();
+        let mut triangle_dops = Vec::with_capacity(triangles.len() * k);
+        for t in &triangles {
+            triangle_dops.extend((0..k).map(|i| {
+                let n = set.normal(i);
+                round_up(t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max))
+            }));
+        }
+        let centroids = triangles
+            .iter()
+            .map(|t| Point3::from((t[0].coords + t[1].coords + t[2].coords) / 3.0))
+            .collect();
+        TreeBuilder {
+            set,
+            leaf_size,
+            k,
+            order: (0..triangles.len() as u32).collect(),
+            triangles,
+            triangle_dops,
+            centroids,
+            nodes: Vec::new(),
+            offsets: Vec::new(),
+        }
+    }
+
+    fn build(mut self) -> DopTree {
+        self.push_nodes(1);
+        self.build_node(0, 0, self.triangles.len());
+        let max_abs_offset = self.offsets[..self.k]
+            .iter()
+            .fold(0.0f32, |m, d| m.max(d.abs()));
+        let (lo, hi) = self.triangles.iter().flatten().fold(
+            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
+            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+        );
+        let bounding_centre = Point3::from((lo + hi) * 0.5);
+        let radius = self
+            .triangles
+            .iter()
+            .flatten()
+            .map(|p| (p - bounding_centre).norm())
+            .fold(0.0, f64::max);
+        DopTree {
+            bounding_centre,
+            bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
+            set: self.set.clone(),
+            k: self.k,
+            nodes: self.nodes,
+            offsets: self.offsets,
+            triangles: self
+                .order
+                .iter()
+                .map(|&i| self.triangles[i as usize])
+                .collect(),
+            triangle_ids: self.order,
+            max_abs_offset,
+        }
+    }
+
+    fn push_nodes(&mut self, count: usize) -> usize {
+        let first = self.nodes.len();
+        for _ in 0..count {
+            self.nodes.push(Node {
+                first: 0,
+                count: 0,
+                size: 0.0,
+            });
+        }
+        self.offsets.resize(self.nodes.len() * self.k, 0.0);
+        first
+    }
+
+    fn build_node(&mut self, index: usize, start: usize, end: usize) {
+        let k = self.k;
+        let h = k / 2;
+        let mut dop = vec![f32::MIN; k];
+        for &t in &self.order[start..end] {
+            let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
+            merge_max(&mut dop, support);
+        }
+        self.offsets[index * k..(index + 1) * k].copy_from_slice(&dop);
+        let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max);
+        let count = end - start;
+        if count <= self.leaf_size {
+            self.nodes[index] = Node {
+                first: start as u32,
+                count: count as u32,
+                size,
+            };
+            return;
+        }
+        let mid = self.partition(start, end);
+        let children = self.push_nodes(2);
+        self.nodes[index] = Node {
+            first: children as u32,
+            count: 0,
+            size,
+        };
+        self.build_node(children, start, mid);
+        self.build_node(children + 1, mid, end);
+    }
+
+    /// Splits `order[start..end]` in two non-empty halves and returns where the second begins.
+    ///
+    /// Binned surface heuristic: along each orientation axis the centroids are put in
+    /// [`SPLIT_BINS`] bins, and the split between bins minimising
+    /// `size(left) * count(left) + size(right) * count(right)` is taken, where `size` is the sum of
+    /// the child DOP's slab widths (proportional to its mean width, hence to how often a node of
+    /// the other tree overlaps it). Falls back to the median when all centroids share a bin.
+    fn partition(&mut self, start: usize, end: usize) -> usize {
+        let k = self.k;
+        let h = k / 2;
+        // (cost, axis, lowest projection, bins per unit length, first bin of the right side)
+        let mut best: Option<(f64, usize, f64, f64, usize)> = None;
+        let mut bin_dops = vec![f32::MIN; SPLIT_BINS * k];
+        let mut bin_counts = [0usize; SPLIT_BINS];
+        let mut left_dops = vec![f32::MIN; SPLIT_BINS * k];
+        // Centroid extent along every axis.
+        let spreads: Vec<(usize, f64, f64)> = self
+            .set
+            .axes()
+            .iter()
+            .enumerate()
+            .map(|(i, axis)| {
+                let (lo, hi) = self.order[start..end]
+                    .iter()
+                    .map(|&t| axis.dot(&self.centroids[t as usize].coords))
+                    .fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+                (i, lo, hi)
+            })
+            .collect();
+        // Few triangles: as many bins as triangles keeps the cost linear in their number.
+        let bins = SPLIT_BINS.min(end - start);
+        for &(axis_index, lo, hi) in &spreads {
+            let axis = self.set.axes()[axis_index];
+            if hi - lo <= 1e-12 * (hi.abs() + lo.abs() + 1.0) {
+                continue;
+            }
+            let scale = bins as f64 / (hi - lo);
+            bin_dops[..bins * k].fill(f32::MIN);
+            bin_counts.fill(0);
+            for &t in &self.order[start..end] {
+                let bin = bin_of(
+                    axis.dot(&self.centroids[t as usize].coords),
+                    lo,
+                    scale,
+                    bins,
+                );
+                bin_counts[bin] += 1;
+                let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
+                merge_max(&mut bin_dops[bin * k..(bin + 1) * k], support);
+            }
+            // Prefix DOPs from the left, then sweep from the right.
+            let mut running = vec![f32::MIN; k];
+            for bin in 0..bins {
+                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
+                left_dops[bin * k..(bin + 1) * k].copy_from_slice(&running);
+            }
+            let size = |dop: &[f32]| (0..h).map(|i| (dop[i] + dop[i + h]) as f64).sum::<f64>();
+            running.fill(f32::MIN);
+            let mut right_count = 0;
+            for bin in (1..bins).rev() {
+                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
+                right_count += bin_counts[bin];
+                let left_count = (end - start) - right_count;
+                if left_count == 0 || right_count == 0 {
+                    continue;
+                }
+                let cost = size(&left_dops[(bin - 1) * k..bin * k]) * left_count as f64
+                    + size(&running) * right_count as f64;
+                if best.is_none_or(|b| cost < b.0) {
+                    best = Some((cost, axis_index, lo, scale, bin));
+                }
+            }
+        }
+        let Some((_, axis_index, lo, scale, split_bin)) = best else {
+            let mid = start + (end - start) / 2;
+            let axis = self.set.axes()[0];
+            let centroids = &self.centroids;
+            self.order[start..end].select_nth_unstable_by(mid - start, |a, b| {
+                axis.dot(&centroids[*a as usize].coords)
+                    .total_cmp(&axis.dot(&centroids[*b as usize].coords))
+            });
+            return mid;
+        };
+        let axis = self.set.axes()[axis_index];
+        let mut boundary = start;
+        for i in start..end {
+            let t = self.order[i];
+            if bin_of(
+                axis.dot(&self.centroids[t as usize].coords),
+                lo,
+                scale,
+                bins,
+            ) < split_bin
+            {
+                self.order.swap(i, boundary);
+                boundary += 1;
+            }
+        }
+        boundary
+    }
+}
+
+/// `into[i] = max(into[i], from[i])`, written so that it compiles to vector max instructions.
+fn merge_max(into: &mut [f32], from: &[f32]) {
+    for (d, &s) in into.iter_mut().zip(from) {
+        *d = if s > *d { s } else { *d };
+    }
+}
+
+/// Number of bins per axis of the split heuristic.
+const SPLIT_BINS: usize = 16;
+
+/// The bin of a centroid projection `x` on an axis whose projections start at `lo`.
+fn bin_of(x: f64, lo: f64, scale: f64, bins: usize) -> usize {
+    (((x - lo) * scale) as usize).min(bins - 1)
+}
+
+/// The smallest `f32` not below `x`.
+fn round_up(x: f64) -> f32 {
+    let y = x as f32;
+    if (y as f64) < x { y.next_up() } else { y }
+}
+
+/// Re-aligns a node of tree B to A's orientations, for one query.
+///
+/// The result is stored *opposite*: `out[i]` is the support of B's node along `-n_i`, so that the
+/// nodes are disjoint along axis i exactly when `a[i] + out[i] < 0`.
+pub(crate) trait Realign<const K: usize>: Sync {
+    /// Writes the re-aligned offsets of node `node` of `b`.
+    /// With `FUSED`, multiply-adds are fused (only where the CPU has FMA, or they become calls).
+    fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]);
+
+    /// The re-alignment of A's nodes into B's frame (made on first use), when the method also
+    /// tests B's axes.
+    fn reverse(&self, _a: &DopTree, _b: &DopTree) -> Option<&Self> {
+        None
+    }
+}
+
+/// The paper's O(k) re-alignment: each new offset is `Σ λ d_j + n . t` over the three planes of
+/// the generic vertex that supports the rotated direction.
+///
+/// Stored densely, one column of coefficients per plane of B, so that re-aligning a node is k_B
+/// vector multiply-adds of `K` lanes (no gathers; vectorises well).
+///
+/// Leaves are handled exactly instead: their few triangle corners are moved into A's frame and
+/// projected on A's directions, which costs about as much as the affine combination and gives
+/// the tightest enclosing DOP (a leaf's DOP is flat, far from the generic structure, so the affine
+/// bound is loose there).
+pub(crate) struct AffineRealign<const K: usize> {
+    /// `columns[j][i]`: coefficient of B's offset j in the re-aligned offset of slot i (on the
+    /// heap: a query moves this struct around, and copying k_B x K floats costs more than
+    /// allocating them).
+    columns: Vec<[f32; K]>,
+    base: [f32; K],
+    /// Directions of the slots (`-n_i`, A's frame) by component, for projecting leaf corners.
+    directions: [[f32; K]; 3],
+    rotation: Matrix3<f64>,
+    translation: Vector3<f64>,
+    /// Bound on the f32 rounding of a projected leaf corner.
+    leaf_margin: f32,
+    /// A's nodes re-aligned into B's frame (same k only): the traversal then tests B's axes
+    /// too. The DOP test alone separates only along A's axes; two thin patches crossing at an
+    /// angle are usually separated along B's own normals, so testing both ways prunes near-contact
+    /// pairs much earlier, as the 15-axis test does for OBBs.
+    reverse: std::sync::OnceLock<Box<AffineRealign<K>>>,
+}
+
+impl<const K: usize> AffineRealign<K> {
+    /// Finds, for each of A's directions, its support cone in B's orientation set.
+    fn new(
+        a: &DopTree,
+        b: &DopTree,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+        hints: &mut ConeHints,
+    ) -> Self {
+        let mut columns = vec![[0f32; K]; b.k];
+        let mut base = [0f32; K];
+        let mut lambda_sum_max = 0.0f64;
+        let r = rotation;
+        for (i, hint) in hints.iter_mut().enumerate().take(K) {
+            let direction = -a.set.normal(i);
+            // u = Rᵀ direction, written out: nalgebra's generic product is slower here.
+            let u = Vector3::new(
+                r[(0, 0)] * direction.x + r[(1, 0)] * direction.y + r[(2, 0)] * direction.z,
+                r[(0, 1)] * direction.x + r[(1, 1)] * direction.y + r[(2, 1)] * direction.z,
+                r[(0, 2)] * direction.x + r[(1, 2)] * direction.y + r[(2, 2)] * direction.z,
+            );
+            let cone = b
+                .set
+                .cone_if_contains(*hint, &u)
+                .unwrap_or_else(|| b.set.support_cone_hinted(&u, hint));
+            for l in 0..3 {
+                columns[cone.planes[l] as usize][i] = cone.lambda[l] as f32;
+            }
+            lambda_sum_max = lambda_sum_max.max(cone.lambda[0] + cone.lambda[1] + cone.lambda[2]);
+            base[i] = direction.dot(translation) as f32;
+        }
+        let margin = rounding_margin(
+            lambda_sum_max * b.max_abs_offset() as f64
+                + translation.norm()
+                + a.max_abs_offset() as f64,
+        );
+        for x in &mut base {
+            *x += margin;
+        }
+        let directions: [[f32; K]; 3] =
+            std::array::from_fn(|c| std::array::from_fn(|i| -a.set.normal(i)[c] as f32));
+        // A moved corner is within |t| + |centre_B| + radius_B of A's origin.
+        let reach = translation.norm() + b.bounding_centre.coords.norm() + b.bounding_radius;
+        AffineRealign {
+            columns,
+            base,
+            directions,
+            rotation: *rotation,
+            translation: *translation,
+            leaf_margin: rounding_margin(reach),
+            reverse: std::sync::OnceLock::new(),
+        }
+    }
+}
+
+/// A margin that bounds the `f32` rounding of re-aligned offsets of magnitude up to `scale`.
+pub(crate) fn rounding_margin(scale: f64) -> f32 {
+    (scale * 64.0 * f32::EPSILON as f64) as f32
+}
+
+impl<const K: usize> Realign<K> for AffineRealign<K> {
+    fn reverse(&self, a: &DopTree, b: &DopTree) -> Option<&Self> {
+        if a.k != b.k {
+            return None;
+        }
+        let reverse = self.reverse.get_or_init(|| {
+            // A's nodes in B's frame: rotation Rᵀ, translation -Rᵀ t.
+            let inverse = self.rotation.transpose();
+            let mut hints = REVERSE_CONE_HINTS.get();
+            let reverse =
+                AffineRealign::new(b, a, &inverse, &-(inverse * self.translation), &mut hints);
+            REVERSE_CONE_HINTS.set(hints);
+            Box::new(reverse)
+        });
+        Some(reverse)
+    }
+
+    #[inline(always)]
+    fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
+        let leaf = &b.nodes[node];
+        if leaf.is_leaf() {
+            *out = [f32::MIN; K];
+            for triangle in &b.triangles[leaf.first as usize..(leaf.first + leaf.count) as usize] {
+                for corner in triangle {
+                    let y = (self.rotation * corner.coords + self.translation).cast::<f32>();
+                    let [dx, dy, dz] = &self.directions;
+                    for (i, o) in out.iter_mut().enumerate() {
+                        let p = dx[i] * y.x + dy[i] * y.y + dz[i] * y.z;
+                        *o = if p > *o { p } else { *o };
+                    }
+                }
+            }
+            for x in out.iter_mut() {
+                *x += self.leaf_margin;
+            }
+            return;
+        }
+        // Four independent accumulators: one chain of k multiply-adds would be latency bound.
+        let mut acc = [self.base, [0.0; K], [0.0; K], [0.0; K]];
+        let columns = &self.columns[..];
+        let d = b.node_offsets(node);
+        let mut groups = columns.chunks_exact(4).zip(d.chunks_exact(4));
+        for (group, offsets) in &mut groups {
+            for lane in 0..4 {
+                multiply_add::<K, FUSED>(&mut acc[lane], &group[lane], offsets[lane]);
+            }
+        }
+        let done = columns.len() - columns.len() % 4;
+        for (column, &offset) in columns[done..].iter().zip(&d[done..]) {
+            multiply_add::<K, FUSED>(&mut acc[0], column, offset);
+        }
+        for i in 0..K {
+            out[i] = (acc[0][i] + acc[1][i]) + (acc[2][i] + acc[3][i]);
+        }
+    }
+}
+
+/// `acc += column * d`, lane by lane (fused where `FUSED`).
+#[inline(always)]
+fn multiply_add<const K: usize, const FUSED: bool>(acc: &mut [f32; K], column: &[f32; K], d: f32) {
+    for i in 0..K {
+        acc[i] = if FUSED {
+            column[i].mul_add(d, acc[i])
+        } else {
+            acc[i] + column[i] * d
+        };
+    }
+}
+
+/// True when A's node offsets `a` and B's re-aligned opposite offsets `e` overlap on every axis.
+#[inline(always)]
+fn dops_overlap<const K: usize>(a: &[f32; K], e: &[f32; K]) -> bool {
+    overlap_slack(a, e) >= 0.0
+}
+
+/// The least `a_i + e_i`: how deeply the DOPs overlap along their tightest axis (negative when
+/// they are disjoint).
+#[inline(always)]
+fn overlap_slack<const K: usize>(a: &[f32; K], e: &[f32; K]) -> f32 {
+    let mut least = f32::INFINITY;
+    for i in 0..K {
+        let s = a[i] + e[i];
+        least = if s < least { s } else { least };
+    }
+    least
+}
+
+/// Fraction of the two nodes' sizes below which an overlap along A's axes is checked along B's.
+const REVERSE_TEST_SLACK: f32 = 0.05;
+
+/// This query's view of the per-thread re-alignment cache.
+struct RealignCache<'a> {
+    stamp: u32,
+    tags: &'a mut [(u32, u32)],
+    realigned: &'a mut [f32],
+}
+
+impl RealignCache<'_> {
+    /// The re-aligned offsets of node `node` of `tree`, computed unless cached in this query.
+    #[inline(always)]
+    fn get<const K: usize, const FUSED: bool, R: Realign<K>>(
+        &mut self,
+        realigner: &R,
+        tree: &DopTree,
+        node: u32,
+        stats: &mut QueryStats,
+    ) -> &[f32; K] {
+        let slot = node as usize % CACHE_SLOTS;
+        let e: &mut [f32; K] = (&mut self.realigned[slot * K..(slot + 1) * K])
+            .try_into()
+            .unwrap();
+        if self.tags[slot] != (self.stamp, node) {
+            self.tags[slot] = (self.stamp, node);
+            realigner.realign::<FUSED>(tree, node as usize, e);
+            stats.realignments += 1;
+        }
+        e
+    }
+}
+
+/// Per-thread buffers reused across queries: the re-alignment cache (stamped per query) and the
+/// traversal stack.
+///
+/// The cache is direct-mapped with [`CACHE_SLOTS`] entries (B node `n` goes to slot
+/// `n % CACHE_SLOTS`), small enough to stay in the core's L2 cache whatever the tree size; an
+/// entry is valid when its tag holds this query's stamp and the node.
+struct Scratch {
+    stamp: u32,
+    /// Per slot: (stamp of the query that filled it, B node it holds).
+    tags: Vec<(u32, u32)>,
+    realigned: Vec<f32>,
+    /// The same for A's nodes re-aligned into B's frame.
+    reverse_tags: Vec<(u32, u32)>,
+    reverse_realigned: Vec<f32>,
+    stack: Vec<(u32, u32)>,
+}
+
+/// Entries of the per-thread re-alignment cache (a power of two).
+const CACHE_SLOTS: usize = 4096;
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch {
+            stamp: 0,
+            tags: vec![(0, 0); CACHE_SLOTS],
+            realigned: vec![0.0; CACHE_SLOTS * MAX_K],
+            reverse_tags: vec![(0, 0); CACHE_SLOTS],
+            reverse_realigned: vec![0.0; CACHE_SLOTS * MAX_K],
+            stack: Vec::new(),
+        }
+    }
+}
+
+impl Scratch {
+    /// Starts a query: a new stamp invalidates every cache entry.
+    fn begin(&mut self) {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.tags.fill((0, 0));
+            self.reverse_tags.fill((0, 0));
+            self.stamp = 1;
+        }
+        self.stack.clear();
+    }
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// Runs `f` with this thread's scratch buffers (or fresh ones if they are already in use).
+fn with_scratch<T>(f: impl FnOnce(&mut Scratch) -> T) -> T {
+    SCRATCH.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut scratch) => f(&mut scratch),
+        Err(_) => f(&mut Scratch::default()),
+    })
+}
+
+/// One query between two DOP-trees: B's pose in A's frame and the re-alignment method.
+pub(crate) struct TreePair<'a, R> {
+    a: &'a DopTree,
+    b: &'a DopTree,
+    rotation: Matrix3<f64>,
+    translation: Vector3<f64>,
+    realigner: R,
+}
+
+/// What a traversal found.
+#[derive(Default)]
+struct Found {
+    stats: QueryStats,
+    pairs: Vec<[u32; 2]>,
+    hit: bool,
+}
+
+impl<'a, R> TreePair<'a, R> {
+    /// Prepares a query of `b` posed at `b_to_a` in `a`'s frame; `realigner` is made from the
+    /// rotation and translation.
+    pub(crate) fn new(
+        a: &'a DopTree,
+        b: &'a DopTree,
+        b_to_a: &Isometry3<f64>,
+        realigner: impl FnOnce(&Matrix3<f64>, &Vector3<f64>) -> R,
+    ) -> Self {
+        let rotation = *b_to_a.rotation.to_rotation_matrix().matrix();
+        let translation = b_to_a.translation.vector;
+        let realigner = realigner(&rotation, &translation);
+        TreePair {
+            a,
+            b,
+            rotation,
+            translation,
+            realigner,
+        }
+    }
+
+    /// B's leaf triangle `index` (leaf order) moved into A's frame.
+    fn b_triangle_in_a(&self, index: usize) -> Triangle {
+        self.b.triangles[index].map(|p| Point3::from(self.rotation * p.coords + self.translation))
+    }
+
+    /// Tests every triangle pair of two leaves; records pairs when `ALL`, else stops at a hit.
+    fn leaf_pair<const ALL: bool>(
+        &self,
+        leaf_a: &Node,
+        leaf_b: &Node,
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+    ) -> bool {
+        let mut hit = false;
+        let range_a = leaf_a.first as usize..(leaf_a.first + leaf_a.count) as usize;
+        for ib in leaf_b.first as usize..(leaf_b.first + leaf_b.count) as usize {
+            let tb = self.b_triangle_in_a(ib);
+            for ia in range_a.clone() {
+                stats.tri_tests += 1;
+                if triangles_intersect(&self.a.triangles[ia], &tb) {
+                    hit = true;
+                    if !ALL {
+                        return true;
+                    }
+                    out.push([self.a.triangle_ids[ia], self.b.triangle_ids[ib]]);
+                }
+            }
+        }
+        hit
+    }
+
+    /// The two node pairs to visit after `(ia, ib)` overlapped: the larger node is split.
+    fn children(&self, ia: u32, ib: u32) -> [(u32, u32); 2] {
+        let (na, nb) = (self.a.nodes[ia as usize], self.b.nodes[ib as usize]);
+        let split_a = !na.is_leaf() && (nb.is_leaf() || na.size >= nb.size);
+        if split_a {
+            [(na.first, ib), (na.first + 1, ib)]
+        } else {
+            [(ia, nb.first), (ia, nb.first + 1)]
+        }
+    }
+}
+
+impl<R> TreePair<'_, R> {
+    /// Runs the query from the root pair, sequentially or split across threads.
+    pub(crate) fn run<const ALL: bool, const K: usize>(
+        &self,
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        parallel: bool,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        let found = if parallel {
+            let stop = AtomicBool::new(false);
+            self.parallel::<ALL, K>(0, 0, PARALLEL_DEPTH, &stop)
+        } else {
+            let mut found = Found::default();
+            found.hit = self.sequential::<ALL, K>((0, 0), &mut found.stats, &mut found.pairs, None);
+            found
+        };
+        *stats += found.stats;
+        out.extend_from_slice(&found.pairs);
+        found.hit
+    }
+
+    /// Depth-first traversal from one node pair with this thread's re-alignment cache, compiled
+    /// for AVX2 and FMA where the CPU has them (the interval tests and re-alignments are vector
+    /// code).
+    fn sequential<const ALL: bool, const K: usize>(
+        &self,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        stop: Option<&AtomicBool>,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        with_scratch(|scratch| {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU supports AVX2 and FMA, checked just above.
+                return unsafe { self.traverse_avx2::<ALL, K>(scratch, start, stats, out, stop) };
+            }
+            self.traverse::<ALL, K, false>(scratch, start, stats, out, stop)
+        })
+    }
+
+    /// [`Self::traverse`] compiled with AVX2 and FMA enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn traverse_avx2<const ALL: bool, const K: usize>(
+        &self,
+        scratch: &mut Scratch,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        stop: Option<&AtomicBool>,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        self.traverse::<ALL, K, true>(scratch, start, stats, out, stop)
+    }
+
+    /// The traversal itself: a stack of node pairs, B's nodes re-aligned once per query.
+    #[inline(always)]
+    fn traverse<const ALL: bool, const K: usize, const FUSED: bool>(
+        &self,
+        scratch: &mut Scratch,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        stop: Option<&AtomicBool>,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        scratch.begin();
+        let stamp = scratch.stamp;
+        let Scratch {
+            tags,
+            realigned,
+            reverse_tags,
+            reverse_realigned,
+            stack,
+            ..
+        } = scratch;
+        let mut cache = RealignCache {
+            stamp,
+            tags,
+            realigned,
+        };
+        let mut reverse_cache = RealignCache {
+            stamp,
+            tags: reverse_tags,
+            realigned: reverse_realigned,
+        };
+        let mut hit = false;
+        if self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, start, stats) < 0.0 {
+            return false;
+        }
+        // The stack holds node pairs already known to overlap. Children pairs are tested when
+        // generated and the one overlapping more deeply is visited first: a first hit is found
+        // sooner.
+        stack.push(start);
+        while let Some((ia, ib)) = stack.pop() {
+            if let Some(stop) = stop
+                && stop.load(Ordering::Relaxed)
+            {
+                break;
+            }
+            stats.nodes_visited += 1;
+            let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+            if na.is_leaf() && nb.is_leaf() {
+                if self.leaf_pair::<ALL>(na, nb, stats, out) {
+                    hit = true;
+                    if !ALL {
+                        if let Some(stop) = stop {
+                            stop.store(true, Ordering::Relaxed);
+                        }
+                        break;
+                    }
+                }
+                continue;
+            }
+            let [first, second] = self.children(ia, ib);
+            let first_slack = self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, first, stats);
+            let second_slack =
+                self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, second, stats);
+            // Relative depth: overlap over the size of the pair's smaller node.
+            let relative = |(ia, ib): (u32, u32), slack: f32| {
+                let size = self.a.nodes[ia as usize]
+                    .size
+                    .min(self.b.nodes[ib as usize].size);
+                slack / size.max(f32::MIN_POSITIVE)
+            };
+            let (deeper, shallower) =
+                if relative(first, first_slack) >= relative(second, second_slack) {
+                    ((first, first_slack), (second, second_slack))
+                } else {
+                    ((second, second_slack), (first, first_slack))
+                };
+            if shallower.1 >= 0.0 {
+                stack.push(shallower.0);
+            }
+            if deeper.1 >= 0.0 {
+                stack.push(deeper.0);
+            }
+        }
+        hit
+    }
+
+    /// The overlap slack of a node pair: the least `a_i + e_i` over the axes, negative exactly
+    /// when some axis separates them. B's node is re-aligned unless cached for this query; when
+    /// the method tests both ways and A's axes do not separate, A's node re-aligned into B's
+    /// frame is tested against B's axes too.
+    #[inline(always)]
+    fn slack<const K: usize, const FUSED: bool>(
+        &self,
+        cache: &mut RealignCache<'_>,
+        reverse_cache: &mut RealignCache<'_>,
+        (ia, ib): (u32, u32),
+        stats: &mut QueryStats,
+    ) -> f32
+    where
+        R: Realign<K>,
+    {
+        let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
+        let e = cache.get::<K, FUSED, R>(&self.realigner, self.b, ib, stats);
+        stats.bv_tests += 1;
+        let forward = overlap_slack(da, e);
+        // Only pairs that A's axes barely fail to separate are worth B's axes: deep overlaps
+        // are rarely separated by them (measured).
+        let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+        if forward < 0.0 || forward > REVERSE_TEST_SLACK * (na.size + nb.size) {
+            return forward;
+        }
+        let Some(reverse) = self.realigner.reverse(self.a, self.b) else {
+            return forward;
+        };
+        let db: &[f32; K] = self.b.node_offsets(ib as usize).try_into().unwrap();
+        let e = reverse_cache.get::<K, FUSED, R>(reverse, self.a, ia, stats);
+        stats.bv_tests += 1;
+        let backward = overlap_slack(db, e);
+        if backward < forward {
+            backward
+        } else {
+            forward
+        }
+    }
+
+    /// Splits the traversal into rayon tasks down to `depth`, then traverses sequentially.
+    fn parallel<const ALL: bool, const K: usize>(
+        &self,
+        ia: u32,
+        ib: u32,
+        depth: u32,
+        stop: &AtomicBool,
+    ) -> Found
+    where
+        R: Realign<K>,
+    {
+        let mut found = Found::default();
+        if stop.load(Ordering::Relaxed) {
+            return found;
+        }
+        let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+        if depth == 0 || (na.is_leaf() && nb.is_leaf()) {
+            found.hit =
+                self.sequential::<ALL, K>((ia, ib), &mut found.stats, &mut found.pairs, Some(stop));
+            return found;
+        }
+        let mut e = [0f32; K];
+        self.realigner.realign::<false>(self.b, ib as usize, &mut e);
+        found.stats.realignments += 1;
+        found.stats.bv_tests += 1;
+        let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
+        if !dops_overlap(da, &e) {
+            return found;
+        }
+        found.stats.nodes_visited += 1;
+        let [first, second] = self.children(ia, ib);
+        let (x, y) = rayon::join(
+            || self.parallel::<ALL, K>(first.0, first.1, depth - 1, stop),
+            || self.parallel::<ALL, K>(second.0, second.1, depth - 1, stop),
+        );
+        found.stats += x.stats;
+        found.stats += y.stats;
+        found.hit = x.hit || y.hit;
+        found.pairs = x.pairs;
+        found.pairs.extend_from_slice(&y.pairs);
+        found
+    }
+}
