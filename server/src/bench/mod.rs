@@ -3,3 +3,4 @@
 pub mod random;
 pub mod report;
 pub mod tumble;
+pub mod slide;

@@ -20,8 +20,8 @@
 
 use nalgebra::{Point3, Unit, Vector3};
 
-use super::motion::Motion;
-use crate::geometry::Point;
+use super::motion::{Motion, Pose};
+use crate::geometry::{EdgeAdjacency, Point, TriMesh};
 
 /// How a pair of triangles touches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
@@ -52,20 +52,35 @@ pub struct Contact {
 /// A triangle pair that intersects: part triangle and obstacle triangle indices.
 pub type TouchingPair = [u32; 2];
 
-/// Triangles sharing an edge with a given triangle: what the classification counts.
-pub trait TriangleNeighbours {
-    /// The triangles that share an edge with `triangle`.
-    fn neighbours(&self, triangle: u32) -> impl Iterator<Item = u32> + '_;
+/// One side of a contact: a mesh, its edge adjacency and its pose in the world.
+#[derive(Clone, Copy)]
+pub struct ContactSide<'a> {
+    /// The mesh, in its own frame.
+    pub mesh: &'a TriMesh,
+    /// Its edge adjacency (built on the welded mesh, so that neighbours share vertex indices).
+    pub adjacency: &'a EdgeAdjacency,
+    /// The mesh frame's pose in the world.
+    pub pose: &'a Pose,
 }
 
-/// One side of a contact: its triangles in the world frame and their adjacency.
-pub struct ContactSide<'a, N> {
-    /// The three corners, in world coordinates, of triangle `t`.
-    pub corners: &'a dyn Fn(u32) -> [Point; 3],
-    /// The vertex indices of triangle `t` (to find the edge two triangles share).
-    pub indices: &'a dyn Fn(u32) -> [u32; 3],
-    /// Edge adjacency of the side's mesh.
-    pub neighbours: &'a N,
+impl ContactSide<'_> {
+    /// The corners of triangle `t` in the world frame.
+    fn corners(&self, t: u32) -> [Point; 3] {
+        self.mesh.triangle(t as usize).map(|p| self.pose * p)
+    }
+
+    /// The edge triangles `a` and `b` share, as a world vector; None if they share none.
+    fn shared_edge(&self, a: u32, b: u32) -> Option<Vector3<f64>> {
+        let of_b = self.adjacency.triangle_edges(b as usize);
+        let edge = self
+            .adjacency
+            .triangle_edges(a as usize)
+            .into_iter()
+            .find(|e| of_b.contains(e))?;
+        let [u, v] = self.adjacency.edge(edge as usize);
+        let vertices = self.mesh.vertices();
+        Some(self.pose * (vertices[v as usize] - vertices[u as usize]))
+    }
 }
 
 /// Where the edges of one triangle pass through another: up to three crossings.
@@ -118,22 +133,15 @@ fn contains_coplanar_point(t: &[Point; 3], normal: &Vector3<f64>, point: &Point)
     })
 }
 
-/// The edge two triangles share, as a vector; None if they share no two vertex indices.
-fn shared_edge(a: [u32; 3], b: [u32; 3], corners_a: &[Point; 3]) -> Option<Vector3<f64>> {
-    let mut shared = (0..3).filter(|&i| b.contains(&a[i]));
-    let (i, j) = (shared.next()?, shared.next()?);
-    Some(corners_a[j] - corners_a[i])
-}
-
 /// Classifies every touching pair of one obstacle and appends one contact per pair to `out`.
 ///
 /// `pairs` must be sorted (they are looked up by binary search); `approach` is the motion of the
 /// part's pivot from the last free pose to the colliding one, and `pivot` the pivot's world
 /// position at the colliding pose.
-pub fn classify_pairs<P: TriangleNeighbours, Q: TriangleNeighbours>(
+pub fn classify_pairs(
     obstacle: usize,
-    part: &ContactSide<'_, P>,
-    other: &ContactSide<'_, Q>,
+    part: &ContactSide<'_>,
+    other: &ContactSide<'_>,
     pairs: &[TouchingPair],
     approach: &Motion,
     pivot: &Point,
@@ -142,12 +150,12 @@ pub fn classify_pairs<P: TriangleNeighbours, Q: TriangleNeighbours>(
     debug_assert!(pairs.is_sorted());
     let touching = |p: u32, q: u32| pairs.binary_search(&[p, q]).is_ok();
     for &[p, q] in pairs {
-        let tp = (part.corners)(p);
-        let tq = (other.corners)(q);
+        let tp = part.corners(p);
+        let tq = other.corners(q);
         let p_neighbour =
-            first_and_count(part.neighbours.neighbours(p).filter(|&n| touching(n, q)));
+            first_and_count(part.adjacency.triangle_neighbours(p as usize).filter(|&n| touching(n, q)));
         let q_neighbour =
-            first_and_count(other.neighbours.neighbours(q).filter(|&n| touching(p, n)));
+            first_and_count(other.adjacency.triangle_neighbours(q as usize).filter(|&n| touching(p, n)));
         let crossings_p = Crossings::of(&tp, &tq);
         let crossings_q = Crossings::of(&tq, &tp);
         let point = contact_point(&crossings_p, &crossings_q, &tp, &tq);
@@ -155,8 +163,7 @@ pub fn classify_pairs<P: TriangleNeighbours, Q: TriangleNeighbours>(
 
         let (kind, normal) = match (p_neighbour, q_neighbour) {
             (Some((np, 1)), Some((nq, 1))) => {
-                let edges = shared_edge((part.indices)(p), (part.indices)(np), &tp)
-                    .zip(shared_edge((other.indices)(q), (other.indices)(nq), &tq));
+                let edges = part.shared_edge(p, np).zip(other.shared_edge(q, nq));
                 match edges {
                     Some((ep, eq)) => (
                         ContactKind::EdgeEdge,
@@ -319,4 +326,170 @@ pub fn reduce_contacts<T>(
         index += 1;
         kept
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn p(x: f64, y: f64, z: f64) -> Point {
+        Point::new(x, y, z)
+    }
+
+    fn mesh(vertices: Vec<Point>, triangles: Vec<[u32; 3]>) -> (TriMesh, EdgeAdjacency) {
+        let mesh = TriMesh::new(vertices, triangles).unwrap().0;
+        let adjacency = EdgeAdjacency::new(&mesh);
+        (mesh, adjacency)
+    }
+
+    /// A square sheet in z = 0, two triangles, with either winding.
+    fn sheet(flip: bool) -> (TriMesh, EdgeAdjacency) {
+        let t = if flip { [[0, 2, 1], [0, 2, 3]] } else { [[0, 1, 2], [0, 3, 2]] };
+        let v = vec![p(-1., -1., 0.), p(1., -1., 0.), p(1., 1., 0.), p(-1., 1., 0.)];
+        mesh(v, t.to_vec())
+    }
+
+    /// A pyramid whose apex, at `depth` below z = 0, points down; four side triangles, open top.
+    fn pyramid(depth: f64) -> (TriMesh, EdgeAdjacency) {
+        let h = 0.3 - depth;
+        let v = vec![
+            p(0., 0., -depth),
+            p(-0.3, -0.3, h),
+            p(0.3, -0.3, h),
+            p(0.3, 0.3, h),
+            p(-0.3, 0.3, h),
+        ];
+        mesh(v, vec![[0, 1, 2], [0, 3, 2], [0, 3, 4], [0, 1, 4]])
+    }
+
+    /// A roof of two triangles along `axis` (x or y) with its ridge at height `ridge`, sloping
+    /// away from it by `slope` (negative: a trough pointing down).
+    fn roof(along_x: bool, ridge: f64, slope: f64) -> (TriMesh, EdgeAdjacency) {
+        let put = |a: f64, b: f64, z: f64| if along_x { p(a, b, z) } else { p(b, a, z) };
+        let v = vec![
+            put(-1., 0., ridge),
+            put(1., 0., ridge),
+            put(-1., -1., ridge - slope),
+            put(1., -1., ridge - slope),
+            put(-1., 1., ridge - slope),
+            put(1., 1., ridge - slope),
+        ];
+        mesh(v, vec![[0, 1, 2], [1, 3, 2], [0, 1, 4], [1, 5, 4]])
+    }
+
+    /// Brute-force touching pairs of two posed meshes, by the classification's own edge test
+    /// (enough here: the test meshes cross generically).
+    fn touching(a: &ContactSide<'_>, b: &ContactSide<'_>) -> Vec<TouchingPair> {
+        let mut pairs = Vec::new();
+        for i in 0..a.mesh.triangles().len() as u32 {
+            for j in 0..b.mesh.triangles().len() as u32 {
+                let (ta, tb) = (a.corners(i), b.corners(j));
+                if Crossings::of(&ta, &tb).count + Crossings::of(&tb, &ta).count > 0 {
+                    pairs.push([i, j]);
+                }
+            }
+        }
+        pairs
+    }
+
+    fn classify(
+        part: &(TriMesh, EdgeAdjacency),
+        obstacle: &(TriMesh, EdgeAdjacency),
+        approach: Vector3<f64>,
+    ) -> Vec<Contact> {
+        let identity = Pose::identity();
+        let a = ContactSide { mesh: &part.0, adjacency: &part.1, pose: &identity };
+        let b = ContactSide { mesh: &obstacle.0, adjacency: &obstacle.1, pose: &identity };
+        let pairs = touching(&a, &b);
+        assert!(!pairs.is_empty(), "the test meshes do not touch");
+        let motion = Motion { translation: approach, rotation: Vector3::zeros() };
+        let mut out = Vec::new();
+        classify_pairs(3, &a, &b, &pairs, &motion, &Point::origin(), &mut out);
+        assert_eq!(out.len(), pairs.len());
+        out
+    }
+
+    #[test]
+    fn a_vertex_in_a_face_gets_the_face_normal_whatever_the_winding_and_side() {
+        for flip in [false, true] {
+            let down = classify(&pyramid(0.01), &sheet(flip), Vector3::new(0.0, 0.0, -1.0));
+            for c in &down {
+                assert_eq!(c.kind, ContactKind::VertexFace);
+                assert!((c.normal.into_inner() - Vector3::z()).norm() < 1e-12, "{:?}", c.normal);
+                assert_eq!(c.obstacle, 3);
+                assert!(c.point.coords.norm() < 0.02, "point {:?}", c.point);
+            }
+            // The same touch reached from below (a sheet has no inside): the normal flips.
+            let up = classify(&pyramid(0.01), &sheet(flip), Vector3::new(0.2, 0.0, 1.0));
+            assert!(up.iter().all(|c| (c.normal.into_inner() + Vector3::z()).norm() < 1e-12));
+        }
+    }
+
+    #[test]
+    fn a_vertex_of_the_obstacle_in_a_face_of_the_part_gets_the_part_face_normal() {
+        // The pyramid is the obstacle, pointing up into the part's sheet at z = 0.
+        let (m, _) = pyramid(0.01);
+        let flipped = m.map_vertices(|v| p(v.x, v.y, -v.z)).unwrap();
+        let obstacle = (flipped.clone(), EdgeAdjacency::new(&flipped));
+        let contacts = classify(&sheet(false), &obstacle, Vector3::new(0.0, 0.0, -1.0));
+        for c in &contacts {
+            assert_eq!(c.kind, ContactKind::FaceVertex);
+            assert!((c.normal.into_inner() - Vector3::z()).norm() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn crossing_ridges_are_edge_edge_with_the_normal_across_both_edges() {
+        // The part: a trough along x pointing down; the obstacle: a ridge along y pointing up,
+        // crossed by 0.01. Edge cross product: x × y = z, oriented against the approach (-z).
+        let part = roof(true, -0.005, -0.5);
+        let obstacle = roof(false, 0.005, 0.5);
+        let contacts = classify(&part, &obstacle, Vector3::new(0.1, 0.0, -1.0));
+        assert!(contacts.iter().any(|c| c.kind == ContactKind::EdgeEdge));
+        for c in contacts.iter().filter(|c| c.kind == ContactKind::EdgeEdge) {
+            assert!((c.normal.into_inner() - Vector3::z()).norm() < 1e-9, "{:?}", c.normal);
+            assert!(c.point.coords.norm() < 0.05);
+        }
+    }
+
+    #[test]
+    fn a_lone_triangle_rim_through_a_face_is_classified_by_its_crossing_edges() {
+        // One triangle (no neighbours at all) dipping a corner through the sheet: n_p = 0, so the
+        // rim rule decides from the edges that cross.
+        let part = mesh(vec![p(0., 0., -0.01), p(0.5, 0.1, 0.3), p(-0.4, 0.2, 0.3)], vec![[0, 1, 2]]);
+        let contacts = classify(&part, &sheet(true), Vector3::new(0.0, 0.0, -1.0));
+        assert_eq!(contacts.len(), 1);
+        assert_eq!(contacts[0].kind, ContactKind::VertexFace);
+        assert!((contacts[0].normal.into_inner() - Vector3::z()).norm() < 1e-12);
+        // A sheet's rim edge through a part face: face/vertex, the part face's normal.
+        let blade = mesh(vec![p(-0.5, 0., -0.3), p(0.5, 0., -0.3), p(0., 0., 0.01)], vec![[0, 1, 2]]);
+        let contacts = classify(&sheet(false), &blade, Vector3::new(0.0, 0.0, -1.0));
+        assert!(contacts.iter().all(|c| c.kind == ContactKind::FaceVertex));
+        assert!(contacts.iter().all(|c| (c.normal.into_inner() - Vector3::z()).norm() < 1e-12));
+    }
+
+    #[test]
+    fn reduction_keeps_the_extremes_of_each_normal_cluster() {
+        let contact = |x: f64, y: f64, n: Vector3<f64>| Contact {
+            obstacle: 0,
+            point: p(x, y, 0.0),
+            normal: Unit::new_normalize(n),
+            kind: ContactKind::FaceFace,
+        };
+        let mut contacts = Vec::new();
+        for i in 0..10 {
+            for j in 0..10 {
+                contacts.push(contact(i as f64, j as f64, Vector3::z()));
+            }
+        }
+        contacts.push(contact(5.0, 5.0, Vector3::x()));
+        reduce_contacts(&mut contacts, |c| c, 0.02);
+        let floor: Vec<_> = contacts.iter().filter(|c| c.normal.z > 0.5).collect();
+        assert!(floor.len() <= 8 && floor.len() >= 4, "{} kept", floor.len());
+        for corner in [(0.0, 0.0), (9.0, 0.0), (0.0, 9.0), (9.0, 9.0)] {
+            assert!(floor.iter().any(|c| (c.point.x, c.point.y) == corner), "{corner:?} dropped");
+        }
+        assert_eq!(contacts.iter().filter(|c| c.normal.x > 0.5).count(), 1);
+    }
 }

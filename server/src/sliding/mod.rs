@@ -10,6 +10,7 @@
 //! * [`force`]: the spring-damper wrench a force-feedback device renders.
 //! * [`allowance`]: slide-in units, whose parts may interfere up to a configured depth.
 //! * [`motion`]: rigid motions of the part's pivot and their interpolation.
+//! * [`world`]: the part's collision copy against the obstacles, queried pair by pair.
 
 pub mod allowance;
 pub mod bisection;
@@ -19,6 +20,7 @@ pub mod force;
 pub mod machine;
 pub mod motion;
 pub mod params;
+pub mod world;
 
 pub use contact::{Contact, ContactKind};
 pub use direction::FreeSpace;
