@@ -68,19 +68,6 @@ impl ContactSide<'_> {
     fn corners(&self, t: u32) -> [Point; 3] {
         self.mesh.triangle(t as usize).map(|p| self.pose * p)
     }
-
-    /// The edge triangles `a` and `b` share, as a world vector; None if they share none.
-    fn shared_edge(&self, a: u32, b: u32) -> Option<Vector3<f64>> {
-        let of_b = self.adjacency.triangle_edges(b as usize);
-        let edge = self
-            .adjacency
-            .triangle_edges(a as usize)
-            .into_iter()
-            .find(|e| of_b.contains(e))?;
-        let [u, v] = self.adjacency.edge(edge as usize);
-        let vertices = self.mesh.vertices();
-        Some(self.pose * (vertices[v as usize] - vertices[u as usize]))
-    }
 }
 
 /// Where the edges of one triangle pass through another: up to three crossings.
@@ -113,10 +100,6 @@ impl Crossings {
         }
         crossings
     }
-
-    fn edge_vector(&self, t: &[Point; 3]) -> Option<Vector3<f64>> {
-        (self.count > 0).then(|| t[(self.edges[0] + 1) % 3] - t[self.edges[0]])
-    }
 }
 
 /// A (non-unit) normal of the triangle's plane, with arbitrary sign.
@@ -131,6 +114,62 @@ fn contains_coplanar_point(t: &[Point; 3], normal: &Vector3<f64>, point: &Point)
         let edge = t[(i + 1) % 3] - t[i];
         edge.cross(&(point - t[i])).dot(normal) >= slack
     })
+}
+
+/// What one side of a touching pair presents to the other.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Feature {
+    /// A vertex: a fan of triangles around it pierces the other triangle.
+    Vertex,
+    /// A sharp edge (world vector); edges between coplanar triangles count as face.
+    Edge(Vector3<f64>),
+    /// The inside of a flat region.
+    Face,
+}
+
+/// Sine of the angle between two triangles' planes below which the edge they share is not a
+/// feature but a fold line of a flat region (cell boundaries of a subdivided face).
+const FLAT_EDGE_SINE: f64 = 0.01;
+
+impl ContactSide<'_> {
+    /// The feature of triangle `t` touching the other side: from the count of its neighbours
+    /// touching the same triangle (`touching`, first one and count), or, when none does (rims,
+    /// shallow touches), from which of its edges cross the other triangle.
+    fn feature(&self, t: u32, touching: Option<(u32, usize)>, crossings: &Crossings) -> Feature {
+        let edges = self.adjacency.triangle_edges(t as usize);
+        let edge = match touching {
+            Some((_, count)) if count >= 2 => return Feature::Vertex,
+            Some((neighbour, _)) => {
+                let of_neighbour = self.adjacency.triangle_edges(neighbour as usize);
+                edges.into_iter().find(|e| of_neighbour.contains(e))
+            }
+            None => match crossings.count {
+                0 => return Feature::Face,
+                1 => Some(edges[crossings.edges[0]]),
+                _ => return Feature::Vertex,
+            },
+        };
+        match edge {
+            Some(edge) if self.is_sharp(edge as usize) => {
+                let [u, v] = self.adjacency.edge(edge as usize);
+                let vertices = self.mesh.vertices();
+                Feature::Edge(self.pose * (vertices[v as usize] - vertices[u as usize]))
+            }
+            Some(_) => Feature::Face,
+            // Neighbours sharing no edge index (a duplicate triangle): treat as a face.
+            None => Feature::Face,
+        }
+    }
+
+    /// Whether an edge is a geometric feature: a rim, non-manifold, or folded.
+    fn is_sharp(&self, edge: usize) -> bool {
+        let &[a, b] = self.adjacency.edge_triangles(edge) else {
+            return true;
+        };
+        let na = plane_normal(&self.mesh.triangle(a as usize)).normalize();
+        let nb = plane_normal(&self.mesh.triangle(b as usize)).normalize();
+        na.cross(&nb).norm() > FLAT_EDGE_SINE
+    }
 }
 
 /// Classifies every touching pair of one obstacle and appends one contact per pair to `out`.
@@ -152,32 +191,36 @@ pub fn classify_pairs(
     for &[p, q] in pairs {
         let tp = part.corners(p);
         let tq = other.corners(q);
-        let p_neighbour =
-            first_and_count(part.adjacency.triangle_neighbours(p as usize).filter(|&n| touching(n, q)));
-        let q_neighbour =
-            first_and_count(other.adjacency.triangle_neighbours(q as usize).filter(|&n| touching(p, n)));
         let crossings_p = Crossings::of(&tp, &tq);
         let crossings_q = Crossings::of(&tq, &tp);
         let point = contact_point(&crossings_p, &crossings_q, &tp, &tq);
         let approach_at_point = approach.point_displacement(&(point - pivot));
-
-        let (kind, normal) = match (p_neighbour, q_neighbour) {
-            (Some((np, 1)), Some((nq, 1))) => {
-                let edges = part.shared_edge(p, np).zip(other.shared_edge(q, nq));
-                match edges {
-                    Some((ep, eq)) => (
-                        ContactKind::EdgeEdge,
-                        edge_edge_normal(&ep, &eq, &approach_at_point),
-                    ),
-                    None => by_crossings(&crossings_p, &crossings_q, &tp, &tq, &approach_at_point),
-                }
-            }
-            (Some((_, a)), Some((_, b))) if a > 1 && b > 1 => {
+        let neighbours_p = part.adjacency.triangle_neighbours(p as usize);
+        let neighbours_q = other.adjacency.triangle_neighbours(q as usize);
+        let feature_p = part.feature(
+            p,
+            first_and_count(neighbours_p.filter(|&n| touching(n, q))),
+            &crossings_p,
+        );
+        let feature_q = other.feature(
+            q,
+            first_and_count(neighbours_q.filter(|&n| touching(p, n))),
+            &crossings_q,
+        );
+        let (kind, normal) = match (feature_p, feature_q) {
+            (Feature::Vertex, Feature::Vertex) | (Feature::Face, Feature::Face) => {
                 (ContactKind::FaceFace, plane_normal(&tq))
             }
-            (Some((_, a)), _) if a > 1 => (ContactKind::VertexFace, plane_normal(&tq)),
-            (_, Some((_, b))) if b > 1 => (ContactKind::FaceVertex, plane_normal(&tp)),
-            _ => by_crossings(&crossings_p, &crossings_q, &tp, &tq, &approach_at_point),
+            (Feature::Vertex | Feature::Edge(_), Feature::Face) | (Feature::Vertex, _) => {
+                (ContactKind::VertexFace, plane_normal(&tq))
+            }
+            (Feature::Face, Feature::Edge(_)) | (_, Feature::Vertex) => {
+                (ContactKind::FaceVertex, plane_normal(&tp))
+            }
+            (Feature::Edge(ep), Feature::Edge(eq)) => (
+                ContactKind::EdgeEdge,
+                edge_edge_normal(&ep, &eq, &approach_at_point),
+            ),
         };
         if let Some(normal) = orient(normal, &approach_at_point, &tp, &tq) {
             out.push(Contact {
@@ -194,22 +237,6 @@ pub fn classify_pairs(
 fn first_and_count(mut items: impl Iterator<Item = u32>) -> Option<(u32, usize)> {
     let first = items.next()?;
     Some((first, 1 + items.count()))
-}
-
-/// The rim rule: which triangle's edges cross the other decides the kind and the normal.
-fn by_crossings(
-    crossings_p: &Crossings,
-    crossings_q: &Crossings,
-    tp: &[Point; 3],
-    tq: &[Point; 3],
-    approach: &Vector3<f64>,
-) -> (ContactKind, Vector3<f64>) {
-    match (crossings_p.edge_vector(tp), crossings_q.edge_vector(tq)) {
-        (Some(ep), Some(eq)) => (ContactKind::EdgeEdge, edge_edge_normal(&ep, &eq, approach)),
-        (Some(_), None) => (ContactKind::VertexFace, plane_normal(tq)),
-        (None, Some(_)) => (ContactKind::FaceVertex, plane_normal(tp)),
-        (None, None) => (ContactKind::FaceFace, plane_normal(tq)),
-    }
 }
 
 /// The normal across two edges; for (nearly) parallel edges, the part of the reversed approach
@@ -457,14 +484,15 @@ mod tests {
     fn a_lone_triangle_rim_through_a_face_is_classified_by_its_crossing_edges() {
         // One triangle (no neighbours at all) dipping a corner through the sheet: n_p = 0, so the
         // rim rule decides from the edges that cross.
-        let part = mesh(vec![p(0., 0., -0.01), p(0.5, 0.1, 0.3), p(-0.4, 0.2, 0.3)], vec![[0, 1, 2]]);
+        let part = mesh(vec![p(0.3, -0.2, -0.01), p(0.8, -0.1, 0.3), p(-0.1, 0.0, 0.3)], vec![[0, 1, 2]]);
         let contacts = classify(&part, &sheet(true), Vector3::new(0.0, 0.0, -1.0));
         assert_eq!(contacts.len(), 1);
         assert_eq!(contacts[0].kind, ContactKind::VertexFace);
         assert!((contacts[0].normal.into_inner() - Vector3::z()).norm() < 1e-12);
         // A sheet's rim edge through a part face: face/vertex, the part face's normal.
-        let blade = mesh(vec![p(-0.5, 0., -0.3), p(0.5, 0., -0.3), p(0., 0., 0.01)], vec![[0, 1, 2]]);
+        let blade = mesh(vec![p(-0.8, 0.4, -0.3), p(0.2, 0.4, -0.3), p(-0.3, 0.4, 0.01)], vec![[0, 1, 2]]);
         let contacts = classify(&sheet(false), &blade, Vector3::new(0.0, 0.0, -1.0));
+        assert_eq!(contacts.len(), 1);
         assert!(contacts.iter().all(|c| c.kind == ContactKind::FaceVertex));
         assert!(contacts.iter().all(|c| (c.normal.into_inner() - Vector3::z()).norm() < 1e-12));
     }

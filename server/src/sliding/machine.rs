@@ -86,6 +86,13 @@ pub enum SlideState {
     },
     /// Bisecting between the last free pose and the first colliding one.
     Approximating(Bisection),
+    /// Moving the part off the contacts just classified by a fraction of the tolerance, so that
+    /// the visible pose keeps a clearance instead of the bisection's last free pose, which may be
+    /// arbitrarily close to a surface.
+    Lifting {
+        /// The lifted pivot pose.
+        goal: Pose,
+    },
     /// Classifying the contacts at the colliding end of a finished bisection.
     Classifying {
         /// The free end (now the visible pose).
@@ -110,6 +117,8 @@ pub enum Event {
     Redirected(FreeSpace),
     /// The goal was free: the visible part moved there.
     Moved,
+    /// The lift off fresh contacts was free (true) or blocked (false, the part stays).
+    Lifted(bool),
     /// The goal collided: bisection starts.
     Collided,
     /// One bisection check; whether the trial pose collided.
@@ -181,8 +190,6 @@ pub struct SlideMachine {
     /// Pivot pose the current frame slides towards.
     target: Pose,
     remembered: Vec<Remembered>,
-    /// Direction (unit, world) in which the next move regains clearance from fresh contacts.
-    lift: Option<Unit<Vector3<f64>>>,
     cycles_this_frame: u32,
     stalled_cycles: u32,
     cycle_start: Pose,
@@ -216,7 +223,6 @@ impl SlideMachine {
             ghost_pending: false,
             target: visible,
             remembered: Vec::new(),
-            lift: None,
             cycles_this_frame: 0,
             stalled_cycles: 0,
             cycle_start: visible,
@@ -305,6 +311,7 @@ impl SlideMachine {
             SlideState::Validating { contact } => self.validate(world, contact),
             SlideState::Redirecting => self.redirect(),
             SlideState::Moving { goal } => self.move_to(world, goal),
+            SlideState::Lifting { goal } => self.lift_to(world, goal),
             SlideState::Approximating(bisection) => self.approximate(world, bisection),
             SlideState::Classifying { valid, colliding } => self.classify(world, valid, colliding),
         }
@@ -390,7 +397,6 @@ impl SlideMachine {
     /// Projects the remaining motion onto the free space the remembered contacts leave.
     fn redirect(&mut self) -> Event {
         self.refresh_target();
-        let lift = self.lift.take();
         let remaining = Motion::between(&self.visible, &self.target);
         if remaining.length(self.radius) <= self.tolerance {
             return self.rest(RestReason::Reached);
@@ -431,10 +437,7 @@ impl SlideMachine {
         if projection.free_space == FreeSpace::Stop {
             return self.rest(RestReason::Blocked);
         }
-        let mut motion = Motion::from_scaled(&projection.motion, self.radius);
-        if let Some(lift) = lift {
-            motion.translation += lift.into_inner() * (self.params.lift * self.tolerance);
-        }
+        let motion = Motion::from_scaled(&projection.motion, self.radius);
         self.cycle_start = self.visible;
         self.state = SlideState::Moving {
             goal: motion.apply(&self.visible),
@@ -454,6 +457,16 @@ impl SlideMachine {
             self.state = SlideState::Redirecting;
             Event::Moved
         }
+    }
+
+    fn lift_to(&mut self, world: &mut impl SlideWorld, goal: Pose) -> Event {
+        self.stats.collision_checks += 1;
+        let free = !world.collides(&self.part_pose(&goal));
+        if free {
+            self.visible = goal;
+        }
+        self.state = SlideState::Redirecting;
+        Event::Lifted(free)
     }
 
     fn approximate(&mut self, world: &mut impl SlideWorld, mut bisection: Bisection) -> Event {
@@ -498,7 +511,6 @@ impl SlideMachine {
             return self.rest(RestReason::Blocked);
         }
         let lift: Vector3<f64> = self.scratch.iter().map(|c| c.normal.into_inner()).sum();
-        self.lift = Unit::try_new(lift, 1e-9);
         // Remember the new contacts beside the old ones and reduce the lot.
         let inverse = self.visible.inverse();
         self.remembered

@@ -45,8 +45,9 @@ pub struct SlideParams {
     /// colliding pose is shorter, and a target nearer than it counts as reached. Unset: 1e-4 of
     /// the grasped part's size.
     pub tolerance: Option<f64>,
-    /// Clearance, as a fraction of the tolerance, that a slide regains from the surfaces it has
-    /// just hit, so that it glides instead of scraping.
+    /// Clearance, as a fraction of the tolerance, that the part regains from the surfaces it has
+    /// just hit (if that lift is free), so that it glides instead of scraping and the visible
+    /// pose is not left arbitrarily close to a surface.
     pub lift: f64,
     /// Most sliding cycles (collision, contact, new direction) per frame.
     pub max_cycles: u32,
