@@ -7,4 +7,5 @@
 pub mod bench;
 pub mod collision;
 pub mod geometry;
+pub mod scene;
 pub mod sliding;

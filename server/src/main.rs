@@ -8,6 +8,7 @@ use tracing_subscriber::EnvFilter;
 use vas_server::bench;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::write_obj;
+use vas_server::scene::Scene;
 
 /// vas: headless virtual-assembly simulation server.
 #[derive(Debug, Parser)]
@@ -31,6 +32,11 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Validate a scene config and print its summary; exits non-zero if it is invalid.
+    CheckScene {
+        /// The scene file.
+        file: PathBuf,
+    },
     /// Run a benchmark of BENCHMARKS.md.
     #[command(subcommand)]
     Bench(Bench),
@@ -53,6 +59,9 @@ fn main() -> ExitCode {
             triangles,
             out,
         } => write_shape(kind, triangles, &out),
+        Command::CheckScene { file } => Scene::load(&file)
+            .map(|scene| println!("{}", scene.summary()))
+            .map_err(Into::into),
         Command::Bench(Bench::Slide(args)) => bench::slide::run_bench(&args).map(drop),
     };
     match result {
