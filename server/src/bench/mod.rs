@@ -2,5 +2,5 @@
 
 pub mod random;
 pub mod report;
-pub mod tumble;
 pub mod slide;
+pub mod tumble;

@@ -372,8 +372,17 @@ mod tests {
 
     /// A square sheet in z = 0, two triangles, with either winding.
     fn sheet(flip: bool) -> (TriMesh, EdgeAdjacency) {
-        let t = if flip { [[0, 2, 1], [0, 2, 3]] } else { [[0, 1, 2], [0, 3, 2]] };
-        let v = vec![p(-1., -1., 0.), p(1., -1., 0.), p(1., 1., 0.), p(-1., 1., 0.)];
+        let t = if flip {
+            [[0, 2, 1], [0, 2, 3]]
+        } else {
+            [[0, 1, 2], [0, 3, 2]]
+        };
+        let v = vec![
+            p(-1., -1., 0.),
+            p(1., -1., 0.),
+            p(1., 1., 0.),
+            p(-1., 1., 0.),
+        ];
         mesh(v, t.to_vec())
     }
 
@@ -426,11 +435,22 @@ mod tests {
         approach: Vector3<f64>,
     ) -> Vec<Contact> {
         let identity = Pose::identity();
-        let a = ContactSide { mesh: &part.0, adjacency: &part.1, pose: &identity };
-        let b = ContactSide { mesh: &obstacle.0, adjacency: &obstacle.1, pose: &identity };
+        let a = ContactSide {
+            mesh: &part.0,
+            adjacency: &part.1,
+            pose: &identity,
+        };
+        let b = ContactSide {
+            mesh: &obstacle.0,
+            adjacency: &obstacle.1,
+            pose: &identity,
+        };
         let pairs = touching(&a, &b);
         assert!(!pairs.is_empty(), "the test meshes do not touch");
-        let motion = Motion { translation: approach, rotation: Vector3::zeros() };
+        let motion = Motion {
+            translation: approach,
+            rotation: Vector3::zeros(),
+        };
         let mut out = Vec::new();
         classify_pairs(3, &a, &b, &pairs, &motion, &Point::origin(), &mut out);
         assert_eq!(out.len(), pairs.len());
@@ -443,13 +463,20 @@ mod tests {
             let down = classify(&pyramid(0.01), &sheet(flip), Vector3::new(0.0, 0.0, -1.0));
             for c in &down {
                 assert_eq!(c.kind, ContactKind::VertexFace);
-                assert!((c.normal.into_inner() - Vector3::z()).norm() < 1e-12, "{:?}", c.normal);
+                assert!(
+                    (c.normal.into_inner() - Vector3::z()).norm() < 1e-12,
+                    "{:?}",
+                    c.normal
+                );
                 assert_eq!(c.obstacle, 3);
                 assert!(c.point.coords.norm() < 0.02, "point {:?}", c.point);
             }
             // The same touch reached from below (a sheet has no inside): the normal flips.
             let up = classify(&pyramid(0.01), &sheet(flip), Vector3::new(0.2, 0.0, 1.0));
-            assert!(up.iter().all(|c| (c.normal.into_inner() + Vector3::z()).norm() < 1e-12));
+            assert!(
+                up.iter()
+                    .all(|c| (c.normal.into_inner() + Vector3::z()).norm() < 1e-12)
+            );
         }
     }
 
@@ -475,7 +502,11 @@ mod tests {
         let contacts = classify(&part, &obstacle, Vector3::new(0.1, 0.0, -1.0));
         assert!(contacts.iter().any(|c| c.kind == ContactKind::EdgeEdge));
         for c in contacts.iter().filter(|c| c.kind == ContactKind::EdgeEdge) {
-            assert!((c.normal.into_inner() - Vector3::z()).norm() < 1e-9, "{:?}", c.normal);
+            assert!(
+                (c.normal.into_inner() - Vector3::z()).norm() < 1e-9,
+                "{:?}",
+                c.normal
+            );
             assert!(c.point.coords.norm() < 0.05);
         }
     }
@@ -484,17 +515,27 @@ mod tests {
     fn a_lone_triangle_rim_through_a_face_is_classified_by_its_crossing_edges() {
         // One triangle (no neighbours at all) dipping a corner through the sheet: n_p = 0, so the
         // rim rule decides from the edges that cross.
-        let part = mesh(vec![p(0.3, -0.2, -0.01), p(0.8, -0.1, 0.3), p(-0.1, 0.0, 0.3)], vec![[0, 1, 2]]);
+        let part = mesh(
+            vec![p(0.3, -0.2, -0.01), p(0.8, -0.1, 0.3), p(-0.1, 0.0, 0.3)],
+            vec![[0, 1, 2]],
+        );
         let contacts = classify(&part, &sheet(true), Vector3::new(0.0, 0.0, -1.0));
         assert_eq!(contacts.len(), 1);
         assert_eq!(contacts[0].kind, ContactKind::VertexFace);
         assert!((contacts[0].normal.into_inner() - Vector3::z()).norm() < 1e-12);
         // A sheet's rim edge through a part face: face/vertex, the part face's normal.
-        let blade = mesh(vec![p(-0.8, 0.4, -0.3), p(0.2, 0.4, -0.3), p(-0.3, 0.4, 0.01)], vec![[0, 1, 2]]);
+        let blade = mesh(
+            vec![p(-0.8, 0.4, -0.3), p(0.2, 0.4, -0.3), p(-0.3, 0.4, 0.01)],
+            vec![[0, 1, 2]],
+        );
         let contacts = classify(&sheet(false), &blade, Vector3::new(0.0, 0.0, -1.0));
         assert_eq!(contacts.len(), 1);
         assert!(contacts.iter().all(|c| c.kind == ContactKind::FaceVertex));
-        assert!(contacts.iter().all(|c| (c.normal.into_inner() - Vector3::z()).norm() < 1e-12));
+        assert!(
+            contacts
+                .iter()
+                .all(|c| (c.normal.into_inner() - Vector3::z()).norm() < 1e-12)
+        );
     }
 
     #[test]
@@ -516,7 +557,10 @@ mod tests {
         let floor: Vec<_> = contacts.iter().filter(|c| c.normal.z > 0.5).collect();
         assert!(floor.len() <= 8 && floor.len() >= 4, "{} kept", floor.len());
         for corner in [(0.0, 0.0), (9.0, 0.0), (0.0, 9.0), (9.0, 9.0)] {
-            assert!(floor.iter().any(|c| (c.point.x, c.point.y) == corner), "{corner:?} dropped");
+            assert!(
+                floor.iter().any(|c| (c.point.x, c.point.y) == corner),
+                "{corner:?} dropped"
+            );
         }
         assert_eq!(contacts.iter().filter(|c| c.normal.x > 0.5).count(), 1);
     }

@@ -13,7 +13,7 @@
 //!     │                                                   Approximating (bisection)     │
 //!     │                                                         │ within tolerance      │
 //!     │                                                         ▼                       │
-//!     │                                                    Classifying ─────────────────┘
+//!     │                                                    Classifying ── Lifting ──────┘
 //! ```
 //!
 //! Each [`SlideMachine::step`] runs one state and makes at most one collision query, so the
@@ -92,10 +92,12 @@ pub enum SlideState {
     Lifting {
         /// The lifted pivot pose.
         goal: Pose,
+        /// The bisection's last free pose: where the part stays if the lift collides.
+        fallback: Pose,
     },
     /// Classifying the contacts at the colliding end of a finished bisection.
     Classifying {
-        /// The free end (now the visible pose).
+        /// The free end.
         valid: Pose,
         /// The colliding end.
         colliding: Pose,
@@ -311,7 +313,7 @@ impl SlideMachine {
             SlideState::Validating { contact } => self.validate(world, contact),
             SlideState::Redirecting => self.redirect(),
             SlideState::Moving { goal } => self.move_to(world, goal),
-            SlideState::Lifting { goal } => self.lift_to(world, goal),
+            SlideState::Lifting { goal, fallback } => self.lift_to(world, goal, fallback),
             SlideState::Approximating(bisection) => self.approximate(world, bisection),
             SlideState::Classifying { valid, colliding } => self.classify(world, valid, colliding),
         }
@@ -384,7 +386,7 @@ impl SlideMachine {
             Metaphor::RubberBand => {
                 self.target = Pose::from_parts(self.ghost.translation, self.visible.rotation);
             }
-            Metaphor::RubberBandSpiralSpring => self.target = self.ghost,
+            Metaphor::SpiralSpring => self.target = self.ghost,
             Metaphor::Incremental => {}
         }
     }
@@ -404,7 +406,7 @@ impl SlideMachine {
         if self.stalled_cycles >= self.params.stall_cycles {
             return self.rest(RestReason::Stalled);
         }
-        if self.cycles_this_frame >= self.params.max_cycles {
+        if self.cycles_this_frame >= self.params.max_iterations {
             return self.rest(RestReason::CycleLimit);
         }
         // A contact the part has moved away from (by turning, or by a lift) no longer constrains.
@@ -459,12 +461,11 @@ impl SlideMachine {
         }
     }
 
-    fn lift_to(&mut self, world: &mut impl SlideWorld, goal: Pose) -> Event {
+    fn lift_to(&mut self, world: &mut impl SlideWorld, goal: Pose, fallback: Pose) -> Event {
         self.stats.collision_checks += 1;
         let free = !world.collides(&self.part_pose(&goal));
-        if free {
-            self.visible = goal;
-        }
+        self.visible = if free { goal } else { fallback };
+        self.end_cycle();
         self.state = SlideState::Redirecting;
         Event::Lifted(free)
     }
@@ -478,11 +479,9 @@ impl SlideMachine {
         Event::Bisected { collides }
     }
 
-    /// The state after a bisection check: more checks, or classification once within tolerance
-    /// (the free end becomes the visible pose).
+    /// The state after a bisection check: more checks, or classification once within tolerance.
     fn approximating(&mut self, bisection: Bisection) -> SlideState {
         if bisection.is_done() {
-            self.visible = *bisection.valid();
             SlideState::Classifying {
                 valid: *bisection.valid(),
                 colliding: *bisection.colliding(),
@@ -505,14 +504,15 @@ impl SlideMachine {
         );
         let classified = self.scratch.len();
         self.stats.contacts_classified += classified as u64;
-        self.end_cycle();
         if classified == 0 {
+            self.visible = valid;
+            self.end_cycle();
             self.stats.contactless_collisions += 1;
             return self.rest(RestReason::Blocked);
         }
         let lift: Vector3<f64> = self.scratch.iter().map(|c| c.normal.into_inner()).sum();
         // Remember the new contacts beside the old ones and reduce the lot.
-        let inverse = self.visible.inverse();
+        let inverse = valid.inverse();
         self.remembered
             .extend(self.scratch.iter().map(|&contact| Remembered {
                 local_point: inverse * contact.point,
@@ -523,7 +523,20 @@ impl SlideMachine {
             |r| &r.contact,
             self.params.cluster_angle,
         );
-        self.state = SlideState::Redirecting;
+        self.state = match Unit::try_new(lift, 1e-9) {
+            Some(direction) if self.params.lift > 0.0 => {
+                let offset = direction.into_inner() * (self.params.lift * self.tolerance);
+                SlideState::Lifting {
+                    goal: Translation3::from(offset) * valid,
+                    fallback: valid,
+                }
+            }
+            _ => {
+                self.visible = valid;
+                self.end_cycle();
+                SlideState::Redirecting
+            }
+        };
         Event::Classified {
             contacts: classified,
         }
@@ -623,7 +636,7 @@ mod tests {
     fn params(metaphor: Metaphor) -> SlideParams {
         SlideParams {
             metaphor,
-            tolerance: Some(1e-4),
+            contact_tolerance: Some(1e-4),
             ..SlideParams::default()
         }
     }
@@ -715,7 +728,7 @@ mod tests {
         let ghost = Pose::new(Vector3::new(0.3, -0.2, 0.5), Vector3::new(0.0, 0.4, 0.1));
         for metaphor in [
             Metaphor::RubberBand,
-            Metaphor::RubberBandSpiralSpring,
+            Metaphor::SpiralSpring,
             Metaphor::Incremental,
         ] {
             let mut world = HalfSpaces::unit_cube(&[]);
@@ -742,7 +755,7 @@ mod tests {
             &at(0., 0., 0.5005),
             Vector3::zeros(),
             0.87,
-            params(Metaphor::RubberBandSpiralSpring),
+            params(Metaphor::SpiralSpring),
         );
         // The ghost tilts about x while staying at the same height: a corner would dig in.
         let ghost = Pose::new(Vector3::new(0.0, 0.0, 0.5005), Vector3::new(0.3, 0.0, 0.0));

@@ -7,13 +7,13 @@ use super::force::ForceParams;
 
 /// How the visible part follows its ghost (the paper's three non-rigid grasping metaphors).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "kebab-case")]
 pub enum Metaphor {
     /// The part is pulled towards the ghost's position; its orientation is left as it is.
     #[default]
     RubberBand,
-    /// Like the rubber band, and a spiral spring pulls the orientation towards the ghost's too.
-    RubberBandSpiralSpring,
+    /// Rubber band and spiral spring: the orientation is pulled towards the ghost's too.
+    SpiralSpring,
     /// Each motion of the ghost is repeated, as far as it goes, from the part's current pose.
     Incremental,
 }
@@ -44,13 +44,14 @@ pub struct SlideParams {
     /// Contact tolerance in metres: bisection stops when the interval between the free and the
     /// colliding pose is shorter, and a target nearer than it counts as reached. Unset: 1e-4 of
     /// the grasped part's size.
-    pub tolerance: Option<f64>,
+    pub contact_tolerance: Option<f64>,
     /// Clearance, as a fraction of the tolerance, that the part regains from the surfaces it has
     /// just hit (if that lift is free), so that it glides instead of scraping and the visible
     /// pose is not left arbitrarily close to a surface.
     pub lift: f64,
-    /// Most sliding cycles (collision, contact, new direction) per frame.
-    pub max_cycles: u32,
+    /// Most sliding iterations (move, contact, classification, new direction) per frame: the
+    /// stopping criterion's iteration count.
+    pub max_iterations: u32,
     /// Consecutive cycles with no progress (less than a tenth of the tolerance) that end a frame.
     pub stall_cycles: u32,
     /// Contacts whose normals differ by less than this angle (radians) form one cluster, reduced
@@ -66,9 +67,9 @@ impl Default for SlideParams {
     fn default() -> Self {
         SlideParams {
             metaphor: Metaphor::default(),
-            tolerance: None,
+            contact_tolerance: None,
             lift: 0.5,
-            max_cycles: 24,
+            max_iterations: 24,
             stall_cycles: 3,
             cluster_angle: 0.02,
             force: ForceParams::default(),
@@ -98,11 +99,11 @@ impl SlideParams {
         };
         let positive = |v: f64| v.is_finite() && v > 0.0;
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
-        if let Some(t) = self.tolerance
+        if let Some(t) = self.contact_tolerance
             && !positive(t)
         {
             return fail(
-                "tolerance",
+                "contact_tolerance",
                 format!("must be a positive length in metres, got {t}"),
             );
         }
@@ -112,8 +113,8 @@ impl SlideParams {
                 format!("must be between 0 and 10, got {}", self.lift),
             );
         }
-        if self.max_cycles == 0 {
-            return fail("max_cycles", "must be at least 1".into());
+        if self.max_iterations == 0 {
+            return fail("max_iterations", "must be at least 1".into());
         }
         if self.stall_cycles == 0 {
             return fail("stall_cycles", "must be at least 1".into());
@@ -156,7 +157,7 @@ impl SlideParams {
 
     /// The contact tolerance for a part of the given size (its bounding-box diagonal), metres.
     pub fn tolerance_for(&self, part_size: f64) -> f64 {
-        self.tolerance.unwrap_or(1e-4 * part_size)
+        self.contact_tolerance.unwrap_or(1e-4 * part_size)
     }
 
     /// The allowance between two named parts, if they form a slide-in unit.
@@ -177,7 +178,7 @@ mod tests {
         let params: SlideParams = toml::from_str(
             r#"
             metaphor = "incremental"
-            tolerance = 1e-5
+            contact_tolerance = 1e-5
             [force]
             stiffness = 800.0
             [[allowances]]
@@ -198,10 +199,13 @@ mod tests {
 
     #[test]
     fn bad_values_are_refused_with_their_key() {
-        let unknown = toml::from_str::<SlideParams>("tolerence = 1e-5").unwrap_err();
-        assert!(unknown.to_string().contains("tolerence"), "{unknown}");
-        let negative: SlideParams = toml::from_str("tolerance = -1.0").unwrap();
-        assert_eq!(negative.validate().unwrap_err().key, "tolerance");
+        let unknown = toml::from_str::<SlideParams>("contact_tolerence = 1e-5").unwrap_err();
+        assert!(
+            unknown.to_string().contains("contact_tolerence"),
+            "{unknown}"
+        );
+        let negative: SlideParams = toml::from_str("contact_tolerance = -1.0").unwrap();
+        assert_eq!(negative.validate().unwrap_err().key, "contact_tolerance");
         let same: SlideParams =
             toml::from_str("[[allowances]]\nparts = [\"a\", \"a\"]\ndepth = 0.001").unwrap();
         assert_eq!(same.validate().unwrap_err().key, "allowances[0].parts");

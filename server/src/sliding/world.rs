@@ -212,7 +212,13 @@ impl<C: MeshCollider> SlideWorld for PairwiseWorld<C> {
         hit
     }
 
-    fn contacts(&mut self, part_pose: &Pose, approach: &Motion, pivot: &Point, out: &mut Vec<Contact>) {
+    fn contacts(
+        &mut self,
+        part_pose: &Pose,
+        approach: &Motion,
+        pivot: &Point,
+        out: &mut Vec<Contact>,
+    ) {
         self.stats.contact_queries += 1;
         let centre = part_pose * self.pivot;
         for index in 0..self.obstacles.len() {
