@@ -38,12 +38,18 @@ enum Command {
         file: PathBuf,
     },
     /// Run a benchmark of BENCHMARKS.md.
-    #[command(subcommand)]
-    Bench(Bench),
+    Bench {
+        #[command(subcommand)]
+        benchmark: BenchCommand,
+    },
 }
 
 #[derive(Debug, Subcommand)]
-enum Bench {
+enum BenchCommand {
+    /// B1: the tumbling pair (the paper's Figure 3 with --figure).
+    Tumble(bench::tumble::TumbleArgs),
+    /// B2: random poses of one mesh against another (FCL's procedure).
+    Random(bench::random::RandomArgs),
     /// B5: sliding contact, time per contact point and sliding frame rate.
     Slide(bench::slide::SlideBenchArgs),
 }
@@ -62,7 +68,11 @@ fn main() -> ExitCode {
         Command::CheckScene { file } => Scene::load(&file)
             .map(|scene| println!("{}", scene.summary()))
             .map_err(Into::into),
-        Command::Bench(Bench::Slide(args)) => bench::slide::run_bench(&args).map(drop),
+        Command::Bench { benchmark } => match benchmark {
+            BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
+            BenchCommand::Random(args) => bench::random::run_cli(&args),
+            BenchCommand::Slide(args) => bench::slide::run_bench(&args).map(drop),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
