@@ -14,7 +14,7 @@
 //! a_i` with `λ ≥ 0` minimising `|y + A λ|`, by the Lawson–Hanson active-set method. Contacts are
 //! few (merged per cluster before they get here), so this takes microseconds.
 
-use nalgebra::{DMatrix, DVector, Vector6};
+use nalgebra::{Matrix6, Vector6};
 
 /// What the free space around the contacts allows, judged from the projection's active contacts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -86,7 +86,7 @@ pub fn project_onto_free_space(desired: &Vector6<f64>, rows: &[Vector6<f64>]) ->
                 excluded[entering] = true;
                 break;
             };
-            if solution.iter().all(|&z| z > 0.0) {
+            if solution.iter().take(passive.len()).all(|&z| z > 0.0) {
                 for (&j, &z) in passive.iter().zip(solution.iter()) {
                     multipliers[j] = z;
                 }
@@ -137,32 +137,54 @@ pub fn project_onto_free_space(desired: &Vector6<f64>, rows: &[Vector6<f64>]) ->
 
 /// Solves the unconstrained least-squares problem on the passive rows: the multipliers `z` with
 /// `(A_P^T A_P) z = -A_P^T y`. None when the passive rows are (numerically) dependent.
+///
+/// Independent rows in a 6-space are at most six, so the Gram matrix is padded to 6 x 6 with the
+/// identity (zero right-hand side) and factorised without allocating.
 fn solve_passive(
     desired: &Vector6<f64>,
     rows: &[Vector6<f64>],
     passive: &[usize],
-) -> Option<Vec<f64>> {
+) -> Option<Vector6<f64>> {
     let k = passive.len();
-    let gram = DMatrix::from_fn(k, k, |a, b| rows[passive[a]].dot(&rows[passive[b]]));
-    let rhs = DVector::from_fn(k, |a, _| -rows[passive[a]].dot(desired));
+    if k > 6 {
+        return None;
+    }
+    let gram = Matrix6::from_fn(|a, b| match (a < k, b < k) {
+        (true, true) => rows[passive[a]].dot(&rows[passive[b]]),
+        _ => f64::from(u8::from(a == b)),
+    });
+    let rhs = Vector6::from_fn(|a, _| {
+        if a < k {
+            -rows[passive[a]].dot(desired)
+        } else {
+            0.0
+        }
+    });
     // A pivot this small relative to the row lengths means the rows are dependent.
-    let smallest_allowed = 1e-12 * gram.diagonal().max();
+    let largest = gram
+        .diagonal()
+        .iter()
+        .take(k)
+        .fold(0.0_f64, |m, &d| m.max(d));
+    let smallest_allowed = 1e-12 * largest;
     let cholesky = gram.cholesky()?;
     if cholesky
         .l_dirty()
         .diagonal()
         .iter()
+        .take(k)
         .any(|&d| d * d <= smallest_allowed)
     {
         return None;
     }
-    Some(cholesky.solve(&rhs).iter().copied().collect())
+    Some(cholesky.solve(&rhs))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::Vector3;
+    use nalgebra::{DMatrix, DVector};
     use proptest::prelude::*;
 
     fn translation_row(n: [f64; 3]) -> Vector6<f64> {

@@ -150,6 +150,9 @@ pub struct SlideStats {
     pub contact_queries: u64,
     /// Contact points classified.
     pub contacts_classified: u64,
+    /// Remembered contact points used as constraints of a new direction, summed over the new
+    /// directions computed: what each cycle handles without detecting them again.
+    pub contacts_projected: u64,
     /// Colliding poses for which the world reported no usable contact (the part stops there).
     pub contactless_collisions: u64,
 }
@@ -196,6 +199,8 @@ pub struct SlideMachine {
     stalled_cycles: u32,
     cycle_start: Pose,
     scratch: Vec<Contact>,
+    /// The constraint rows of the remembered contacts (kept to reuse its allocation).
+    rows: Vec<Vector6<f64>>,
     stats: SlideStats,
 }
 
@@ -229,6 +234,7 @@ impl SlideMachine {
             stalled_cycles: 0,
             cycle_start: visible,
             scratch: Vec::new(),
+            rows: Vec::new(),
             stats: SlideStats::default(),
         }
     }
@@ -415,20 +421,18 @@ impl SlideMachine {
         self.remembered.retain(|r| r.gap(&visible) <= release);
         let rotates = self.metaphor.rotates();
         let pivot = Point3::from(self.visible.translation.vector);
-        let rows: Vec<Vector6<f64>> = self
-            .remembered
-            .iter()
-            .map(|r| {
-                let n = r.contact.normal.into_inner();
-                let torque = if rotates {
-                    ((self.visible * r.local_point) - pivot).cross(&n) / self.radius
-                } else {
-                    Vector3::zeros()
-                };
-                Vector6::new(n.x, n.y, n.z, torque.x, torque.y, torque.z)
-            })
-            .collect();
-        let projection = project_onto_free_space(&remaining.to_scaled(self.radius), &rows);
+        self.rows.clear();
+        self.rows.extend(self.remembered.iter().map(|r| {
+            let n = r.contact.normal.into_inner();
+            let torque = if rotates {
+                ((self.visible * r.local_point) - pivot).cross(&n) / self.radius
+            } else {
+                Vector3::zeros()
+            };
+            Vector6::new(n.x, n.y, n.z, torque.x, torque.y, torque.z)
+        }));
+        self.stats.contacts_projected += self.rows.len() as u64;
+        let projection = project_onto_free_space(&remaining.to_scaled(self.radius), &self.rows);
         let mut active = projection.active.iter().peekable();
         let mut index = 0;
         self.remembered.retain(|_| {
@@ -795,6 +799,38 @@ mod tests {
         machine.set_metaphor(Metaphor::RubberBand);
         drive(&mut machine, &mut world, &[at(0.5, 0.0, -0.2)]);
         assert_near(&machine.visible_pose(), [0.5, 0.0, 0.5], 3e-4);
+    }
+
+    #[test]
+    fn a_ghost_pushed_into_the_floor_gives_the_hand_an_upward_force() {
+        let mut world = HalfSpaces::unit_cube(&[([0., 0., 1.], 0.0)]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 1.),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::RubberBand),
+        );
+        let mut force = crate::sliding::ForceModel::new(crate::sliding::ForceParams::default());
+        machine.set_ghost(&at(0.0, 0.0, 0.49));
+        assert_eq!(machine.run_frame(&mut world), RestReason::Blocked);
+        let wrench = force.update(
+            machine.visible_pivot_pose(),
+            machine.ghost_pivot_pose(),
+            0.001,
+        );
+        // The hand is 1 cm below the resting part (plus its gap of at most the tolerance and the
+        // lift): 500 N/m pulls it up by 5 N and a little more.
+        assert!(
+            (5.0..=5.0 + 500.0 * 1.5e-4).contains(&wrench.force.z),
+            "{}",
+            wrench.force
+        );
+        assert!(wrench.force.xy().norm() < 1e-9);
+        // A second frame with the ghost where it is changes nothing.
+        assert_eq!(machine.run_frame(&mut world), RestReason::Blocked);
+        machine.set_ghost(&at(0.0, 0.0, 0.49));
+        assert_eq!(machine.run_frame(&mut world), RestReason::Blocked);
+        assert_near(&machine.visible_pose(), [0.0, 0.0, 0.5], 3e-4);
     }
 
     #[test]
