@@ -9,3 +9,4 @@ pub mod collision;
 pub mod geometry;
 pub mod runtime;
 pub mod scene;
+pub mod sliding;

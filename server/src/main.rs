@@ -61,6 +61,8 @@ enum BenchCommand {
     Tumble(bench::tumble::TumbleArgs),
     /// B2: random poses of one mesh against another (FCL's procedure).
     Random(bench::random::RandomArgs),
+    /// B5: sliding contact, time per contact point and sliding frame rate.
+    Slide(bench::slide::SlideBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -86,6 +88,7 @@ fn main() -> ExitCode {
         Command::Bench { benchmark } => match benchmark {
             BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
             BenchCommand::Random(args) => bench::random::run_cli(&args),
+            BenchCommand::Slide(args) => bench::slide::run_bench(&args).map(drop),
         },
     };
     match result {

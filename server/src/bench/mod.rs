@@ -2,4 +2,5 @@
 
 pub mod random;
 pub mod report;
+pub mod slide;
 pub mod tumble;

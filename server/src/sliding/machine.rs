@@ -1,0 +1,855 @@
+//! The sliding finite state machine (the paper's Figure 6) as an explicit type.
+//!
+//! ```text
+//!            new ghost                      contacts still there / gone
+//!  Resting ───────────▶ Validating ──────────────────────────────┐
+//!     ▲                    (one probe per remembered cluster)     ▼
+//!     │ reached, blocked,                                    Redirecting ◀──────────────┐
+//!     │ stalled, cycle limit ◀───────────────────────────────── │  project the remaining │
+//!     │                                                         ▼  motion on free space  │
+//!     │                                                       Moving ── free ───────────┤
+//!     │                                                         │ collides              │
+//!     │                                                         ▼                       │
+//!     │                                                   Approximating (bisection)     │
+//!     │                                                         │ within tolerance      │
+//!     │                                                         ▼                       │
+//!     │                                                    Classifying ── Lifting ──────┘
+//! ```
+//!
+//! Each [`SlideMachine::step`] runs one state and makes at most one collision query, so the
+//! runtime can interleave the machine with its rendezvous. The ghost follows the hand and may
+//! penetrate; trial poses are tried on the collision copy (the [`SlideWorld`]); the visible pose
+//! changes only to poses the collision copy found free. Contacts found by classification are
+//! remembered (in the part's frame) while the part keeps pressing on them, so that a part sliding
+//! along a plane or into a crease does not rediscover its contacts every cycle; at the start of
+//! each frame a short probe towards every remembered surface checks that it is still there.
+
+use nalgebra::{Point3, Translation3, Unit, Vector3, Vector6};
+
+use super::bisection::Bisection;
+use super::contact::{Contact, reduce_contacts};
+use super::direction::{FreeSpace, project_onto_free_space};
+use super::motion::{Motion, Pose, pose_distance};
+use super::params::{Metaphor, SlideParams};
+use crate::geometry::Point;
+
+/// What the machine needs from collision detection: the grasped part's collision copy tested
+/// against the obstacles around it.
+pub trait SlideWorld {
+    /// Whether the part, with its mesh frame at `part_pose`, intersects any obstacle (beyond the
+    /// obstacle's slide-in allowance).
+    fn collides(&mut self, part_pose: &Pose) -> bool;
+
+    /// Appends the classified contacts of the part at `part_pose` to `out`; `approach` is the
+    /// pivot's motion from the last free pose to `part_pose` and `pivot` the pivot's position
+    /// there (see [`super::contact::classify_pairs`]).
+    fn contacts(
+        &mut self,
+        part_pose: &Pose,
+        approach: &Motion,
+        pivot: &Point,
+        out: &mut Vec<Contact>,
+    );
+}
+
+/// Why the machine came to rest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum RestReason {
+    /// Just grasped: the visible part is where the ghost is.
+    Grasped,
+    /// The part reached its target (within tolerance).
+    Reached,
+    /// The contacts leave no free motion towards the target.
+    Blocked,
+    /// Several cycles in a row made no progress.
+    Stalled,
+    /// The frame used up its cycles; the next frame goes on.
+    CycleLimit,
+}
+
+/// The states of Figure 6; the data each carries is what the next step needs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SlideState {
+    /// Waiting for the ghost to move.
+    Resting(RestReason),
+    /// Probing whether remembered contact `contact` (and its cluster) still touches.
+    Validating {
+        /// Index into the remembered contacts.
+        contact: usize,
+    },
+    /// Computing the new direction from the remaining motion and the contacts.
+    Redirecting,
+    /// Checking the goal of the current direction on the collision copy.
+    Moving {
+        /// The pivot pose the part tries to reach.
+        goal: Pose,
+    },
+    /// Bisecting between the last free pose and the first colliding one.
+    Approximating(Bisection),
+    /// Moving the part off the contacts just classified by a fraction of the tolerance, so that
+    /// the visible pose keeps a clearance instead of the bisection's last free pose, which may be
+    /// arbitrarily close to a surface.
+    Lifting {
+        /// The lifted pivot pose.
+        goal: Pose,
+        /// The bisection's last free pose: where the part stays if the lift collides.
+        fallback: Pose,
+    },
+    /// Classifying the contacts at the colliding end of a finished bisection.
+    Classifying {
+        /// The free end.
+        valid: Pose,
+        /// The colliding end.
+        colliding: Pose,
+    },
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub enum Event {
+    /// Resting, and the ghost has not moved.
+    Idle,
+    /// A new ghost pose started a frame.
+    FrameStarted,
+    /// A remembered contact cluster still touches.
+    ContactConfirmed,
+    /// A remembered contact cluster was left behind and forgotten.
+    ContactLost,
+    /// A new direction was computed.
+    Redirected(FreeSpace),
+    /// The goal was free: the visible part moved there.
+    Moved,
+    /// The lift off fresh contacts was free (true) or blocked (false, the part stays).
+    Lifted(bool),
+    /// The goal collided: bisection starts.
+    Collided,
+    /// One bisection check; whether the trial pose collided.
+    Bisected {
+        /// The trial pose collided.
+        collides: bool,
+    },
+    /// The contacts were classified: how many contact points.
+    Classified {
+        /// Contact points classified (one per touching triangle pair).
+        contacts: usize,
+    },
+    /// The machine came to rest.
+    Rested(RestReason),
+}
+
+/// Counters over the machine's lifetime, for benchmarks and diagnostics.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SlideStats {
+    /// Frames started.
+    pub frames: u64,
+    /// Sliding cycles completed.
+    pub cycles: u64,
+    /// Static collision checks asked of the world.
+    pub collision_checks: u64,
+    /// Contact queries asked of the world.
+    pub contact_queries: u64,
+    /// Contact points classified.
+    pub contacts_classified: u64,
+    /// Remembered contact points used as constraints of a new direction, summed over the new
+    /// directions computed: what each cycle handles without detecting them again.
+    pub contacts_projected: u64,
+    /// Colliding poses for which the world reported no usable contact (the part stops there).
+    pub contactless_collisions: u64,
+}
+
+/// A contact remembered in the part's frame: the point moves with the part, the normal (of a
+/// static obstacle) stays in the world, and so does the anchor, where the contact was found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Remembered {
+    local_point: Point,
+    contact: Contact,
+}
+
+impl Remembered {
+    /// How far the part's contact point, at pivot pose `visible`, has moved off the surface.
+    fn gap(&self, visible: &Pose) -> f64 {
+        self.contact
+            .normal
+            .dot(&(visible * self.local_point - self.contact.point))
+    }
+}
+
+/// The sliding simulation of one grasped part.
+#[derive(Debug, Clone)]
+pub struct SlideMachine {
+    params: SlideParams,
+    metaphor: Metaphor,
+    tolerance: f64,
+    /// The pivot in the part's mesh frame.
+    pivot: Vector3<f64>,
+    /// The part's radius about the pivot: converts rotations to lengths.
+    radius: f64,
+    state: SlideState,
+    /// Pivot pose of the visible part: only ever a pose found free.
+    visible: Pose,
+    /// Pivot pose of the ghost: where the hand holds the part.
+    ghost: Pose,
+    /// The ghost pose the current target already accounts for.
+    consumed_ghost: Pose,
+    ghost_pending: bool,
+    /// Pivot pose the current frame slides towards.
+    target: Pose,
+    remembered: Vec<Remembered>,
+    cycles_this_frame: u32,
+    stalled_cycles: u32,
+    cycle_start: Pose,
+    scratch: Vec<Contact>,
+    /// The constraint rows of the remembered contacts (kept to reuse its allocation).
+    rows: Vec<Vector6<f64>>,
+    stats: SlideStats,
+}
+
+impl SlideMachine {
+    /// A machine for a part grasped at `part_pose` (pose of its mesh frame, which must be free),
+    /// with its pivot at `pivot` and its radius about the pivot `radius` (both in the mesh frame,
+    /// metres), and the scene's sliding parameters (already validated). The tolerance is the
+    /// parameters' one or 1e-4 of the part's diameter.
+    pub fn new(part_pose: &Pose, pivot: Vector3<f64>, radius: f64, params: SlideParams) -> Self {
+        let radius = if radius.is_finite() && radius > 0.0 {
+            radius
+        } else {
+            1.0
+        };
+        let tolerance = params.tolerance_for(2.0 * radius);
+        let visible = part_pose * Translation3::from(pivot);
+        SlideMachine {
+            metaphor: params.metaphor,
+            params,
+            tolerance,
+            pivot,
+            radius,
+            state: SlideState::Resting(RestReason::Grasped),
+            visible,
+            ghost: visible,
+            consumed_ghost: visible,
+            ghost_pending: false,
+            target: visible,
+            remembered: Vec::new(),
+            cycles_this_frame: 0,
+            stalled_cycles: 0,
+            cycle_start: visible,
+            scratch: Vec::new(),
+            rows: Vec::new(),
+            stats: SlideStats::default(),
+        }
+    }
+
+    /// Sets the ghost: the pose (of the part's mesh frame) where the hand now holds the part.
+    /// The next step from rest starts a frame towards it; a frame under way picks it up at its
+    /// next new direction.
+    pub fn set_ghost(&mut self, part_pose: &Pose) {
+        self.ghost = part_pose * Translation3::from(self.pivot);
+        self.ghost_pending = true;
+    }
+
+    /// Switches the grasping metaphor at run time; the current frame ends.
+    pub fn set_metaphor(&mut self, metaphor: Metaphor) {
+        self.metaphor = metaphor;
+        self.consumed_ghost = self.ghost;
+        self.target = self.visible;
+        self.remembered.clear();
+        self.state = SlideState::Resting(RestReason::Reached);
+        self.ghost_pending = true;
+    }
+
+    /// The current metaphor.
+    pub fn metaphor(&self) -> Metaphor {
+        self.metaphor
+    }
+
+    /// The contact tolerance in metres.
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &SlideState {
+        &self.state
+    }
+
+    /// The visible part's pose (its mesh frame): always a pose found free.
+    pub fn visible_pose(&self) -> Pose {
+        self.visible * Translation3::from(-self.pivot)
+    }
+
+    /// The visible part's pivot pose (for the force model).
+    pub fn visible_pivot_pose(&self) -> &Pose {
+        &self.visible
+    }
+
+    /// The ghost's pivot pose (for the force model).
+    pub fn ghost_pivot_pose(&self) -> &Pose {
+        &self.ghost
+    }
+
+    /// The contacts the part currently presses on, in the world frame.
+    pub fn contacts(&self) -> impl Iterator<Item = Contact> + '_ {
+        self.remembered.iter().map(|r| Contact {
+            point: self.visible * r.local_point,
+            ..r.contact
+        })
+    }
+
+    /// Lifetime counters.
+    pub fn stats(&self) -> &SlideStats {
+        &self.stats
+    }
+
+    /// Steps until the machine rests (a whole frame when a ghost is pending); returns why it rests.
+    pub fn run_frame(&mut self, world: &mut impl SlideWorld) -> RestReason {
+        loop {
+            if let Event::Rested(reason) = self.step(world) {
+                return reason;
+            }
+            if let (SlideState::Resting(reason), false) = (&self.state, self.ghost_pending) {
+                return *reason;
+            }
+        }
+    }
+
+    /// Runs the current state once, with at most one query to `world`, and moves to the next.
+    pub fn step(&mut self, world: &mut impl SlideWorld) -> Event {
+        match std::mem::replace(&mut self.state, SlideState::Redirecting) {
+            SlideState::Resting(reason) => self.start_frame(reason),
+            SlideState::Validating { contact } => self.validate(world, contact),
+            SlideState::Redirecting => self.redirect(),
+            SlideState::Moving { goal } => self.move_to(world, goal),
+            SlideState::Lifting { goal, fallback } => self.lift_to(world, goal, fallback),
+            SlideState::Approximating(bisection) => self.approximate(world, bisection),
+            SlideState::Classifying { valid, colliding } => self.classify(world, valid, colliding),
+        }
+    }
+
+    fn start_frame(&mut self, reason: RestReason) -> Event {
+        if !self.ghost_pending {
+            self.state = SlideState::Resting(reason);
+            return Event::Idle;
+        }
+        self.stats.frames += 1;
+        self.cycles_this_frame = 0;
+        self.stalled_cycles = 0;
+        if self.metaphor == Metaphor::Incremental {
+            // What the last frame did not achieve is dropped: the user is in control again.
+            self.target = self.visible;
+        }
+        self.state = if self.remembered.is_empty() {
+            SlideState::Redirecting
+        } else {
+            SlideState::Validating { contact: 0 }
+        };
+        Event::FrameStarted
+    }
+
+    /// Probes towards one remembered cluster; forgets it if nothing is there any more.
+    fn validate(&mut self, world: &mut impl SlideWorld, index: usize) -> Event {
+        let normal = self.remembered[index].contact.normal;
+        let probe_distance = self.release_distance();
+        let probe = Translation3::from(-normal.into_inner() * probe_distance) * self.visible;
+        self.stats.collision_checks += 1;
+        let still_touching = world.collides(&self.part_pose(&probe));
+        let cos_limit = self.params.cluster_angle.cos();
+        let same_cluster = |r: &Remembered| r.contact.normal.dot(&normal) >= cos_limit;
+        let event = if still_touching {
+            Event::ContactConfirmed
+        } else {
+            Event::ContactLost
+        };
+        // The next cluster to probe: the first remembered contact after this one of another
+        // cluster than every one probed so far.
+        if !still_touching {
+            self.remembered.retain(|r| !same_cluster(r));
+        }
+        let probed_until = if still_touching { index + 1 } else { index };
+        let next = (probed_until..self.remembered.len()).find(|&i| {
+            let n = self.remembered[i].contact.normal;
+            !self.remembered[..i]
+                .iter()
+                .any(|r| r.contact.normal.dot(&n) >= cos_limit)
+        });
+        self.state = match next {
+            Some(contact) => SlideState::Validating { contact },
+            None => SlideState::Redirecting,
+        };
+        event
+    }
+
+    /// The target of the current frame under the metaphor, refreshed from the newest ghost.
+    fn refresh_target(&mut self) {
+        if self.ghost_pending {
+            if self.metaphor == Metaphor::Incremental {
+                self.target =
+                    Motion::between(&self.consumed_ghost, &self.ghost).apply(&self.target);
+            }
+            self.consumed_ghost = self.ghost;
+            self.ghost_pending = false;
+        }
+        match self.metaphor {
+            Metaphor::RubberBand => {
+                self.target = Pose::from_parts(self.ghost.translation, self.visible.rotation);
+            }
+            Metaphor::SpiralSpring => self.target = self.ghost,
+            Metaphor::Incremental => {}
+        }
+    }
+
+    fn rest(&mut self, reason: RestReason) -> Event {
+        self.state = SlideState::Resting(reason);
+        Event::Rested(reason)
+    }
+
+    /// Projects the remaining motion onto the free space the remembered contacts leave.
+    fn redirect(&mut self) -> Event {
+        self.refresh_target();
+        let remaining = Motion::between(&self.visible, &self.target);
+        if remaining.length(self.radius) <= self.tolerance {
+            return self.rest(RestReason::Reached);
+        }
+        if self.stalled_cycles >= self.params.stall_cycles {
+            return self.rest(RestReason::Stalled);
+        }
+        if self.cycles_this_frame >= self.params.max_iterations {
+            return self.rest(RestReason::CycleLimit);
+        }
+        // A contact the part has moved away from (by turning, or by a lift) no longer constrains.
+        let release = self.release_distance();
+        let visible = self.visible;
+        self.remembered.retain(|r| r.gap(&visible) <= release);
+        let rotates = self.metaphor.rotates();
+        let pivot = Point3::from(self.visible.translation.vector);
+        self.rows.clear();
+        self.rows.extend(self.remembered.iter().map(|r| {
+            let n = r.contact.normal.into_inner();
+            let torque = if rotates {
+                ((self.visible * r.local_point) - pivot).cross(&n) / self.radius
+            } else {
+                Vector3::zeros()
+            };
+            Vector6::new(n.x, n.y, n.z, torque.x, torque.y, torque.z)
+        }));
+        self.stats.contacts_projected += self.rows.len() as u64;
+        let projection = project_onto_free_space(&remaining.to_scaled(self.radius), &self.rows);
+        let mut active = projection.active.iter().peekable();
+        let mut index = 0;
+        self.remembered.retain(|_| {
+            let kept = active.next_if_eq(&&index).is_some();
+            index += 1;
+            kept
+        });
+        if projection.free_space == FreeSpace::Stop {
+            return self.rest(RestReason::Blocked);
+        }
+        let motion = Motion::from_scaled(&projection.motion, self.radius);
+        self.cycle_start = self.visible;
+        self.state = SlideState::Moving {
+            goal: motion.apply(&self.visible),
+        };
+        Event::Redirected(projection.free_space)
+    }
+
+    fn move_to(&mut self, world: &mut impl SlideWorld, goal: Pose) -> Event {
+        self.stats.collision_checks += 1;
+        if world.collides(&self.part_pose(&goal)) {
+            let bisection = Bisection::new(self.visible, goal, self.tolerance, self.radius);
+            self.state = self.approximating(bisection);
+            Event::Collided
+        } else {
+            self.visible = goal;
+            self.end_cycle();
+            self.state = SlideState::Redirecting;
+            Event::Moved
+        }
+    }
+
+    fn lift_to(&mut self, world: &mut impl SlideWorld, goal: Pose, fallback: Pose) -> Event {
+        self.stats.collision_checks += 1;
+        let free = !world.collides(&self.part_pose(&goal));
+        self.visible = if free { goal } else { fallback };
+        self.end_cycle();
+        self.state = SlideState::Redirecting;
+        Event::Lifted(free)
+    }
+
+    fn approximate(&mut self, world: &mut impl SlideWorld, mut bisection: Bisection) -> Event {
+        let trial = bisection.trial();
+        self.stats.collision_checks += 1;
+        let collides = world.collides(&self.part_pose(&trial));
+        bisection.record(trial, collides);
+        self.state = self.approximating(bisection);
+        Event::Bisected { collides }
+    }
+
+    /// The state after a bisection check: more checks, or classification once within tolerance.
+    fn approximating(&mut self, bisection: Bisection) -> SlideState {
+        if bisection.is_done() {
+            SlideState::Classifying {
+                valid: *bisection.valid(),
+                colliding: *bisection.colliding(),
+            }
+        } else {
+            SlideState::Approximating(bisection)
+        }
+    }
+
+    fn classify(&mut self, world: &mut impl SlideWorld, valid: Pose, colliding: Pose) -> Event {
+        let approach = Motion::between(&valid, &colliding);
+        self.scratch.clear();
+        self.stats.contact_queries += 1;
+        let pivot = Point3::from(colliding.translation.vector);
+        world.contacts(
+            &self.part_pose(&colliding),
+            &approach,
+            &pivot,
+            &mut self.scratch,
+        );
+        let classified = self.scratch.len();
+        self.stats.contacts_classified += classified as u64;
+        if classified == 0 {
+            self.visible = valid;
+            self.end_cycle();
+            self.stats.contactless_collisions += 1;
+            return self.rest(RestReason::Blocked);
+        }
+        let lift: Vector3<f64> = self.scratch.iter().map(|c| c.normal.into_inner()).sum();
+        // Remember the new contacts beside the old ones and reduce the lot.
+        let inverse = valid.inverse();
+        self.remembered
+            .extend(self.scratch.iter().map(|&contact| Remembered {
+                local_point: inverse * contact.point,
+                contact,
+            }));
+        reduce_contacts(
+            &mut self.remembered,
+            |r| &r.contact,
+            self.params.cluster_angle,
+        );
+        self.state = match Unit::try_new(lift, 1e-9) {
+            Some(direction) if self.params.lift > 0.0 => {
+                let offset = direction.into_inner() * (self.params.lift * self.tolerance);
+                SlideState::Lifting {
+                    goal: Translation3::from(offset) * valid,
+                    fallback: valid,
+                }
+            }
+            _ => {
+                self.visible = valid;
+                self.end_cycle();
+                SlideState::Redirecting
+            }
+        };
+        Event::Classified {
+            contacts: classified,
+        }
+    }
+
+    /// The gap beyond which a remembered contact is no longer touched: the bisection's tolerance,
+    /// the lift, and as much again for rounding.
+    fn release_distance(&self) -> f64 {
+        self.tolerance * (2.0 + self.params.lift)
+    }
+
+    fn end_cycle(&mut self) {
+        self.cycles_this_frame += 1;
+        self.stats.cycles += 1;
+        let progress = pose_distance(&self.cycle_start, &self.visible, self.radius);
+        if progress < 0.1 * self.tolerance {
+            self.stalled_cycles += 1;
+        } else {
+            self.stalled_cycles = 0;
+        }
+    }
+
+    /// The mesh-frame pose of the part whose pivot is at `pivot_pose`.
+    fn part_pose(&self, pivot_pose: &Pose) -> Pose {
+        pivot_pose * Translation3::from(-self.pivot)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sliding::ContactKind;
+
+    /// A world of half-spaces that a set of part points must stay inside: an analytic stand-in
+    /// for collision detection that exercises the machine alone.
+    struct HalfSpaces {
+        /// Each plane as (inward unit normal, offset): free where `normal · x >= offset`.
+        planes: Vec<(Unit<Vector3<f64>>, f64)>,
+        points: Vec<Point>,
+        queries: usize,
+    }
+
+    impl HalfSpaces {
+        fn unit_cube(planes: &[([f64; 3], f64)]) -> Self {
+            let mut points = Vec::new();
+            for i in 0..8 {
+                let c = |bit: i32| if i & (1 << bit) != 0 { 0.5 } else { -0.5 };
+                points.push(Point::new(c(0), c(1), c(2)));
+            }
+            HalfSpaces {
+                planes: planes
+                    .iter()
+                    .map(|&(n, d)| (Unit::new_normalize(Vector3::from(n)), d))
+                    .collect(),
+                points,
+                queries: 0,
+            }
+        }
+
+        fn penetrations(
+            &self,
+            pose: &Pose,
+        ) -> impl Iterator<Item = (Point, Unit<Vector3<f64>>)> + '_ {
+            let pose = *pose;
+            self.points.iter().flat_map(move |p| {
+                let x = pose * p;
+                self.planes
+                    .iter()
+                    .filter(move |(n, d)| n.dot(&x.coords) < *d)
+                    .map(move |(n, _)| (x, *n))
+            })
+        }
+    }
+
+    impl SlideWorld for HalfSpaces {
+        fn collides(&mut self, part_pose: &Pose) -> bool {
+            self.queries += 1;
+            self.penetrations(part_pose).next().is_some()
+        }
+
+        fn contacts(&mut self, part_pose: &Pose, _: &Motion, _: &Point, out: &mut Vec<Contact>) {
+            self.queries += 1;
+            let found: Vec<_> = self.penetrations(part_pose).collect();
+            out.extend(found.into_iter().map(|(point, normal)| Contact {
+                obstacle: 0,
+                point,
+                normal,
+                kind: ContactKind::VertexFace,
+            }));
+        }
+    }
+
+    fn at(x: f64, y: f64, z: f64) -> Pose {
+        Pose::translation(x, y, z)
+    }
+
+    fn params(metaphor: Metaphor) -> SlideParams {
+        SlideParams {
+            metaphor,
+            contact_tolerance: Some(1e-4),
+            ..SlideParams::default()
+        }
+    }
+
+    /// Runs frames towards each ghost pose, checking after every single step that the visible
+    /// pose is free and that no step asked more than one query.
+    fn drive(machine: &mut SlideMachine, world: &mut HalfSpaces, ghosts: &[Pose]) -> RestReason {
+        let mut reason = RestReason::Grasped;
+        for ghost in ghosts {
+            machine.set_ghost(ghost);
+            for _ in 0..10_000 {
+                let before = world.queries;
+                let event = machine.step(world);
+                assert!(
+                    world.queries - before <= 1,
+                    "{event:?} asked several queries"
+                );
+                let visible = machine.visible_pose();
+                assert!(
+                    world.penetrations(&visible).next().is_none(),
+                    "visible pose collides"
+                );
+                if let Event::Rested(r) = event {
+                    reason = r;
+                    break;
+                }
+            }
+        }
+        reason
+    }
+
+    fn assert_near(pose: &Pose, expected: [f64; 3], within: f64) {
+        let error = (pose.translation.vector - Vector3::from(expected)).norm();
+        assert!(
+            error <= within,
+            "at {}, expected {expected:?}",
+            pose.translation.vector
+        );
+    }
+
+    #[test]
+    fn a_block_dragged_into_the_floor_ends_above_the_ghost() {
+        let mut world = HalfSpaces::unit_cube(&[([0., 0., 1.], 0.0)]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 1.),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::RubberBand),
+        );
+        let ghosts: Vec<Pose> = (1..=20)
+            .map(|i| at(0.1 * i as f64, 0.05 * i as f64, 1.0 - 0.1 * i as f64))
+            .collect();
+        let reason = drive(&mut machine, &mut world, &ghosts);
+        assert_eq!(reason, RestReason::Blocked);
+        assert_near(&machine.visible_pose(), [2.0, 1.0, 0.5], 3e-4);
+        assert!(machine.contacts().all(|c| c.normal.z > 0.999));
+    }
+
+    #[test]
+    fn into_a_crease_the_block_slides_along_it_and_into_a_corner_it_stops() {
+        let floor = ([0., 0., 1.], 0.0);
+        let wall = ([-1., 0., 0.], -1.0); // free where x <= 1
+        let back = ([0., -1., 0.], -1.0); // free where y <= 1
+        let ghost = [at(3.0, 2.0, -1.0)];
+
+        let mut world = HalfSpaces::unit_cube(&[floor, wall]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 1.),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::RubberBand),
+        );
+        assert_eq!(drive(&mut machine, &mut world, &ghost), RestReason::Blocked);
+        assert_near(&machine.visible_pose(), [0.5, 2.0, 0.5], 3e-4);
+
+        let mut world = HalfSpaces::unit_cube(&[floor, wall, back]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 1.),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::RubberBand),
+        );
+        assert_eq!(drive(&mut machine, &mut world, &ghost), RestReason::Blocked);
+        assert_near(&machine.visible_pose(), [0.5, 0.5, 0.5], 3e-4);
+    }
+
+    #[test]
+    fn without_contact_every_metaphor_follows_the_ghost() {
+        let ghost = Pose::new(Vector3::new(0.3, -0.2, 0.5), Vector3::new(0.0, 0.4, 0.1));
+        for metaphor in [
+            Metaphor::RubberBand,
+            Metaphor::SpiralSpring,
+            Metaphor::Incremental,
+        ] {
+            let mut world = HalfSpaces::unit_cube(&[]);
+            let mut machine =
+                SlideMachine::new(&Pose::identity(), Vector3::zeros(), 0.87, params(metaphor));
+            assert_eq!(
+                drive(&mut machine, &mut world, &[ghost]),
+                RestReason::Reached
+            );
+            let rotation_error = machine.visible_pose().rotation.angle_to(&ghost.rotation);
+            if metaphor.rotates() {
+                assert!(rotation_error < 1e-9, "{metaphor:?}");
+            } else {
+                assert!((machine.visible_pose().rotation.angle() - 0.0).abs() < 1e-12);
+            }
+            assert_near(&machine.visible_pose(), [0.3, -0.2, 0.5], 1e-9);
+        }
+    }
+
+    #[test]
+    fn the_spiral_spring_tilts_the_block_only_as_far_as_the_floor_allows() {
+        let mut world = HalfSpaces::unit_cube(&[([0., 0., 1.], 0.0)]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 0.5005),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::SpiralSpring),
+        );
+        // The ghost tilts about x while staying at the same height: a corner would dig in.
+        let ghost = Pose::new(Vector3::new(0.0, 0.0, 0.5005), Vector3::new(0.3, 0.0, 0.0));
+        drive(&mut machine, &mut world, &[ghost]);
+        let visible = machine.visible_pose();
+        // It turns most of the way towards the ghost's tilt, pivoting on its lower edge, which
+        // ends on the floor (within the tolerance and the lift), never through it.
+        let (roll, _, _) = visible.rotation.euler_angles();
+        assert!((0.2..=0.3 + 1e-9).contains(&roll), "roll {roll}");
+        let lowest = world
+            .points
+            .iter()
+            .map(|p| (visible * p).z)
+            .fold(f64::MAX, f64::min);
+        assert!((0.0..=3e-4).contains(&lowest), "lowest corner at {lowest}");
+    }
+
+    #[test]
+    fn incremental_motion_repeats_the_ghost_delta_from_where_the_part_is() {
+        let mut world = HalfSpaces::unit_cube(&[([0., 0., 1.], 0.0)]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 1.),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::Incremental),
+        );
+        // Down into the floor: the part stops on it while the ghost goes 1 deeper.
+        drive(&mut machine, &mut world, &[at(0.5, 0.0, -0.5)]);
+        assert_near(&machine.visible_pose(), [0.5, 0.0, 0.5], 3e-4);
+        // Up by 0.3: the part rises by 0.3 from where it is, not to the ghost.
+        assert_eq!(
+            drive(&mut machine, &mut world, &[at(0.5, 0.0, -0.2)]),
+            RestReason::Reached
+        );
+        assert_near(&machine.visible_pose(), [0.5, 0.0, 0.8], 3e-4);
+        // Switching to the rubber band pulls it back down to the ghost's projection.
+        machine.set_metaphor(Metaphor::RubberBand);
+        drive(&mut machine, &mut world, &[at(0.5, 0.0, -0.2)]);
+        assert_near(&machine.visible_pose(), [0.5, 0.0, 0.5], 3e-4);
+    }
+
+    #[test]
+    fn a_ghost_pushed_into_the_floor_gives_the_hand_an_upward_force() {
+        let mut world = HalfSpaces::unit_cube(&[([0., 0., 1.], 0.0)]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 1.),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::RubberBand),
+        );
+        let mut force = crate::sliding::ForceModel::new(crate::sliding::ForceParams::default());
+        machine.set_ghost(&at(0.0, 0.0, 0.49));
+        assert_eq!(machine.run_frame(&mut world), RestReason::Blocked);
+        let wrench = force.update(
+            machine.visible_pivot_pose(),
+            machine.ghost_pivot_pose(),
+            0.001,
+        );
+        // The hand is 1 cm below the resting part (plus its gap of at most the tolerance and the
+        // lift): 500 N/m pulls it up by 5 N and a little more.
+        assert!(
+            (5.0..=5.0 + 500.0 * 1.5e-4).contains(&wrench.force.z),
+            "{}",
+            wrench.force
+        );
+        assert!(wrench.force.xy().norm() < 1e-9);
+        // A second frame with the ghost where it is changes nothing.
+        assert_eq!(machine.run_frame(&mut world), RestReason::Blocked);
+        machine.set_ghost(&at(0.0, 0.0, 0.49));
+        assert_eq!(machine.run_frame(&mut world), RestReason::Blocked);
+        assert_near(&machine.visible_pose(), [0.0, 0.0, 0.5], 3e-4);
+    }
+
+    #[test]
+    fn a_contact_left_behind_is_forgotten_at_the_next_frame() {
+        // A table top (z >= 0) that ends at x = 1: beyond it the floor is at z >= -5.
+        let mut world = HalfSpaces::unit_cube(&[([0., 0., 1.], 0.0)]);
+        let mut machine = SlideMachine::new(
+            &at(0., 0., 1.),
+            Vector3::zeros(),
+            0.87,
+            params(Metaphor::RubberBand),
+        );
+        drive(&mut machine, &mut world, &[at(0.5, 0.0, -1.0)]);
+        assert!(machine.contacts().count() > 0);
+        world.planes = vec![(Vector3::z_axis(), -5.0)];
+        assert_eq!(
+            drive(&mut machine, &mut world, &[at(0.5, 0.0, -1.0)]),
+            RestReason::Reached
+        );
+        assert_near(&machine.visible_pose(), [0.5, 0.0, -1.0], 1e-9);
+    }
+}

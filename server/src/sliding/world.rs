@@ -1,0 +1,246 @@
+//! The collision copy of the grasped part tested pairwise against the obstacles around it: the
+//! [`SlideWorld`] the state machine runs on when it queries collision structures directly.
+//!
+//! The part and every obstacle carry a [`MeshCollider`] (the DOP-tree in the server) and an edge
+//! adjacency for classification. A query skips obstacles whose world box the part's bounding
+//! sphere misses, then asks the collider. Obstacles that form a slide-in unit with the part have
+//! an allowance: their intersecting pairs count only when deeper than it.
+//!
+//! The world keeps the time spent in collision detection apart from the rest, so that benchmarks
+//! can report the sliding algorithm's own cost per contact point.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use nalgebra::Point3;
+
+use super::allowance::triangle_pair_depth;
+use super::contact::{Contact, ContactSide, TouchingPair, classify_pairs};
+use super::machine::SlideWorld;
+use super::motion::{Motion, Pose};
+use crate::collision::{MeshCollider, QueryStats};
+use crate::geometry::{EdgeAdjacency, Point, TriMesh};
+
+/// A mesh with what sliding needs of it: edge adjacency and a collision structure.
+#[derive(Debug)]
+pub struct SlideBody<C> {
+    mesh: Arc<TriMesh>,
+    adjacency: EdgeAdjacency,
+    collider: C,
+}
+
+impl<C: MeshCollider> SlideBody<C> {
+    /// Builds adjacency and collider for `mesh` (weld a soup first, so that neighbours share
+    /// vertices; classification copes without, by its rim rule).
+    pub fn new(mesh: Arc<TriMesh>) -> Self {
+        SlideBody {
+            adjacency: EdgeAdjacency::new(&mesh),
+            collider: C::build(&mesh),
+            mesh,
+        }
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
+
+    /// The centre of the mesh's bounding box and the radius of the sphere around it that holds
+    /// every vertex: the pivot and radius of a grasped part.
+    pub fn pivot_and_radius(&self) -> (Point, f64) {
+        let (lo, hi) = self.mesh.bounding_box();
+        let centre = nalgebra::center(&lo, &hi);
+        let radius = self
+            .mesh
+            .vertices()
+            .iter()
+            .map(|v| (v - centre).norm())
+            .fold(0.0, f64::max);
+        (centre, radius)
+    }
+
+    fn side<'a>(&'a self, pose: &'a Pose) -> ContactSide<'a> {
+        ContactSide {
+            mesh: &self.mesh,
+            adjacency: &self.adjacency,
+            pose,
+        }
+    }
+}
+
+/// A static obstacle: a body at a pose, with an optional slide-in allowance against the part.
+#[derive(Debug)]
+pub struct Obstacle<C> {
+    body: Arc<SlideBody<C>>,
+    pose: Pose,
+    allowance: Option<f64>,
+    /// The world-frame bounding box of the posed mesh.
+    world_box: (Point, Point),
+}
+
+impl<C: MeshCollider> Obstacle<C> {
+    /// An obstacle at `pose`; `allowance` (metres) when it and the part form a slide-in unit.
+    pub fn new(body: Arc<SlideBody<C>>, pose: Pose, allowance: Option<f64>) -> Self {
+        let mut lo = Point3::from([f64::MAX; 3]);
+        let mut hi = Point3::from([f64::MIN; 3]);
+        for v in body.mesh.vertices() {
+            let w = pose * v;
+            lo = lo.inf(&w);
+            hi = hi.sup(&w);
+        }
+        Obstacle {
+            body,
+            pose,
+            allowance,
+            world_box: (lo, hi),
+        }
+    }
+
+    /// Whether a sphere may touch the obstacle's world box.
+    fn near(&self, centre: &Point, radius: f64) -> bool {
+        let (lo, hi) = &self.world_box;
+        let nearest = centre.coords.sup(&lo.coords).inf(&hi.coords);
+        (nearest - centre.coords).norm_squared() <= radius * radius
+    }
+}
+
+/// Work and time spent by a [`PairwiseWorld`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct WorldStats {
+    /// Collision queries (first hit) answered.
+    pub collision_queries: u64,
+    /// Contact queries (all pairs, then classification) answered.
+    pub contact_queries: u64,
+    /// Obstacle tests skipped by the bounding-sphere check.
+    pub obstacles_skipped: u64,
+    /// Work inside the colliders.
+    pub query_stats: QueryStats,
+    /// Time spent in collision detection (collider queries and allowance depths).
+    pub collision_time: Duration,
+    /// Time spent classifying contacts.
+    pub classification_time: Duration,
+}
+
+/// The grasped part's collision copy against a set of static obstacles, queried pair by pair.
+#[derive(Debug)]
+pub struct PairwiseWorld<C> {
+    part: Arc<SlideBody<C>>,
+    /// Pivot of the part in its mesh frame, and the radius around it.
+    pivot: Point,
+    radius: f64,
+    obstacles: Vec<Obstacle<C>>,
+    pairs: Vec<TouchingPair>,
+    stats: WorldStats,
+}
+
+impl<C: MeshCollider> PairwiseWorld<C> {
+    /// The part's collision copy against `obstacles`.
+    pub fn new(part: Arc<SlideBody<C>>, obstacles: Vec<Obstacle<C>>) -> Self {
+        let (pivot, radius) = part.pivot_and_radius();
+        PairwiseWorld {
+            part,
+            pivot,
+            radius,
+            obstacles,
+            pairs: Vec::new(),
+            stats: WorldStats::default(),
+        }
+    }
+
+    /// The obstacles, in the order contacts name them.
+    pub fn obstacles(&self) -> &[Obstacle<C>] {
+        &self.obstacles
+    }
+
+    /// Counters and times so far.
+    pub fn stats(&self) -> &WorldStats {
+        &self.stats
+    }
+
+    /// The pairs of obstacle `index` touching the part at `part_pose`, deeper than the
+    /// obstacle's allowance if it has one, into `self.pairs` (sorted).
+    fn collect_pairs(&mut self, index: usize, part_pose: &Pose) {
+        let obstacle = &self.obstacles[index];
+        self.pairs.clear();
+        let b_to_a = part_pose.inverse() * obstacle.pose;
+        self.part.collider.intersecting_pairs(
+            &obstacle.body.collider,
+            &b_to_a,
+            &mut self.pairs,
+            &mut self.stats.query_stats,
+        );
+        if let Some(allowance) = obstacle.allowance {
+            let (part, other) = (&self.part.mesh, &obstacle.body.mesh);
+            self.pairs.retain(|&[p, q]| {
+                let tp = part.triangle(p as usize);
+                let tq = other.triangle(q as usize).map(|v| b_to_a * v);
+                triangle_pair_depth(&tp, &tq) > allowance
+            });
+        }
+        self.pairs.sort_unstable();
+    }
+}
+
+impl<C: MeshCollider> SlideWorld for PairwiseWorld<C> {
+    fn collides(&mut self, part_pose: &Pose) -> bool {
+        let start = Instant::now();
+        self.stats.collision_queries += 1;
+        let centre = part_pose * self.pivot;
+        let mut hit = false;
+        for index in 0..self.obstacles.len() {
+            let obstacle = &self.obstacles[index];
+            if !obstacle.near(&centre, self.radius) {
+                self.stats.obstacles_skipped += 1;
+                continue;
+            }
+            hit = if obstacle.allowance.is_some() {
+                self.collect_pairs(index, part_pose);
+                !self.pairs.is_empty()
+            } else {
+                let b_to_a = part_pose.inverse() * obstacle.pose;
+                self.part.collider.intersects(
+                    &obstacle.body.collider,
+                    &b_to_a,
+                    &mut self.stats.query_stats,
+                )
+            };
+            if hit {
+                break;
+            }
+        }
+        self.stats.collision_time += start.elapsed();
+        hit
+    }
+
+    fn contacts(
+        &mut self,
+        part_pose: &Pose,
+        approach: &Motion,
+        pivot: &Point,
+        out: &mut Vec<Contact>,
+    ) {
+        self.stats.contact_queries += 1;
+        let centre = part_pose * self.pivot;
+        for index in 0..self.obstacles.len() {
+            if !self.obstacles[index].near(&centre, self.radius) {
+                self.stats.obstacles_skipped += 1;
+                continue;
+            }
+            let start = Instant::now();
+            self.collect_pairs(index, part_pose);
+            let classifying = Instant::now();
+            self.stats.collision_time += classifying - start;
+            let obstacle = &self.obstacles[index];
+            classify_pairs(
+                index,
+                &self.part.side(part_pose),
+                &obstacle.body.side(&obstacle.pose),
+                &self.pairs,
+                approach,
+                pivot,
+                out,
+            );
+            self.stats.classification_time += classifying.elapsed();
+        }
+    }
+}
