@@ -5,3 +5,4 @@
 //! Only `runtime` knows about threads and IPC; every other module is a plain library.
 
 pub mod geometry;
+pub mod grasping;

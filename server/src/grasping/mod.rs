@@ -1,0 +1,9 @@
+//! Natural grasping (the paper's section 4): a hand model driven by a tracker and a data glove
+//! whose fingers close around parts without entering them, and that knows when it holds one.
+
+pub mod model;
+
+pub use model::{
+    FLEX_COUNT, Finger, FlexVector, HandConfigError, HandModel, JointLevel, ROOT_VARIABLE,
+    SegmentId, Side, VARIABLE_COUNT, VariableSet,
+};
