@@ -1,6 +1,7 @@
 //! Natural grasping (the paper's section 4): a hand model driven by a tracker and a data glove
 //! whose fingers close around parts without entering them, and that knows when it holds one.
 
+pub mod analysis;
 pub mod clasp;
 pub mod flex;
 pub mod model;
