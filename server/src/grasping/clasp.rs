@@ -20,6 +20,12 @@
 //! * a variable whose interval moves no point of the hand by more than the tolerance is fixed;
 //!   several may be fixed in one step; a cap on the steps fixes the rest.
 //!
+//! The root is minimised first, with the flex values at their valid values, then the flex values
+//! with the root fixed: two stages of the same iteration. Interpolated together, as the paper
+//! has it, the root would be blamed for every collision of every segment, since every segment
+//! depends on it: fingers pressing on a part (the glove closes further than the virtual fingers
+//! can) would stop the whole hand, and a hand holding a part could not carry it anywhere.
+//!
 //! Touch flags follow the paper: a segment's collision flag is set whenever it collides; when a
 //! variable the segment's joint owns is fixed, the segment is marked touching if its flag is set;
 //! then the flags of the segments further down the chain are cleared, because their collisions may
@@ -102,7 +108,8 @@ pub struct ClaspParams {
     /// A variable is fixed when its valid-invalid interval moves no point of the hand by more
     /// than this (metres).
     pub tolerance: f64,
-    /// Cap on the iteration steps per minimisation; what is left unfixed stays at its valid value.
+    /// Cap on the iteration steps of each stage (root, then flex values); what is left unfixed
+    /// stays at its valid value.
     pub max_steps: u32,
     /// The most any variable may move the hand per minimisation (metres). A target farther away
     /// is approached over several frames, so a jump of the tracker or glove cannot carry a
@@ -275,96 +282,107 @@ where
     let (path, clipped) = Path::new(model, valid, target, params.max_motion);
     let mut lo = [0.0f64; VARIABLE_COUNT];
     let mut hi = [1.0f64; VARIABLE_COUNT];
-    let mut tried = false;
-    let mut near_step_pending = VariableSet::EMPTY;
-    let mut unfixed = VariableSet::ALL;
     let mut flags = [ObjectSet::EMPTY; SEGMENT_COUNT];
     let mut touching = [ObjectSet::EMPTY; SEGMENT_COUNT];
     let mut poses = [Isometry3::identity(); SEGMENT_COUNT];
     let mut steps = 0;
     let mut checks = 0;
 
-    while !unfixed.is_empty() {
-        // 1. Trial values.
-        let mut trial = lo;
-        for v in unfixed.iter() {
-            trial[v] = if !tried {
-                1.0
-            } else if near_step_pending.contains(v) {
-                // Just short of the tolerance past the valid value: if this collides, the
-                // variable is fixed at once.
-                let near = lo[v] + 0.9 * params.tolerance / path.motion[v];
-                near.min(0.5 * (lo[v] + hi[v]))
-            } else {
-                0.5 * (lo[v] + hi[v])
-            };
-        }
-        let first_trial = !tried;
-        tried = true;
-        near_step_pending = VariableSet::EMPTY;
-
-        // 2. Check the segments that move.
-        let pose = path.at(&trial);
-        model.forward_kinematics(&pose.flex, &mut poses);
-        let mut colliding = VariableSet::EMPTY;
-        for s in 0..SEGMENT_COUNT {
-            if !plan.depends[s].intersects(unfixed) {
-                continue;
+    let root = VariableSet::single(ROOT_VARIABLE);
+    for stage in [root, VariableSet::ALL.without(root)] {
+        // A stage whose variables do not move would only re-check the valid configuration.
+        let mut unfixed = if stage.iter().all(|v| path.motion[v] == 0.0) {
+            VariableSet::EMPTY
+        } else {
+            stage
+        };
+        let mut tried = false;
+        let mut near_step_pending = VariableSet::EMPTY;
+        let mut stage_steps = 0;
+        while !unfixed.is_empty() {
+            // 1. Trial values.
+            let mut trial = lo;
+            for v in unfixed.iter() {
+                trial[v] = if !tried {
+                    1.0
+                } else if near_step_pending.contains(v) {
+                    // Just short of the tolerance past the valid value: if this collides, the
+                    // variable is fixed at once.
+                    let near = lo[v] + 0.9 * params.tolerance / path.motion[v];
+                    near.min(0.5 * (lo[v] + hi[v]))
+                } else {
+                    0.5 * (lo[v] + hi[v])
+                };
             }
-            checks += 1;
-            let hit = collides(
-                s,
-                &SegmentPlacement {
-                    root: pose.root,
-                    local: poses[s],
-                },
-            );
-            if !hit.is_empty() {
-                flags[s] = flags[s].union(hit);
-                colliding = colliding.or(plan.depends[s]);
-            }
-        }
-        colliding = colliding.and(unfixed);
+            let first_trial = !tried;
+            tried = true;
+            near_step_pending = VariableSet::EMPTY;
 
-        // 3. Raise the valid end where the new configuration of valid values was checked whole.
-        let mut raised = unfixed.without(colliding);
-        loop {
-            let before = raised;
-            for depends in &plan.depends {
-                let moving = depends.and(unfixed);
-                if moving.intersects(raised) && !moving.without(raised).is_empty() {
-                    raised = raised.without(moving);
+            // 2. Check the segments that move.
+            let pose = path.at(&trial);
+            model.forward_kinematics(&pose.flex, &mut poses);
+            let mut colliding = VariableSet::EMPTY;
+            for s in 0..SEGMENT_COUNT {
+                if !plan.depends[s].intersects(unfixed) {
+                    continue;
+                }
+                checks += 1;
+                let hit = collides(
+                    s,
+                    &SegmentPlacement {
+                        root: pose.root,
+                        local: poses[s],
+                    },
+                );
+                if !hit.is_empty() {
+                    flags[s] = flags[s].union(hit);
+                    colliding = colliding.or(plan.depends[s]);
                 }
             }
-            if raised == before {
-                break;
-            }
-        }
-        for v in colliding.iter() {
-            hi[v] = trial[v];
-            if first_trial {
-                near_step_pending = near_step_pending.or(VariableSet::single(v));
-            }
-        }
-        for v in raised.iter() {
-            lo[v] = trial[v];
-        }
-        steps += 1;
+            colliding = colliding.and(unfixed);
 
-        // 4. Fix what is close enough (everything at the cap), fingertips first.
-        let at_cap = steps >= params.max_steps;
-        for &v in &plan.fixing_order {
-            if !unfixed.contains(v)
-                || !(at_cap || (hi[v] - lo[v]) * path.motion[v] <= params.tolerance)
-            {
-                continue;
+            // 3. Raise the valid end where the new configuration of valid values was checked
+            //    whole.
+            let mut raised = unfixed.without(colliding);
+            loop {
+                let before = raised;
+                for depends in &plan.depends {
+                    let moving = depends.and(unfixed);
+                    if moving.intersects(raised) && !moving.without(raised).is_empty() {
+                        raised = raised.without(moving);
+                    }
+                }
+                if raised == before {
+                    break;
+                }
             }
-            unfixed = unfixed.without(VariableSet::single(v));
-            for s in bits(plan.owners[v]) {
-                touching[s] = touching[s].union(flags[s]);
+            for v in colliding.iter() {
+                hi[v] = trial[v];
+                if first_trial {
+                    near_step_pending = near_step_pending.or(VariableSet::single(v));
+                }
             }
-            for s in bits(plan.dependents[v]) {
-                flags[s] = ObjectSet::EMPTY;
+            for v in raised.iter() {
+                lo[v] = trial[v];
+            }
+            steps += 1;
+            stage_steps += 1;
+
+            // 4. Fix what is close enough (everything at the cap), fingertips first.
+            let at_cap = stage_steps >= params.max_steps;
+            for &v in &plan.fixing_order {
+                if !unfixed.contains(v)
+                    || !(at_cap || (hi[v] - lo[v]) * path.motion[v] <= params.tolerance)
+                {
+                    continue;
+                }
+                unfixed = unfixed.without(VariableSet::single(v));
+                for s in bits(plan.owners[v]) {
+                    touching[s] = touching[s].union(flags[s]);
+                }
+                for s in bits(plan.dependents[v]) {
+                    flags[s] = ObjectSet::EMPTY;
+                }
             }
         }
     }
@@ -421,8 +439,15 @@ mod tests {
             .unwrap()
     }
 
+    fn floor() -> BallWorld {
+        BallWorld {
+            floor: Some(0.0),
+            ..BallWorld::default()
+        }
+    }
+
     #[test]
-    fn a_free_target_is_reached_in_one_step() {
+    fn a_free_target_is_reached_in_one_step_per_stage() {
         let model = right_hand();
         let plan = ClaspPlan::new(&model);
         let world = BallWorld {
@@ -431,30 +456,40 @@ mod tests {
         };
         let mut target = at_height(0.1, [0.3; FLEX_COUNT]);
         target.root.rotation = UnitQuaternion::from_euler_angles(0.2, -0.1, 0.4);
+        let start = at_height(0.0, [0.0; FLEX_COUNT]);
         let out = clasp(
             &model,
             &plan,
-            &at_height(0.0, [0.0; FLEX_COUNT]),
+            &start,
             &target,
             &unlimited(),
             world.collider(&model),
         );
         assert!(out.reached_target);
-        assert_eq!((out.steps, out.checks), (1, SEGMENT_COUNT as u32));
+        // One step for the root, one for the flex values.
+        assert_eq!((out.steps, out.checks), (2, 2 * SEGMENT_COUNT as u32));
         assert!(out.touching.iter().all(|t| t.is_empty()));
         assert!((out.pose.root.translation.vector - target.root.translation.vector).norm() < 1e-12);
         assert!(out.pose.root.rotation.angle_to(&target.root.rotation) < 1e-12);
         assert_eq!(out.pose.flex, target.flex);
+        // A hand that does not move needs no check at all.
+        let still = clasp(
+            &model,
+            &plan,
+            &start,
+            &start,
+            &unlimited(),
+            world.collider(&model),
+        );
+        assert_eq!((still.steps, still.checks), (0, 0));
+        assert!(still.reached_target);
     }
 
     #[test]
     fn fingers_closing_onto_a_floor_stop_tight_against_it_and_touch_it() {
         let model = right_hand();
         let plan = ClaspPlan::new(&model);
-        let world = BallWorld {
-            floor: Some(0.0),
-            ..BallWorld::default()
-        };
+        let world = floor();
         let start = at_height(0.05, [0.0; FLEX_COUNT]);
         let mut target = start;
         for v in MCPS {
@@ -474,11 +509,8 @@ mod tests {
             "the result collides"
         );
         for v in MCPS {
-            assert!(
-                out.pose.flex[v] > 0.3 && out.pose.flex[v] < FRAC_PI_2,
-                "MCP {v}: {}",
-                out.pose.flex[v]
-            );
+            let angle = out.pose.flex[v];
+            assert!(angle > 0.3 && angle < FRAC_PI_2, "MCP {v}: {angle}");
             // Tight: closing further by a few tolerances collides.
             let mut deeper = out.pose;
             deeper.flex[v] += 3.0 * params.tolerance / model.lever(v);
@@ -494,7 +526,7 @@ mod tests {
                 "{name}"
             );
         }
-        // The thumb does not move and never reaches the floor.
+        // The thumb does not move and does not reach the floor.
         for name in ["thumb inner", "thumb middle", "thumb outer"] {
             assert!(out.touching[segment(&model, name)].is_empty(), "{name}");
         }
@@ -502,28 +534,30 @@ mod tests {
     }
 
     #[test]
-    fn a_blocked_root_stops_at_the_floor_with_the_lowest_segment_touching() {
+    fn a_blocked_root_stops_at_the_floor_with_the_palm_touching() {
         let model = right_hand();
         let plan = ClaspPlan::new(&model);
-        let world = BallWorld {
-            floor: Some(0.0),
-            ..BallWorld::default()
-        };
-        // At rest the thumb's metacarpal hangs lowest: 0.3 cm below the root plus its 1.05 cm
-        // radius (the palm reaches 1.25 cm down).
-        let lowest = 0.003 + 0.0105;
+        let world = floor();
+        // An open flat hand: the thumb rolled back into the plane of the palm and spread. The
+        // palm is the lowest part, 1.25 cm below the root; the thumb's metacarpal reaches
+        // 0.2 cm + 0.95 cm.
+        let mut open = [0.0; FLEX_COUNT];
+        open[0] = -30f64.to_radians();
+        open[3] = 45f64.to_radians();
         let params = unlimited();
+        let (start, target) = (at_height(0.05, open), at_height(0.0, open));
         let out = clasp(
             &model,
             &plan,
-            &at_height(0.05, [0.0; FLEX_COUNT]),
-            &at_height(0.0, [0.0; FLEX_COUNT]),
+            &start,
+            &target,
             &params,
             world.collider(&model),
         );
         let z = out.pose.root.translation.z;
-        assert!(z > lowest && z < lowest + params.tolerance, "{z}");
-        assert!(out.touching[segment(&model, "thumb inner")].contains(0));
+        assert!(z > 0.0125 && z < 0.0125 + params.tolerance, "{z}");
+        assert!(out.touching[model.palm()].contains(0));
+        assert!(out.touching[segment(&model, "thumb inner")].is_empty());
         // One step to the target, one just short of the tolerance, then bisection.
         assert!(out.steps <= 10, "{}", out.steps);
     }
@@ -547,12 +581,10 @@ mod tests {
                 floor: None,
                 balls: (0..rng.random_range(2..6))
                     .map(|_| {
-                        let centre = Point3::new(
-                            rng.random_range(-0.1..0.1),
-                            rng.random_range(-0.05..0.2),
-                            rng.random_range(-0.1..0.1),
-                        );
-                        (centre, rng.random_range(0.005..0.03))
+                        let x = rng.random_range(-0.1..0.1);
+                        let y = rng.random_range(-0.05..0.2);
+                        let z = rng.random_range(-0.1..0.1);
+                        (Point3::new(x, y, z), rng.random_range(0.005..0.03))
                     })
                     .collect(),
             };
@@ -589,10 +621,17 @@ mod tests {
                 );
                 assert!(out.pose.flex[v] >= a - 1e-12 && out.pose.flex[v] <= b + 1e-12);
             }
-            let target_free = world.hand_hits(&model, &target).is_empty();
-            assert_eq!(out.reached_target, target_free, "case {cases}");
-            assert!(out.steps <= ClaspParams::default().max_steps);
-            reached += usize::from(target_free);
+            // The root moves first with the flex values where they were: when that and the
+            // target are free, the target is reached.
+            let root_first = HandPose {
+                root: target.root,
+                flex: start.flex,
+            };
+            let path_free = world.hand_hits(&model, &target).is_empty()
+                && world.hand_hits(&model, &root_first).is_empty();
+            assert_eq!(out.reached_target, path_free, "case {cases}");
+            assert!(out.steps <= 2 * ClaspParams::default().max_steps);
+            reached += usize::from(path_free);
             touched += usize::from(out.touching.iter().any(|t| !t.is_empty()));
         }
         // The cases exercise both outcomes.
@@ -611,32 +650,29 @@ mod tests {
         let params = ClaspParams::default();
         let mut target = at_height(0.1, [0.0; FLEX_COUNT]);
         target.flex[INDEX_MCP] = 1.0;
+        let start = at_height(0.0, [0.0; FLEX_COUNT]);
         let out = clasp(
             &model,
             &plan,
-            &at_height(0.0, [0.0; FLEX_COUNT]),
+            &start,
             &target,
             &params,
             world.collider(&model),
         );
         assert!(!out.reached_target);
         assert!((out.pose.root.translation.z - params.max_motion).abs() < 1e-12);
-        assert!(
-            (out.pose.flex[INDEX_MCP] * model.lever(INDEX_MCP) - params.max_motion).abs() < 1e-12
-        );
+        let index_motion = out.pose.flex[INDEX_MCP] * model.lever(INDEX_MCP);
+        assert!((index_motion - params.max_motion).abs() < 1e-12);
     }
 
     #[test]
     fn the_step_cap_leaves_unfixed_values_at_their_valid_end() {
         let model = right_hand();
         let plan = ClaspPlan::new(&model);
-        let world = BallWorld {
-            floor: Some(0.0),
-            ..BallWorld::default()
-        };
+        let world = floor();
         let start = at_height(0.05, [0.0; FLEX_COUNT]);
         let mut target = at_height(-0.02, [0.0; FLEX_COUNT]);
-        target.flex[INDEX_MCP] = 0.3;
+        target.flex[INDEX_MCP] = 1.2;
         let params = ClaspParams {
             max_steps: 1,
             ..unlimited()
@@ -649,7 +685,8 @@ mod tests {
             &params,
             world.collider(&model),
         );
-        assert_eq!(out.steps, 1);
+        // One step per stage: the root and the finger both collide at their targets.
+        assert_eq!(out.steps, 2);
         assert_eq!(out.pose.root, start.root);
         assert_eq!(out.pose.flex[INDEX_MCP], 0.0);
         assert!(out.touching[model.palm()].contains(0));
@@ -698,22 +735,16 @@ mod tests {
         let out = tip_run(&rest, 0.05, f64::INFINITY);
         assert!(out.touching[tip].is_empty());
         assert!(out.pose.flex[6] > 0.0 && out.pose.flex[6] < 1.4);
-        assert!(
-            out.pose.flex[4] < 0.05 && out.pose.flex[4] > 0.05 - 0.001,
-            "{}",
-            out.pose.flex[4]
-        );
+        let mcp = out.pose.flex[4];
+        assert!(mcp < 0.05 && mcp > 0.05 - 0.001, "{mcp}");
 
         // The tip's collisions come from its own joint. The MCP, blamed too and fixed first,
         // clears the tip's flag, and the DIP gets fixed just short of the contact without
         // colliding again: not touching yet.
         let first = tip_run(&rest, f64::INFINITY, 0.7);
         let tolerance = ClaspParams::default().tolerance / model.lever(6);
-        assert!(
-            first.pose.flex[6] < 0.7 && first.pose.flex[6] > 0.7 - tolerance,
-            "{}",
-            first.pose.flex[6]
-        );
+        let dip = first.pose.flex[6];
+        assert!(dip < 0.7 && dip > 0.7 - tolerance, "{dip}");
         assert!(first.touching[tip].is_empty());
         // In the next frame the hand starts at the contact: the step just past it collides, both
         // values are fixed in the same step, the DIP first, and the tip is touching.

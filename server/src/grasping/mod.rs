@@ -3,8 +3,12 @@
 
 pub mod analysis;
 pub mod clasp;
+pub mod collider;
 pub mod flex;
+pub mod hand;
 pub mod model;
+#[cfg(test)]
+mod scenarios;
 pub mod segment_mesh;
 #[cfg(test)]
 pub(crate) mod testing;
