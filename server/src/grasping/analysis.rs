@@ -407,7 +407,7 @@ mod tests {
             &[[0., 0., 0.]],
         );
         assert_eq!(
-            classify_default(&[back.clone()], [0., 0., 0.05]),
+            classify_default(std::slice::from_ref(&back), [0., 0., 0.05]),
             Some(GraspType::Push)
         );
         // Even with fingers wrapped around the other side.

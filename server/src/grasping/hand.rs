@@ -3,10 +3,10 @@
 //! analyse the grasp, and grasp or release parts with hysteresis.
 //!
 //! Cart motion (navigation) is handled apart: while the cart moves the hand is not clasped; it
-//! follows the target whenever the whole hand is free there and otherwise stays where it was.
-//! Once the hand has been left at its last valid place, clasping resumes only when the user has
-//! moved the whole hand (the target) to a free place, where the hand then jumps. The visible
-//! hand is thus never published at a colliding pose.
+//! follows the tracked root, its fingers as they were, whenever the whole hand is free there,
+//! and otherwise stays where it was. Once the hand has been left at its last valid place,
+//! clasping resumes only when the user has moved the whole hand to a free place, where the hand
+//! then jumps. The visible hand is thus never published at a colliding pose.
 //!
 //! Grasp hand-over: a grasp is an event carrying the part and its pose in the hand root's frame;
 //! from then on the part follows the hand (`root · hand_to_part`, see
@@ -275,12 +275,19 @@ impl GraspingHand {
         let mut collider = SceneCollider::new(&self.geometry, obstacles, held);
 
         if cart_moved || self.mode == HandMode::AwaitingFreeHand {
-            let poses = self.model.segment_poses(&target.flex);
+            // The whole hand moves to the tracked root with its fingers as they are; the clasp
+            // brings them to the glove's values once it runs again (fingers closed on a held
+            // part would otherwise keep the hand from ever being free).
+            let moved_hand = HandPose {
+                root: target.root,
+                flex: self.visible.flex,
+            };
+            let poses = self.model.segment_poses(&moved_hand.flex);
             frame.segment_checks = SEGMENT_COUNT as u32;
-            let free = collider.hand_is_free(&target.root, &poses);
+            let free = collider.hand_is_free(&moved_hand.root, &poses);
             self.stats += collider.stats;
             if free {
-                self.visible = target;
+                self.visible = moved_hand;
                 self.mode = if cart_moved {
                     HandMode::Navigating
                 } else {

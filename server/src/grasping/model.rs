@@ -1020,8 +1020,8 @@ pub(crate) mod tests {
             ),
             (
                 text.replacen(
-                    "origin = [0.0, 0.045, 0.0]",
-                    "origin = [0.0, 0.045, nan]",
+                    "origin = [0.0, 0.048, 0.0]",
+                    "origin = [0.0, 0.048, nan]",
                     1,
                 ),
                 "segment[2] (thumb middle).origin: not finite",
