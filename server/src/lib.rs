@@ -8,3 +8,4 @@ pub mod bench;
 pub mod collision;
 pub mod geometry;
 pub mod grasping;
+pub mod scene;

@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::write_obj;
+use vas_server::scene::Scene;
 
 /// vas: headless virtual-assembly simulation server.
 #[derive(Debug, Parser)]
@@ -30,6 +31,11 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Validate a scene config and print its summary; exits non-zero if it is invalid.
+    CheckScene {
+        /// The scene file.
+        file: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -43,6 +49,9 @@ fn main() -> ExitCode {
             triangles,
             out,
         } => write_shape(kind, triangles, &out),
+        Command::CheckScene { file } => Scene::load(&file)
+            .map(|scene| println!("{}", scene.summary()))
+            .map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,562 @@
+//! The scene: parts with their meshes and poses, the collision interest groups, the algorithm
+//! parameters and the loop rates, loaded from a TOML config and validated as a whole.
+//!
+//! A config that is wrong in any way is refused with the file, the key and the reason; a scene is
+//! either loaded completely or not at all. The format:
+//!
+//! ```toml
+//! name = "peg in hole"
+//! # hand = "hands/right.toml"          # optional hand model, relative to this file
+//!
+//! [params]                             # all optional, with defaults
+//! dop_orientations = 24
+//! sliding = { metaphor = "rubber-band", contact_tolerance = 1e-4 }
+//!
+//! [rates]                              # optional, hertz
+//! publish_hz = 60
+//!
+//! [groups]                             # optional: group pairs never tested against each other
+//! not_of_interest = [["fixtures", "fixtures"]]
+//!
+//! [[parts]]
+//! name = "block"
+//! shape = { kind = "box-with-hole", width = 0.08, height = 0.05, hole_radius = 0.01, triangles = 2000 }
+//! position = [0.0, 0.0, 0.025]         # metres; default the origin
+//! rotation = [0.0, 0.0, 0.0, 1.0]      # unit quaternion x, y, z, w; default identity
+//! movable = false                      # default false (static)
+//! group = "fixtures"                   # default "default"
+//!
+//! [[parts]]
+//! name = "bunny"
+//! mesh = "meshes/low_poly_bunny.obj"   # OBJ or STL, relative to this file
+//! scale = 0.05                         # optional uniform scale of a mesh file
+//! movable = true
+//! ```
+
+mod params;
+
+use std::collections::{BTreeSet, HashMap};
+use std::fmt::Write as _;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use serde::Deserialize;
+use thiserror::Error;
+
+use crate::geometry::shapes::ShapeSpec;
+use crate::geometry::{GeometryError, Point, TriMesh, load_mesh};
+use params::Problem;
+pub use params::{
+    AlgorithmParams, ClaspParams, DOP_ORIENTATION_COUNTS, Rates, SlidingMetaphor, SlidingParams,
+};
+
+/// How far from 1 a rotation quaternion's norm may be (relative), as a config writes it with a
+/// limited number of digits.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-6;
+
+/// Why a scene config was refused; every variant names the file.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("scene {}: cannot read it: {source}", file.display())]
+    Read {
+        /// The scene file.
+        file: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: io::Error,
+    },
+    /// The file is not valid TOML, has an unknown key, or a value of the wrong type.
+    #[error("scene {}: {message}", file.display())]
+    Syntax {
+        /// The scene file.
+        file: PathBuf,
+        /// The line, the offending text and the reason.
+        message: String,
+    },
+    /// A value is out of range or inconsistent with the rest of the scene.
+    #[error("scene {}: {key}: {reason}", file.display())]
+    Invalid {
+        /// The scene file.
+        file: PathBuf,
+        /// The key, as in the config (`parts[2].rotation`).
+        key: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A part's mesh file could not be loaded or its shape not built.
+    #[error("scene {}: {key}: {source}", file.display())]
+    Mesh {
+        /// The scene file.
+        file: PathBuf,
+        /// The key, as in the config (`parts[1].mesh`).
+        key: String,
+        /// Why the mesh failed.
+        #[source]
+        source: GeometryError,
+    },
+}
+
+/// A loaded, validated scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The scene's name.
+    pub name: String,
+    /// The file it was loaded from.
+    pub source: PathBuf,
+    /// The parts; a part's id is its index here.
+    pub parts: Vec<Part>,
+    /// The hand model file, resolved against the scene's folder; it exists.
+    pub hand: Option<PathBuf>,
+    /// Parameters of the algorithms.
+    pub params: AlgorithmParams,
+    /// Rates of the runtime loops.
+    pub rates: Rates,
+    /// The collision interest groups.
+    pub groups: Groups,
+}
+
+/// One part of a scene.
+#[derive(Debug, Clone)]
+pub struct Part {
+    /// Unique name within the scene.
+    pub name: String,
+    /// The geometry in the part's own frame (shared between parts that use the same source).
+    pub mesh: Arc<TriMesh>,
+    /// Where the mesh came from: the resolved file path, or `shape:KIND:...` for a procedural
+    /// shape.
+    pub mesh_source: String,
+    /// Initial pose of the part's frame in the world.
+    pub pose: Isometry3<f64>,
+    /// Whether the part can be grasped and moved; static parts never move.
+    pub movable: bool,
+    /// The part's group in the collision interest matrix.
+    pub group: String,
+}
+
+/// The groups of a scene and the pairs of groups whose parts are never tested against each
+/// other. Pairs of two static parts are never of interest either.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Groups {
+    /// Every group some part belongs to, sorted.
+    pub names: Vec<String>,
+    /// Pairs of groups that are not of interest, each sorted, as the config lists them.
+    pub not_of_interest: Vec<[String; 2]>,
+}
+
+impl Groups {
+    /// True unless the config lists the pair of groups (in either order) as not of interest.
+    pub fn of_interest(&self, a: &str, b: &str) -> bool {
+        let pair = sorted_pair(a, b);
+        !self.not_of_interest.contains(&pair)
+    }
+}
+
+fn sorted_pair(a: &str, b: &str) -> [String; 2] {
+    if a <= b {
+        [a.to_owned(), b.to_owned()]
+    } else {
+        [b.to_owned(), a.to_owned()]
+    }
+}
+
+/// The default demo scene, `configs/default.toml`: found relative to the working directory
+/// (running from the repository root), else in the source tree the binary was built from.
+pub fn default_scene_path() -> PathBuf {
+    let relative = Path::new("configs").join("default.toml");
+    if relative.is_file() {
+        relative
+    } else {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join(relative)
+    }
+}
+
+/// The config as written, before validation.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: String,
+    hand: Option<PathBuf>,
+    #[serde(default)]
+    params: AlgorithmParams,
+    #[serde(default)]
+    rates: Rates,
+    #[serde(default)]
+    groups: GroupsFile,
+    #[serde(default)]
+    parts: Vec<PartFile>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GroupsFile {
+    #[serde(default)]
+    not_of_interest: Vec<[String; 2]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PartFile {
+    name: String,
+    mesh: Option<PathBuf>,
+    scale: Option<f64>,
+    shape: Option<ShapeSpec>,
+    #[serde(default)]
+    position: [f64; 3],
+    rotation: Option<[f64; 4]>,
+    #[serde(default)]
+    movable: bool,
+    #[serde(default = "default_group")]
+    group: String,
+}
+
+fn default_group() -> String {
+    "default".to_owned()
+}
+
+impl Scene {
+    /// Loads and validates the scene config at `path`. Mesh paths (and the hand model) are
+    /// relative to the config's folder.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            file: path.to_owned(),
+            source,
+        })?;
+        let file: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Syntax {
+            file: path.to_owned(),
+            message: describe_toml_error(&text, &e),
+        })?;
+        Loader {
+            path,
+            folder: path.parent().unwrap_or(Path::new("")),
+            meshes: HashMap::new(),
+        }
+        .scene(file)
+    }
+
+    /// True when parts `a` and `b` must be tested for collision: different parts, at least one
+    /// movable, and their groups of interest to each other.
+    pub fn pair_of_interest(&self, a: usize, b: usize) -> bool {
+        let (p, q) = (&self.parts[a], &self.parts[b]);
+        a != b && (p.movable || q.movable) && self.groups.of_interest(&p.group, &q.group)
+    }
+
+    /// A human-readable summary: parts, triangles, groups, parameters and rates.
+    pub fn summary(&self) -> String {
+        let mut s = String::new();
+        let triangles: usize = self.parts.iter().map(|p| p.mesh.triangles().len()).sum();
+        let _ = writeln!(s, "scene {:?} ({})", self.name, self.source.display());
+        let _ = writeln!(
+            s,
+            "parts: {} ({} movable), {triangles} triangles",
+            self.parts.len(),
+            self.parts.iter().filter(|p| p.movable).count()
+        );
+        for (id, part) in self.parts.iter().enumerate() {
+            let t = part.pose.translation.vector;
+            let (roll, pitch, yaw) = part.pose.rotation.euler_angles();
+            let _ = writeln!(
+                s,
+                "  {id:>3} {:<16} {:<7} group {:<10} {:>7} triangles  at [{:.4}, {:.4}, {:.4}] m, \
+                 rpy [{:.1}, {:.1}, {:.1}]°  {}",
+                part.name,
+                if part.movable { "movable" } else { "static" },
+                part.group,
+                part.mesh.triangles().len(),
+                t.x,
+                t.y,
+                t.z,
+                // Adding zero turns -0.0 into 0.0 for display.
+                roll.to_degrees() + 0.0,
+                pitch.to_degrees() + 0.0,
+                yaw.to_degrees() + 0.0,
+                part.mesh_source
+            );
+        }
+        let ignored: Vec<String> = self
+            .groups
+            .not_of_interest
+            .iter()
+            .map(|[a, b]| format!("{a}/{b}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "groups: {}; not of interest: {} (and every static/static pair)",
+            self.groups.names.join(", "),
+            if ignored.is_empty() {
+                "none".to_owned()
+            } else {
+                ignored.join(", ")
+            }
+        );
+        let (p, sl, cl) = (&self.params, &self.params.sliding, &self.params.clasp);
+        let _ = writeln!(
+            s,
+            "params: {}-DOPs; sliding {} (contact tolerance {} m, angle tolerance {} rad, \
+             {} bisection steps, {} iterations); clasp (flex tolerance {} rad, root tolerance {} m, \
+             {} iterations)",
+            p.dop_orientations,
+            sl.metaphor,
+            sl.contact_tolerance,
+            sl.angle_tolerance,
+            sl.max_bisection_steps,
+            sl.max_iterations,
+            cl.flex_tolerance,
+            cl.root_tolerance,
+            cl.max_iterations
+        );
+        let r = &self.rates;
+        let _ = writeln!(
+            s,
+            "rates: publish {} Hz, collision {} Hz, sliding {} Hz, grasping {} Hz",
+            r.publish_hz, r.collision_hz, r.sliding_hz, r.grasping_hz
+        );
+        let _ = write!(
+            s,
+            "hand: {}",
+            self.hand
+                .as_ref()
+                .map_or("none".to_owned(), |h| h.display().to_string())
+        );
+        s
+    }
+}
+
+/// Turns a TOML error into one line: where, the offending line's text, and the reason.
+fn describe_toml_error(text: &str, error: &toml::de::Error) -> String {
+    let reason = error.message().trim();
+    match error.span() {
+        Some(span) => {
+            let start = span.start.min(text.len());
+            let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+            let line_number = text[..start].matches('\n').count() + 1;
+            let line = text[line_start..].lines().next().unwrap_or("").trim();
+            format!("line {line_number} (`{line}`): {reason}")
+        }
+        None => reason.to_owned(),
+    }
+}
+
+/// Validation state while loading one scene.
+struct Loader<'a> {
+    path: &'a Path,
+    folder: &'a Path,
+    /// Meshes already loaded or built, by source, so that parts sharing one are loaded once.
+    meshes: HashMap<String, Arc<TriMesh>>,
+}
+
+impl Loader<'_> {
+    fn invalid(&self, key: impl Into<String>, reason: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            file: self.path.to_owned(),
+            key: key.into(),
+            reason: reason.into(),
+        }
+    }
+
+    fn problem(&self, problem: Problem) -> SceneError {
+        self.invalid(problem.key, problem.reason)
+    }
+
+    fn scene(mut self, file: SceneFile) -> Result<Scene, SceneError> {
+        if file.name.trim().is_empty() {
+            return Err(self.invalid("name", "must not be empty"));
+        }
+        file.params.validate().map_err(|p| self.problem(p))?;
+        file.rates.validate().map_err(|p| self.problem(p))?;
+
+        let mut parts: Vec<Part> = Vec::with_capacity(file.parts.len());
+        for (index, part) in file.parts.into_iter().enumerate() {
+            let part = self.part(index, part)?;
+            if let Some(first) = parts.iter().position(|p| p.name == part.name) {
+                return Err(self.invalid(
+                    format!("parts[{index}].name"),
+                    format!("{:?} is already the name of parts[{first}]", part.name),
+                ));
+            }
+            parts.push(part);
+        }
+
+        let names: Vec<String> = parts
+            .iter()
+            .map(|p| p.group.clone())
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        let mut not_of_interest = Vec::with_capacity(file.groups.not_of_interest.len());
+        for (index, [a, b]) in file.groups.not_of_interest.iter().enumerate() {
+            if let Some(unknown) = [a, b].into_iter().find(|g| !names.contains(g)) {
+                return Err(self.invalid(
+                    format!("groups.not_of_interest[{index}]"),
+                    format!(
+                        "no part is in group {unknown:?} (groups: {})",
+                        names.join(", ")
+                    ),
+                ));
+            }
+            not_of_interest.push(sorted_pair(a, b));
+        }
+
+        let hand = match file.hand {
+            Some(hand) => {
+                let resolved = self.folder.join(&hand);
+                if !resolved.is_file() {
+                    return Err(self.invalid(
+                        "hand",
+                        format!("hand model file {} does not exist", resolved.display()),
+                    ));
+                }
+                Some(resolved)
+            }
+            None => None,
+        };
+
+        Ok(Scene {
+            name: file.name,
+            source: self.path.to_owned(),
+            parts,
+            hand,
+            params: file.params,
+            rates: file.rates,
+            groups: Groups {
+                names,
+                not_of_interest,
+            },
+        })
+    }
+
+    fn part(&mut self, index: usize, part: PartFile) -> Result<Part, SceneError> {
+        let key = |field: &str| format!("parts[{index}].{field}");
+        if part.name.trim().is_empty() {
+            return Err(self.invalid(key("name"), "must not be empty"));
+        }
+        if part.group.trim().is_empty() {
+            return Err(self.invalid(key("group"), "must not be empty"));
+        }
+        if let Some(c) = part.position.iter().find(|c| !c.is_finite()) {
+            return Err(self.invalid(
+                key("position"),
+                format!("coordinates must be finite, not {c}"),
+            ));
+        }
+        let rotation = match part.rotation {
+            None => UnitQuaternion::identity(),
+            Some(q) => self.rotation(&key("rotation"), q)?,
+        };
+        let pose = Isometry3::from_parts(Translation3::from(part.position), rotation);
+        let (mesh, mesh_source) = match (part.mesh, part.shape) {
+            (Some(mesh), None) => self.mesh_file(index, &mesh, part.scale)?,
+            (None, Some(shape)) if part.scale.is_none() => self.shape(index, shape)?,
+            (None, Some(_)) => {
+                return Err(self.invalid(
+                    key("scale"),
+                    "applies to mesh files only; give a shape's dimensions instead",
+                ));
+            }
+            (Some(_), Some(_)) => {
+                return Err(self.invalid(key("shape"), "give either mesh or shape, not both"));
+            }
+            (None, None) => {
+                return Err(self.invalid(
+                    format!("parts[{index}]"),
+                    "needs a mesh (a file) or a shape",
+                ));
+            }
+        };
+        Ok(Part {
+            name: part.name,
+            mesh,
+            mesh_source,
+            pose,
+            movable: part.movable,
+            group: part.group,
+        })
+    }
+
+    /// A unit quaternion from (x, y, z, w), refused unless its norm is 1 within
+    /// [`QUATERNION_NORM_TOLERANCE`]; accepted ones are renormalised to full precision.
+    fn rotation(
+        &self,
+        key: &str,
+        [x, y, z, w]: [f64; 4],
+    ) -> Result<UnitQuaternion<f64>, SceneError> {
+        if ![x, y, z, w].iter().all(|c| c.is_finite()) {
+            return Err(self.invalid(key, "components must be finite"));
+        }
+        let quaternion = Quaternion::new(w, x, y, z);
+        let norm = quaternion.norm();
+        if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+            return Err(self.invalid(
+                key,
+                format!(
+                    "[{x}, {y}, {z}, {w}] has norm {norm}; a unit quaternion [x, y, z, w] is \
+                     required (norm 1 within {QUATERNION_NORM_TOLERANCE})"
+                ),
+            ));
+        }
+        Ok(UnitQuaternion::from_quaternion(quaternion))
+    }
+
+    fn mesh_file(
+        &mut self,
+        index: usize,
+        relative: &Path,
+        scale: Option<f64>,
+    ) -> Result<(Arc<TriMesh>, String), SceneError> {
+        let scale = scale.unwrap_or(1.0);
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(self.invalid(
+                format!("parts[{index}].scale"),
+                format!("must be a positive number, not {scale}"),
+            ));
+        }
+        let path = self.folder.join(relative);
+        let source = path.display().to_string();
+        let cache_key = format!("{source} x {scale}");
+        if let Some(mesh) = self.meshes.get(&cache_key) {
+            return Ok((mesh.clone(), source));
+        }
+        let mesh_error = |source| SceneError::Mesh {
+            file: self.path.to_owned(),
+            key: format!("parts[{index}].mesh"),
+            source,
+        };
+        let mut mesh = load_mesh(&path).map_err(mesh_error)?;
+        if scale != 1.0 {
+            // Uniform scaling keeps the triangles' shapes; only extreme scales can make some
+            // degenerate, and a mesh with none left is refused.
+            mesh = mesh
+                .map_vertices(|v| Point::from(v.coords * scale))
+                .map_err(|source| {
+                    mesh_error(GeometryError::InvalidMesh {
+                        path: path.clone(),
+                        source,
+                    })
+                })?;
+        }
+        let mesh = Arc::new(mesh);
+        self.meshes.insert(cache_key, mesh.clone());
+        Ok((mesh, source))
+    }
+
+    fn shape(
+        &mut self,
+        index: usize,
+        shape: ShapeSpec,
+    ) -> Result<(Arc<TriMesh>, String), SceneError> {
+        let source = shape.to_string();
+        if let Some(mesh) = self.meshes.get(&source) {
+            return Ok((mesh.clone(), source));
+        }
+        let mesh =
+            Arc::new(shape.build().map_err(|e| {
+                self.invalid(format!("parts[{index}].shape.{}", e.field), e.reason)
+            })?);
+        self.meshes.insert(source.clone(), mesh.clone());
+        Ok((mesh, source))
+    }
+}

@@ -1,0 +1,492 @@
+//! Scene configs: the shipped scenes load and make physical sense, every kind of bad config is
+//! refused with the file, the key and the reason, and the `check-scene` and `shape` commands
+//! behave.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Arc;
+
+use nalgebra::{Point2, Point3};
+use vas_server::geometry::{TriMesh, load_mesh};
+use vas_server::scene::{Scene, SceneError, SlidingMetaphor, default_scene_path};
+
+fn configs() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs")
+}
+
+/// A fresh folder for one test's files.
+fn scratch_dir(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("scenes")
+        .join(test);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write(dir: &Path, name: &str, contents: &str) -> PathBuf {
+    let path = dir.join(name);
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent).unwrap();
+    }
+    std::fs::write(&path, contents).unwrap();
+    path
+}
+
+/// A valid part to build scenes around.
+const PEG: &str = r#"
+[[parts]]
+name = "peg"
+shape = { kind = "cylinder", radius = 0.01, height = 0.05, triangles = 200 }
+movable = true
+group = "parts"
+"#;
+
+/// The world-space bounding box of a part.
+fn world_box(scene: &Scene, id: usize) -> (Point3<f64>, Point3<f64>) {
+    let part = &scene.parts[id];
+    let world = part
+        .mesh
+        .map_vertices(|v| part.pose.transform_point(v))
+        .unwrap();
+    world.bounding_box()
+}
+
+#[test]
+fn every_shipped_scene_loads_with_movable_parts_clear_of_the_rest() {
+    let mut count = 0;
+    for entry in std::fs::read_dir(configs()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        count += 1;
+        let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!scene.parts.is_empty(), "{}", path.display());
+        assert!(scene.parts.iter().any(|p| p.movable), "{}", path.display());
+        // No movable part starts touching another part: their boxes are apart.
+        for a in 0..scene.parts.len() {
+            for b in 0..scene.parts.len() {
+                if a == b || !scene.parts[a].movable {
+                    continue;
+                }
+                let ((lo_a, hi_a), (lo_b, hi_b)) = (world_box(&scene, a), world_box(&scene, b));
+                let apart = (0..3).any(|i| hi_a[i] < lo_b[i] || hi_b[i] < lo_a[i]);
+                assert!(
+                    apart,
+                    "{}: {} starts in contact with {}",
+                    path.display(),
+                    scene.parts[a].name,
+                    scene.parts[b].name
+                );
+            }
+        }
+    }
+    assert!(count >= 4, "configs/ holds the four scenes");
+}
+
+#[test]
+fn the_default_scene_is_found_and_loads() {
+    let path = default_scene_path();
+    assert!(path.ends_with("configs/default.toml"), "{}", path.display());
+    let scene = Scene::load(&path).unwrap();
+    assert_eq!(scene.name, "demo");
+    for name in ["table", "block", "peg"] {
+        assert!(scene.parts.iter().any(|p| p.name == name), "{name}");
+    }
+}
+
+/// Distance from the origin to a triangle projected onto the xy plane (0 if it covers the
+/// origin): for the vertical walls of a bore, the distance from the axis.
+fn axis_distance(mesh: &TriMesh, triangle: usize) -> f64 {
+    let [a, b, c] = mesh.triangle(triangle).map(|p| Point2::new(p.x, p.y));
+    let cross = |p: Point2<f64>, q: Point2<f64>| p.x * q.y - p.y * q.x;
+    let sides = [cross(a, b), cross(b, c), cross(c, a)];
+    if sides.iter().all(|&s| s > 0.0) || sides.iter().all(|&s| s < 0.0) {
+        return 0.0;
+    }
+    let to_segment = |p: Point2<f64>, q: Point2<f64>| {
+        let d = q - p;
+        let t = if d.norm_squared() > 0.0 {
+            (-p.coords.dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (p + d * t).coords.norm()
+    };
+    to_segment(a, b).min(to_segment(b, c)).min(to_segment(c, a))
+}
+
+/// The radius of the largest coaxial cylinder that passes through the part's hole.
+fn bore_radius(mesh: &TriMesh) -> f64 {
+    (0..mesh.triangles().len())
+        .map(|t| axis_distance(mesh, t))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The largest distance of the part's surface from its axis.
+fn outer_radius(mesh: &TriMesh) -> f64 {
+    mesh.vertices()
+        .iter()
+        .map(|v| v.xy().coords.norm())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn the_peg_fits_its_hole_with_about_one_percent_clearance() {
+    let scene = Scene::load(&configs().join("peg_in_hole.toml")).unwrap();
+    let part = |name: &str| scene.parts.iter().find(|p| p.name == name).unwrap();
+    let (block, peg) = (part("block"), part("peg"));
+    let (hole, pin) = (bore_radius(&block.mesh), outer_radius(&peg.mesh));
+    let clearance = (hole - pin) / hole;
+    assert!(
+        (0.005..0.015).contains(&clearance),
+        "hole {hole}, peg {pin}, clearance {clearance}"
+    );
+    // Coaxial: the same x and y.
+    let offset = peg.pose.translation.vector - block.pose.translation.vector;
+    assert!(offset.xy().norm() < 1e-12);
+}
+
+#[test]
+fn the_pipe_passes_through_the_sheets_hole() {
+    let scene = Scene::load(&configs().join("pipe_through_sheet.toml")).unwrap();
+    let (sheet, pipe) = (&scene.parts[0], &scene.parts[1]);
+    assert_eq!((sheet.name.as_str(), pipe.name.as_str()), ("sheet", "pipe"));
+    assert!(!sheet.movable && pipe.movable);
+    assert!(outer_radius(&pipe.mesh) < bore_radius(&sheet.mesh));
+    let (lo, hi) = sheet.mesh.bounding_box();
+    assert_eq!((lo.z, hi.z), (0.0, 0.0), "the sheet has no thickness");
+}
+
+#[test]
+fn meshes_are_resolved_scaled_and_shared() {
+    let dir = scratch_dir("meshes");
+    let bunny = configs().join("meshes/low_poly_bunny.obj");
+    std::fs::create_dir_all(dir.join("models")).unwrap();
+    std::fs::copy(&bunny, dir.join("models/bunny.obj")).unwrap();
+    let path = write(
+        &dir,
+        "scene.toml",
+        r#"
+name = "bunnies"
+hand = "hand.toml"
+params = { dop_orientations = 18, sliding = { metaphor = "spiral-spring" } }
+rates = { publish_hz = 30 }
+groups = { not_of_interest = [["b", "a"]] }
+
+[[parts]]
+name = "one"
+mesh = "models/bunny.obj"
+scale = 0.5
+group = "a"
+
+[[parts]]
+name = "two"
+mesh = "models/bunny.obj"
+scale = 0.5
+position = [1.0, 0.0, 0.0]
+rotation = [0.0, 0.0, 0.7071068, 0.7071068]
+movable = true
+group = "b"
+
+[[parts]]
+name = "three"
+mesh = "models/bunny.obj"
+movable = true
+"#,
+    );
+    write(&dir, "hand.toml", "# a hand model\n");
+    let scene = Scene::load(&path).unwrap();
+    let original = load_mesh(&bunny).unwrap();
+    let [one, two, three] = [0, 1, 2].map(|i| &scene.parts[i]);
+    assert!(
+        Arc::ptr_eq(&one.mesh, &two.mesh),
+        "same file and scale: one mesh"
+    );
+    assert!(!Arc::ptr_eq(&one.mesh, &three.mesh));
+    assert_eq!(*three.mesh, original);
+    assert_eq!(one.mesh.vertices()[7], original.vertices()[7] * 0.5);
+    assert_eq!(
+        one.mesh_source,
+        dir.join("models/bunny.obj").display().to_string()
+    );
+    // The rotation is a quarter turn about z, renormalised to full precision.
+    assert!((two.pose.rotation.angle() - std::f64::consts::FRAC_PI_2).abs() < 1e-6);
+    assert!((two.pose.rotation.quaternion().norm() - 1.0).abs() < 1e-15);
+    assert_eq!(three.group, "default");
+    assert_eq!(scene.hand, Some(dir.join("hand.toml")));
+    assert_eq!(scene.params.dop_orientations, 18);
+    assert_eq!(scene.params.sliding.metaphor, SlidingMetaphor::SpiralSpring);
+    assert_eq!(scene.params.sliding.contact_tolerance, 1e-4, "default kept");
+    assert_eq!(
+        (scene.rates.publish_hz, scene.rates.collision_hz),
+        (30.0, 500.0)
+    );
+    assert_eq!(scene.groups.names, ["a", "b", "default"]);
+    // Interest: a/b is excluded by the config, and parts are never tested against themselves.
+    assert!(!scene.pair_of_interest(0, 1));
+    assert!(scene.pair_of_interest(0, 2) && scene.pair_of_interest(1, 2));
+    assert!(!scene.pair_of_interest(2, 2));
+    let summary = scene.summary();
+    for needle in [
+        "bunnies",
+        "parts: 3 (2 movable)",
+        "18-DOPs",
+        "spiral-spring",
+        "a/b",
+    ] {
+        assert!(
+            summary.contains(needle),
+            "{needle} missing from:\n{summary}"
+        );
+    }
+}
+
+#[test]
+fn static_pairs_are_never_of_interest() {
+    let dir = scratch_dir("static_pairs");
+    let path = write(
+        &dir,
+        "scene.toml",
+        r#"
+name = "fixtures"
+[[parts]]
+name = "a"
+shape = { kind = "sphere", radius = 0.1, triangles = 100 }
+[[parts]]
+name = "b"
+shape = { kind = "sphere", radius = 0.1, triangles = 100 }
+position = [1.0, 0.0, 0.0]
+"#,
+    );
+    let scene = Scene::load(&path).unwrap();
+    assert!(!scene.pair_of_interest(0, 1));
+}
+
+/// Loads `contents` as a scene and returns the error's message, checking that it names the
+/// file and contains every one of `needles` (the key and the reason).
+fn refused(test: &str, contents: &str, needles: &[&str]) -> SceneError {
+    let dir = scratch_dir(test);
+    let path = write(&dir, "scene.toml", contents);
+    let error = Scene::load(&path).expect_err("the scene must be refused");
+    let message = error.to_string();
+    assert!(
+        message.contains(&path.display().to_string()),
+        "{test}: the file is not named in: {message}"
+    );
+    for needle in needles {
+        assert!(
+            message.contains(needle),
+            "{test}: {needle:?} not in: {message}"
+        );
+    }
+    error
+}
+
+#[test]
+fn unknown_keys_are_refused() {
+    let top = refused(
+        "unknown_top",
+        &format!("name = \"s\"\ncolour = 1\n{PEG}"),
+        &["line 2", "colour"],
+    );
+    assert!(matches!(top, SceneError::Syntax { .. }));
+    refused(
+        "unknown_in_part",
+        &format!("name = \"s\"\n{PEG}mass = 2.0\n"),
+        &["mass"],
+    );
+    refused(
+        "unknown_in_params",
+        &format!("name = \"s\"\n[params.sliding]\nstiffness = 3\n{PEG}"),
+        &["stiffness"],
+    );
+    refused(
+        "unknown_in_shape",
+        "name = \"s\"\n[[parts]]\nname = \"p\"\nshape = { kind = \"sphere\", radius = 1.0, triangles = 10, colour = 1 }\n",
+        &["colour"],
+    );
+}
+
+#[test]
+fn missing_and_unloadable_meshes_are_refused() {
+    let missing = refused(
+        "missing_mesh",
+        "name = \"s\"\n[[parts]]\nname = \"p\"\nmesh = \"nowhere/part.obj\"\n",
+        &["parts[0].mesh", "nowhere/part.obj", "cannot read"],
+    );
+    assert!(matches!(missing, SceneError::Mesh { .. }));
+    let dir = scratch_dir("bad_mesh");
+    write(&dir, "broken.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+    let path = write(
+        &dir,
+        "scene.toml",
+        &format!("name = \"s\"\n{PEG}\n[[parts]]\nname = \"q\"\nmesh = \"broken.obj\"\n"),
+    );
+    let message = Scene::load(&path).unwrap_err().to_string();
+    assert!(
+        message.contains("parts[1].mesh")
+            && message.contains("broken.obj")
+            && message.contains("not a valid OBJ"),
+        "{message}"
+    );
+}
+
+#[test]
+fn non_finite_numbers_are_refused() {
+    refused(
+        "nan_position",
+        &format!("name = \"s\"\n{PEG}position = [0.0, nan, 0.0]\n"),
+        &["parts[0].position", "finite"],
+    );
+    refused(
+        "inf_rotation",
+        &format!("name = \"s\"\n{PEG}rotation = [0.0, 0.0, 0.0, inf]\n"),
+        &["parts[0].rotation", "finite"],
+    );
+    refused(
+        "nan_shape",
+        "name = \"s\"\n[[parts]]\nname = \"p\"\nshape = { kind = \"sphere\", radius = nan, triangles = 10 }\n",
+        &["parts[0].shape.radius", "NaN"],
+    );
+    refused(
+        "inf_tolerance",
+        &format!("name = \"s\"\n[params.clasp]\nflex_tolerance = inf\n{PEG}"),
+        &["params.clasp.flex_tolerance"],
+    );
+}
+
+#[test]
+fn bad_quaternions_are_refused_not_normalised() {
+    refused(
+        "long_quaternion",
+        &format!("name = \"s\"\n{PEG}rotation = [0.0, 0.0, 0.0, 2.0]\n"),
+        &["parts[0].rotation", "norm 2", "unit quaternion"],
+    );
+    refused(
+        "zero_quaternion",
+        &format!("name = \"s\"\n{PEG}rotation = [0.0, 0.0, 0.0, 0.0]\n"),
+        &["parts[0].rotation", "norm 0"],
+    );
+    refused(
+        "short_quaternion",
+        &format!("name = \"s\"\n{PEG}rotation = [0.0, 0.0, 1.0]\n"),
+        &["line"],
+    );
+}
+
+#[test]
+fn duplicate_part_names_are_refused() {
+    refused(
+        "duplicate_names",
+        &format!("name = \"s\"\n{PEG}{PEG}"),
+        &["parts[1].name", "\"peg\"", "parts[0]"],
+    );
+}
+
+#[test]
+fn unknown_groups_in_the_interest_matrix_are_refused() {
+    refused(
+        "unknown_group",
+        &format!("name = \"s\"\n[groups]\nnot_of_interest = [[\"parts\", \"tools\"]]\n{PEG}"),
+        &["groups.not_of_interest[0]", "\"tools\""],
+    );
+}
+
+#[test]
+fn bad_dop_orientation_counts_are_refused() {
+    refused(
+        "bad_k",
+        &format!("name = \"s\"\n[params]\ndop_orientations = 12\n{PEG}"),
+        &["params.dop_orientations", "12", "[6, 14, 18, 24, 26]"],
+    );
+}
+
+#[test]
+fn negative_and_zero_rates_are_refused() {
+    refused(
+        "negative_rate",
+        &format!("name = \"s\"\n[rates]\nsliding_hz = -5.0\n{PEG}"),
+        &["rates.sliding_hz", "-5"],
+    );
+    refused(
+        "zero_rate",
+        &format!("name = \"s\"\n[rates]\npublish_hz = 0\n{PEG}"),
+        &["rates.publish_hz"],
+    );
+}
+
+#[test]
+fn inconsistent_parts_are_refused() {
+    refused(
+        "no_geometry",
+        "name = \"s\"\n[[parts]]\nname = \"p\"\n",
+        &["parts[0]", "mesh", "shape"],
+    );
+    refused(
+        "mesh_and_shape",
+        &format!("name = \"s\"\n{PEG}mesh = \"x.obj\"\n"),
+        &["parts[0].shape", "not both"],
+    );
+    refused(
+        "scaled_shape",
+        &format!("name = \"s\"\n{PEG}scale = 2.0\n"),
+        &["parts[0].scale"],
+    );
+    refused(
+        "hole_too_big",
+        "name = \"s\"\n[[parts]]\nname = \"p\"\nshape = { kind = \"sheet-with-hole\", width = 0.1, hole_radius = 0.05, triangles = 100 }\n",
+        &["parts[0].shape.hole_radius"],
+    );
+    refused("empty_name", "name = \"\"\n", &["name", "empty"]);
+    refused(
+        "missing_hand",
+        &format!("name = \"s\"\nhand = \"hands/left.toml\"\n{PEG}"),
+        &["hand", "hands/left.toml", "does not exist"],
+    );
+    refused("not_toml", "name = \n", &["line 1"]);
+}
+
+#[test]
+fn check_scene_prints_a_summary_or_fails_with_the_error() {
+    let binary = env!("CARGO_BIN_EXE_vas-server");
+    let ok = Command::new(binary)
+        .args(["check-scene"])
+        .arg(configs().join("peg_in_hole.toml"))
+        .output()
+        .unwrap();
+    assert!(ok.status.success());
+    let stdout = String::from_utf8_lossy(&ok.stdout);
+    assert!(
+        stdout.contains("peg in hole") && stdout.contains("parts: 2 (1 movable)"),
+        "{stdout}"
+    );
+
+    let dir = scratch_dir("cli");
+    let bad = write(
+        &dir,
+        "bad.toml",
+        &format!("name = \"s\"\n[params]\ndop_orientations = 7\n{PEG}"),
+    );
+    let failed = Command::new(binary)
+        .arg("check-scene")
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert!(!failed.status.success());
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert!(stderr.contains("params.dop_orientations"), "{stderr}");
+    assert!(failed.stdout.is_empty());
+}
+
+#[test]
+fn the_shape_command_writes_a_loadable_obj() {
+    let out = scratch_dir("cli_shape").join("torus.obj");
+    let status = Command::new(env!("CARGO_BIN_EXE_vas-server"))
+        .args(["shape", "torus", "--triangles", "50000", "--out"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert_eq!(load_mesh(&out).unwrap().triangles().len(), 50_000);
+}
