@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
+use vas_server::bench;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::write_obj;
 use vas_server::scene::Scene;
@@ -36,6 +37,19 @@ enum Command {
         /// The scene file.
         file: PathBuf,
     },
+    /// Run a benchmark of BENCHMARKS.md.
+    Bench {
+        #[command(subcommand)]
+        benchmark: BenchCommand,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum BenchCommand {
+    /// B1: the tumbling pair (the paper's Figure 3 with --figure).
+    Tumble(bench::tumble::TumbleArgs),
+    /// B2: random poses of one mesh against another (FCL's procedure).
+    Random(bench::random::RandomArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +66,10 @@ fn main() -> ExitCode {
         Command::CheckScene { file } => Scene::load(&file)
             .map(|scene| println!("{}", scene.summary()))
             .map_err(Into::into),
+        Command::Bench { benchmark } => match benchmark {
+            BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
+            BenchCommand::Random(args) => bench::random::run_cli(&args),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -8,9 +8,13 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::tumble::{Algo, AlgoResult, BuildResult, BuiltCollider, build_results, run_poses};
+use super::report::{LinePlot, Series, write_json, write_svg_line_plot};
+use super::tumble::{
+    Algo, AlgoResult, BuildResult, BuiltCollider, build_results, build_table, results_table,
+    run_poses,
+};
 use crate::collision::OrientationSet;
-use crate::geometry::TriMesh;
+use crate::geometry::{TriMesh, parse_mesh_spec};
 
 /// The default number of poses of B2.
 pub const DEFAULT_POSES: usize = 10_000;
@@ -99,6 +103,85 @@ pub fn run_random(a: &TriMesh, b: &TriMesh, config: &RandomConfig) -> Result<Ran
         results,
         build: build_results(&colliders),
     })
+}
+
+/// Command-line arguments of `vas-server bench random`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RandomArgs {
+    /// The fixed mesh A: a file or shape:KIND:TRIANGLES.
+    #[arg(long, default_value = "configs/meshes/fcl_env.obj")]
+    pub mesh: String,
+    /// The moving mesh B.
+    #[arg(long, default_value = "configs/meshes/fcl_rob.obj")]
+    pub mesh_b: String,
+    /// Number of random poses.
+    #[arg(long, default_value_t = DEFAULT_POSES)]
+    pub poses: usize,
+    /// Seed of the pose generator.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Algorithms to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = Algo::DEFAULT)]
+    pub algos: Vec<Algo>,
+    /// Number of DOP orientations (6, 14, 18, 24 or 26).
+    #[arg(long, default_value_t = crate::collision::orientation::DEFAULT_K)]
+    pub k: usize,
+    /// Write the results as JSON to this file.
+    #[arg(long)]
+    pub json: Option<std::path::PathBuf>,
+    /// Draw an SVG plot of each algorithm's time per query by percentile.
+    #[arg(long)]
+    pub svg: Option<std::path::PathBuf>,
+}
+
+/// `vas-server bench random`: runs B2, prints the table, writes files.
+pub fn run_cli(args: &RandomArgs) -> Result<()> {
+    let a = parse_mesh_spec(&args.mesh)?;
+    let b = parse_mesh_spec(&args.mesh_b)?;
+    let config = RandomConfig {
+        poses: args.poses,
+        seed: args.seed,
+        algos: args.algos.clone(),
+        orientations: OrientationSet::new(args.k)?,
+    };
+    let report = run_random(&a, &b, &config)?;
+    println!(
+        "random poses: {} x {} triangles, {} poses, k = {}",
+        report.triangles_a, report.triangles_b, report.poses, report.k
+    );
+    print!("{}", results_table(&report.results).render());
+    print!("{}", build_table(&report.build).render());
+    println!("mismatches: {}", report.mismatches);
+    if let Some(path) = &args.json {
+        write_json(path, &report)?;
+    }
+    if let Some(path) = &args.svg {
+        write_svg_line_plot(path, &percentile_plot(&report.results))?;
+    }
+    Ok(())
+}
+
+/// Time per query by percentile (log time axis), one curve per algorithm.
+fn percentile_plot(results: &[AlgoResult]) -> LinePlot {
+    LinePlot {
+        title: "Random poses: time per query by percentile".into(),
+        x_label: "percentile".into(),
+        y_label: "microseconds per query".into(),
+        log_x: false,
+        log_y: true,
+        series: results
+            .iter()
+            .map(|r| Series {
+                name: r.algo.clone(),
+                points: r
+                    .percentiles_us
+                    .iter()
+                    .enumerate()
+                    .map(|(p, &t)| (p as f64, t.max(1e-3)))
+                    .collect(),
+            })
+            .collect(),
+    }
 }
 
 #[cfg(test)]

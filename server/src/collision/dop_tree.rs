@@ -22,7 +22,7 @@ use super::{MeshCollider, QueryStats};
 use crate::geometry::TriMesh;
 
 /// Default number of triangles per leaf (the fastest in the tumbling benchmark).
-pub const DEFAULT_LEAF_SIZE: usize = 2;
+pub const DEFAULT_LEAF_SIZE: usize = 1;
 
 /// Depth to which the parallel traversal splits the node-pair tree into rayon tasks.
 const PARALLEL_DEPTH: u32 = 10;
@@ -57,6 +57,9 @@ pub struct DopTree {
     triangle_ids: Vec<u32>,
     /// Largest absolute offset in the tree (bounds rounding errors of re-alignment).
     max_abs_offset: f32,
+    /// Centre and radius of a sphere enclosing the mesh (for the cheap first test of a query).
+    bounding_centre: Point3<f64>,
+    bounding_radius: f64,
 }
 
 impl DopTree {
@@ -166,10 +169,21 @@ fn with_affine<const ALL: bool>(
         out: &mut Vec<[u32; 2]>,
         parallel: bool,
     ) -> bool {
-        let pair = TreePair::new(a, b, b_to_a, |rotation, translation| {
-            AffineRealign::<K>::new(a, b, rotation, translation)
+        let mut hints = CONE_HINTS.get();
+        let separated = roots_separated_along_offset(a, b, b_to_a, &mut hints);
+        let pair = (!separated).then(|| {
+            TreePair::new(a, b, b_to_a, |rotation, translation| {
+                AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
+            })
         });
-        pair.run::<ALL, K>(stats, out, parallel)
+        CONE_HINTS.set(hints);
+        match pair {
+            Some(pair) => pair.run::<ALL, K>(stats, out, parallel),
+            None => {
+                stats.bv_tests += 1;
+                false
+            }
+        }
     }
     match a.k {
         6 => run::<6, ALL>(a, b, b_to_a, stats, out, parallel),
@@ -181,14 +195,71 @@ fn with_affine<const ALL: bool>(
     }
 }
 
+/// Cheap start of a query: along the single orientation of A closest to the direction from A's
+/// centre to B's, first B's bounding sphere, then B's re-aligned root offset (one support cone
+/// instead of k) are tested against A's root. Pairs far apart end here.
+fn roots_separated_along_offset(
+    a: &DopTree,
+    b: &DopTree,
+    b_to_a: &Isometry3<f64>,
+    hints: &mut ConeHints,
+) -> bool {
+    let centre_b = b_to_a * b.bounding_centre;
+    let offset = centre_b - a.bounding_centre;
+    let Some((axis, along)) = a
+        .set
+        .axes()
+        .iter()
+        .enumerate()
+        .map(|(i, axis)| (i, axis.dot(&offset)))
+        .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
+    else {
+        return false;
+    };
+    // Slot `axis` compares A's maximum along +axis with B's minimum; slot `axis + k/2` the reverse.
+    let slot = if along >= 0.0 { axis } else { axis + a.k / 2 };
+    let a_max = a.node_offsets(0)[slot] as f64;
+    let direction = -a.set.normal(slot);
+    if a_max < -direction.dot(&centre_b.coords) - b.bounding_radius {
+        return true;
+    }
+    let cone = b.set.support_cone_hinted(
+        &b_to_a.rotation.inverse_transform_vector(&direction),
+        &mut hints[slot],
+    );
+    let d = b.node_offsets(0);
+    let b_support = (0..3)
+        .map(|l| cone.lambda[l] * d[cone.planes[l] as usize] as f64)
+        .sum::<f64>()
+        + direction.dot(&b_to_a.translation.vector);
+    // Rounding of the f32 offsets is covered by the margin, as in the traversal.
+    let margin = rounding_margin(
+        cone.lambda.iter().sum::<f64>() * b.max_abs_offset() as f64
+            + b_to_a.translation.vector.norm()
+            + a.max_abs_offset() as f64,
+    ) as f64;
+    a_max + b_support + margin < 0.0
+}
+
+/// Per orientation slot of A, the generic vertex of B's set that supported it at the previous
+/// query on this thread: the first candidate tried (temporal coherence of poses).
+type ConeHints = [u8; MAX_K];
+
+/// The largest supported k.
+const MAX_K: usize = 26;
+
+thread_local! {
+    static CONE_HINTS: std::cell::Cell<ConeHints> = const { std::cell::Cell::new([u8::MAX; MAX_K]) };
+}
+
 /// Top-down construction state.
 struct TreeBuilder<'a> {
     set: &'a OrientationSet,
     leaf_size: usize,
     k: usize,
     triangles: Vec<Triangle>,
-    /// `k` support values (f64) per triangle, in mesh order.
-    triangle_dops: Vec<f64>,
+    /// `k` support values per triangle, in mesh order, rounded up to `f32`.
+    triangle_dops: Vec<f32>,
     /// Centroid of each triangle, in mesh order.
     centroids: Vec<Point3<f64>>,
     order: Vec<u32>,
@@ -206,7 +277,7 @@ impl<'a> TreeBuilder<'a> {
         for t in &triangles {
             triangle_dops.extend((0..k).map(|i| {
                 let n = set.normal(i);
-                t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max)
+                round_up(t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max))
             }));
         }
         let centroids = triangles
@@ -232,7 +303,20 @@ impl<'a> TreeBuilder<'a> {
         let max_abs_offset = self.offsets[..self.k]
             .iter()
             .fold(0.0f32, |m, d| m.max(d.abs()));
+        let (lo, hi) = self.triangles.iter().flatten().fold(
+            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
+            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+        );
+        let bounding_centre = Point3::from((lo + hi) * 0.5);
+        let radius = self
+            .triangles
+            .iter()
+            .flatten()
+            .map(|p| (p - bounding_centre).norm())
+            .fold(0.0, f64::max);
         DopTree {
+            bounding_centre,
+            bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
             set: self.set.clone(),
             k: self.k,
             nodes: self.nodes,
@@ -263,20 +347,13 @@ impl<'a> TreeBuilder<'a> {
     fn build_node(&mut self, index: usize, start: usize, end: usize) {
         let k = self.k;
         let h = k / 2;
-        let mut dop = vec![f64::MIN; k];
+        let mut dop = vec![f32::MIN; k];
         for &t in &self.order[start..end] {
             let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
-            for (d, s) in dop.iter_mut().zip(support) {
-                *d = d.max(*s);
-            }
+            merge_max(&mut dop, support);
         }
-        for (o, d) in self.offsets[index * k..(index + 1) * k]
-            .iter_mut()
-            .zip(&dop)
-        {
-            *o = round_up(*d);
-        }
-        let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f64::max) as f32;
+        self.offsets[index * k..(index + 1) * k].copy_from_slice(&dop);
+        let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max);
         let count = end - start;
         if count <= self.leaf_size {
             self.nodes[index] = Node {
@@ -286,11 +363,7 @@ impl<'a> TreeBuilder<'a> {
             };
             return;
         }
-        let axis = self.split_axis(start, end);
-        let centroids = &self.centroids;
-        let key = |t: &u32| axis.dot(&centroids[*t as usize].coords);
-        let mid = start + count / 2;
-        self.order[start..end].select_nth_unstable_by(count / 2, |a, b| key(a).total_cmp(&key(b)));
+        let mid = self.partition(start, end);
         let children = self.push_nodes(2);
         self.nodes[index] = Node {
             first: children as u32,
@@ -301,20 +374,121 @@ impl<'a> TreeBuilder<'a> {
         self.build_node(children + 1, mid, end);
     }
 
-    /// The orientation axis along which the centroids of `order[start..end]` spread most.
-    fn split_axis(&self, start: usize, end: usize) -> Vector3<f64> {
-        let mut best = (f64::MIN, Vector3::x());
-        for axis in self.set.axes() {
-            let (lo, hi) = self.order[start..end]
-                .iter()
-                .map(|&t| axis.dot(&self.centroids[t as usize].coords))
-                .fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
-            if hi - lo > best.0 {
-                best = (hi - lo, *axis);
+    /// Splits `order[start..end]` in two non-empty halves and returns where the second begins.
+    ///
+    /// Binned surface heuristic: along each orientation axis the centroids are put in
+    /// [`SPLIT_BINS`] bins, and the split between bins minimising
+    /// `size(left) * count(left) + size(right) * count(right)` is taken, where `size` is the sum of
+    /// the child DOP's slab widths (proportional to its mean width, hence to how often a node of
+    /// the other tree overlaps it). Falls back to the median when all centroids share a bin.
+    fn partition(&mut self, start: usize, end: usize) -> usize {
+        let k = self.k;
+        let h = k / 2;
+        // (cost, axis, lowest projection, bins per unit length, first bin of the right side)
+        let mut best: Option<(f64, usize, f64, f64, usize)> = None;
+        let mut bin_dops = vec![f32::MIN; SPLIT_BINS * k];
+        let mut bin_counts = [0usize; SPLIT_BINS];
+        let mut left_dops = vec![f32::MIN; SPLIT_BINS * k];
+        // Centroid extent along every axis.
+        let spreads: Vec<(usize, f64, f64)> = self
+            .set
+            .axes()
+            .iter()
+            .enumerate()
+            .map(|(i, axis)| {
+                let (lo, hi) = self.order[start..end]
+                    .iter()
+                    .map(|&t| axis.dot(&self.centroids[t as usize].coords))
+                    .fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+                (i, lo, hi)
+            })
+            .collect();
+        // Few triangles: as many bins as triangles keeps the cost linear in their number.
+        let bins = SPLIT_BINS.min(end - start);
+        for &(axis_index, lo, hi) in &spreads {
+            let axis = self.set.axes()[axis_index];
+            if hi - lo <= 1e-12 * (hi.abs() + lo.abs() + 1.0) {
+                continue;
+            }
+            let scale = bins as f64 / (hi - lo);
+            bin_dops[..bins * k].fill(f32::MIN);
+            bin_counts.fill(0);
+            for &t in &self.order[start..end] {
+                let bin = bin_of(
+                    axis.dot(&self.centroids[t as usize].coords),
+                    lo,
+                    scale,
+                    bins,
+                );
+                bin_counts[bin] += 1;
+                let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
+                merge_max(&mut bin_dops[bin * k..(bin + 1) * k], support);
+            }
+            // Prefix DOPs from the left, then sweep from the right.
+            let mut running = vec![f32::MIN; k];
+            for bin in 0..bins {
+                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
+                left_dops[bin * k..(bin + 1) * k].copy_from_slice(&running);
+            }
+            let size = |dop: &[f32]| (0..h).map(|i| (dop[i] + dop[i + h]) as f64).sum::<f64>();
+            running.fill(f32::MIN);
+            let mut right_count = 0;
+            for bin in (1..bins).rev() {
+                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
+                right_count += bin_counts[bin];
+                let left_count = (end - start) - right_count;
+                if left_count == 0 || right_count == 0 {
+                    continue;
+                }
+                let cost = size(&left_dops[(bin - 1) * k..bin * k]) * left_count as f64
+                    + size(&running) * right_count as f64;
+                if best.is_none_or(|b| cost < b.0) {
+                    best = Some((cost, axis_index, lo, scale, bin));
+                }
             }
         }
-        best.1
+        let Some((_, axis_index, lo, scale, split_bin)) = best else {
+            let mid = start + (end - start) / 2;
+            let axis = self.set.axes()[0];
+            let centroids = &self.centroids;
+            self.order[start..end].select_nth_unstable_by(mid - start, |a, b| {
+                axis.dot(&centroids[*a as usize].coords)
+                    .total_cmp(&axis.dot(&centroids[*b as usize].coords))
+            });
+            return mid;
+        };
+        let axis = self.set.axes()[axis_index];
+        let mut boundary = start;
+        for i in start..end {
+            let t = self.order[i];
+            if bin_of(
+                axis.dot(&self.centroids[t as usize].coords),
+                lo,
+                scale,
+                bins,
+            ) < split_bin
+            {
+                self.order.swap(i, boundary);
+                boundary += 1;
+            }
+        }
+        boundary
     }
+}
+
+/// `into[i] = max(into[i], from[i])`, written so that it compiles to vector max instructions.
+fn merge_max(into: &mut [f32], from: &[f32]) {
+    for (d, &s) in into.iter_mut().zip(from) {
+        *d = if s > *d { s } else { *d };
+    }
+}
+
+/// Number of bins per axis of the split heuristic.
+const SPLIT_BINS: usize = 16;
+
+/// The bin of a centroid projection `x` on an axis whose projections start at `lo`.
+fn bin_of(x: f64, lo: f64, scale: f64, bins: usize) -> usize {
+    (((x - lo) * scale) as usize).min(bins - 1)
 }
 
 /// The smallest `f32` not below `x`.
@@ -334,25 +508,36 @@ pub(crate) trait Realign<const K: usize>: Sync {
 
 /// The paper's O(k) re-alignment: each new offset is `Σ λ d_j + n . t` over the three planes of
 /// the generic vertex that supports the rotated direction.
+///
+/// Stored densely, one column of coefficients per plane of B, so that re-aligning a node is k_B
+/// vector multiply-adds of `K` lanes (no gathers; vectorises well).
 pub(crate) struct AffineRealign<const K: usize> {
-    planes: [[u8; K]; 3],
-    lambda: [[f32; K]; 3],
+    /// `columns[j][i]`: coefficient of B's offset j in the re-aligned offset of slot i.
+    columns: [[f32; K]; MAX_K],
+    /// Number of B's orientations (columns in use).
+    b_k: usize,
     base: [f32; K],
 }
 
 impl<const K: usize> AffineRealign<K> {
     /// Finds, for each of A's directions, its support cone in B's orientation set.
-    fn new(a: &DopTree, b: &DopTree, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Self {
-        let mut planes = [[0u8; K]; 3];
-        let mut lambda = [[0f32; K]; 3];
+    fn new(
+        a: &DopTree,
+        b: &DopTree,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+        hints: &mut ConeHints,
+    ) -> Self {
+        let mut columns = [[0f32; K]; MAX_K];
         let mut base = [0f32; K];
         let mut lambda_sum_max = 0.0f64;
         for i in 0..K {
             let direction = -a.set.normal(i);
-            let cone = b.set.support_cone(&(rotation.transpose() * direction));
+            let cone = b
+                .set
+                .support_cone_hinted(&rotation.tr_mul(&direction), &mut hints[i]);
             for l in 0..3 {
-                planes[l][i] = cone.planes[l];
-                lambda[l][i] = cone.lambda[l] as f32;
+                columns[cone.planes[l] as usize][i] = cone.lambda[l] as f32;
             }
             lambda_sum_max = lambda_sum_max.max(cone.lambda.iter().sum());
             base[i] = direction.dot(translation) as f32;
@@ -366,8 +551,8 @@ impl<const K: usize> AffineRealign<K> {
             *x += margin;
         }
         AffineRealign {
-            planes,
-            lambda,
+            columns,
+            b_k: b.k,
             base,
         }
     }
@@ -379,20 +564,20 @@ pub(crate) fn rounding_margin(scale: f64) -> f32 {
 }
 
 impl<const K: usize> Realign<K> for AffineRealign<K> {
-    #[inline]
+    #[inline(always)]
     fn realign(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
-        let d = b.node_offsets(node);
-        *out = self.base;
-        for l in 0..3 {
+        let mut e = self.base;
+        for (column, &d) in self.columns[..self.b_k].iter().zip(b.node_offsets(node)) {
             for i in 0..K {
-                out[i] += self.lambda[l][i] * d[self.planes[l][i] as usize];
+                e[i] += column[i] * d;
             }
         }
+        *out = e;
     }
 }
 
 /// True when A's node offsets `a` and B's re-aligned opposite offsets `e` overlap on every axis.
-#[inline]
+#[inline(always)]
 fn dops_overlap<const K: usize>(a: &[f32; K], e: &[f32; K]) -> bool {
     let mut overlap = true;
     for i in 0..K {
@@ -546,7 +731,8 @@ impl<R> TreePair<'_, R> {
         found.hit
     }
 
-    /// Depth-first traversal from one node pair with this thread's re-alignment cache.
+    /// Depth-first traversal from one node pair with this thread's re-alignment cache, compiled
+    /// for AVX2 where the CPU has it (the interval tests and re-alignments are vector code).
     fn sequential<const ALL: bool, const K: usize>(
         &self,
         start: (u32, u32),
@@ -558,52 +744,92 @@ impl<R> TreePair<'_, R> {
         R: Realign<K>,
     {
         with_scratch(|scratch| {
-            scratch.begin(self.b.nodes.len(), K);
-            let stamp = scratch.stamp;
-            let Scratch {
-                stamps,
-                realigned,
-                stack,
-                ..
-            } = scratch;
-            let mut hit = false;
-            stack.push(start);
-            while let Some((ia, ib)) = stack.pop() {
-                if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-                    break;
-                }
-                let slot = ib as usize * K;
-                let e: &mut [f32; K] = (&mut realigned[slot..slot + K]).try_into().unwrap();
-                if stamps[ib as usize] != stamp {
-                    stamps[ib as usize] = stamp;
-                    self.realigner.realign(self.b, ib as usize, e);
-                    stats.realignments += 1;
-                }
-                stats.bv_tests += 1;
-                let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
-                if !dops_overlap(da, e) {
-                    continue;
-                }
-                stats.nodes_visited += 1;
-                let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
-                if na.is_leaf() && nb.is_leaf() {
-                    if self.leaf_pair::<ALL>(na, nb, stats, out) {
-                        hit = true;
-                        if !ALL {
-                            if let Some(stop) = stop {
-                                stop.store(true, Ordering::Relaxed);
-                            }
-                            break;
-                        }
-                    }
-                    continue;
-                }
-                let [first, second] = self.children(ia, ib);
-                stack.push(second);
-                stack.push(first);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2, checked just above.
+                return unsafe { self.traverse_avx2::<ALL, K>(scratch, start, stats, out, stop) };
             }
-            hit
+            self.traverse::<ALL, K>(scratch, start, stats, out, stop)
         })
+    }
+
+    /// [`Self::traverse`] compiled with AVX2 enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn traverse_avx2<const ALL: bool, const K: usize>(
+        &self,
+        scratch: &mut Scratch,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        stop: Option<&AtomicBool>,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        self.traverse::<ALL, K>(scratch, start, stats, out, stop)
+    }
+
+    /// The traversal itself: a stack of node pairs, B's nodes re-aligned once per query.
+    #[inline(always)]
+    fn traverse<const ALL: bool, const K: usize>(
+        &self,
+        scratch: &mut Scratch,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        stop: Option<&AtomicBool>,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        scratch.begin(self.b.nodes.len(), K);
+        let stamp = scratch.stamp;
+        let Scratch {
+            stamps,
+            realigned,
+            stack,
+            ..
+        } = scratch;
+        let mut hit = false;
+        stack.push(start);
+        while let Some((ia, ib)) = stack.pop() {
+            if let Some(stop) = stop
+                && stop.load(Ordering::Relaxed)
+            {
+                break;
+            }
+            let slot = ib as usize * K;
+            let e: &mut [f32; K] = (&mut realigned[slot..slot + K]).try_into().unwrap();
+            if stamps[ib as usize] != stamp {
+                stamps[ib as usize] = stamp;
+                self.realigner.realign(self.b, ib as usize, e);
+                stats.realignments += 1;
+            }
+            stats.bv_tests += 1;
+            let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
+            if !dops_overlap(da, e) {
+                continue;
+            }
+            stats.nodes_visited += 1;
+            let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+            if na.is_leaf() && nb.is_leaf() {
+                if self.leaf_pair::<ALL>(na, nb, stats, out) {
+                    hit = true;
+                    if !ALL {
+                        if let Some(stop) = stop {
+                            stop.store(true, Ordering::Relaxed);
+                        }
+                        break;
+                    }
+                }
+                continue;
+            }
+            let [first, second] = self.children(ia, ib);
+            stack.push(second);
+            stack.push(first);
+        }
+        hit
     }
 
     /// Splits the traversal into rayon tasks down to `depth`, then traverses sequentially.
