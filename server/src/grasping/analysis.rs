@@ -145,6 +145,20 @@ pub struct AnalysisParams {
     /// The smallest angle (radians) between two contact normals for the contacts to oppose each
     /// other, as fingers closing on a part do (a flat hand pressed on a face does not).
     pub min_opposition: f64,
+    /// How much the angles above are relaxed (radians) to keep holding a part already held, so
+    /// that a grasp near a threshold does not flicker.
+    pub hold_slack: f64,
+}
+
+impl AnalysisParams {
+    /// The thresholds for a part already held: tilt and opposition relaxed by `hold_slack`.
+    pub fn for_held(&self) -> AnalysisParams {
+        AnalysisParams {
+            max_rest_tilt: self.max_rest_tilt + self.hold_slack,
+            min_opposition: (self.min_opposition - self.hold_slack).max(0.0),
+            ..*self
+        }
+    }
 }
 
 impl Default for AnalysisParams {
@@ -154,6 +168,7 @@ impl Default for AnalysisParams {
             max_rest_tilt: 45f64.to_radians(),
             support_margin: 0.01,
             min_opposition: 60f64.to_radians(),
+            hold_slack: 15f64.to_radians(),
         }
     }
 }
@@ -642,6 +657,48 @@ mod tests {
         assert_eq!(
             classify_default(&[index, pad], [-0.02, 0.15, 0.0]),
             Some(GraspType::Push)
+        );
+    }
+
+    #[test]
+    fn a_held_part_keeps_its_grasp_with_relaxed_thresholds() {
+        // Palm and thumb 55 degrees apart: not opposed enough to take the part, enough to keep it.
+        let palm = touch(
+            Palm,
+            JointLevel::Palm,
+            Palmar,
+            [0., 0., -1.],
+            &[[0., 0.06, -0.0125]],
+        );
+        let (s, c) = 55f64.to_radians().sin_cos();
+        let thumb = touch(Thumb, Mid, Palmar, [s, 0., -c], &[[-0.04, 0.05, -0.03]]);
+        let params = AnalysisParams::default();
+        let com = Point3::new(0., 0.06, -0.03);
+        assert_eq!(
+            classify(&[palm.clone(), thumb.clone()], &com, &params),
+            Some(GraspType::Push)
+        );
+        assert_eq!(
+            classify(&[palm, thumb], &com, &params.for_held()),
+            Some(GraspType::Power)
+        );
+        // Resting tilted 50 degrees: kept but not taken.
+        let (s, c) = 50f64.to_radians().sin_cos();
+        let tilted = touch(
+            Palm,
+            JointLevel::Palm,
+            Palmar,
+            [s, 0., c],
+            &[[-0.03, -0.03, 0.0], [0.03, -0.03, 0.0], [0.0, 0.03, 0.0]],
+        );
+        let above = Point3::new(0.0, 0.0, 0.02);
+        assert_eq!(
+            classify(std::slice::from_ref(&tilted), &above, &params),
+            Some(GraspType::Push)
+        );
+        assert_eq!(
+            classify(&[tilted], &above, &params.for_held()),
+            Some(GraspType::Gravity)
         );
     }
 

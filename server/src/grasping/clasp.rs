@@ -17,8 +17,9 @@
 //!   colliding and a non-colliding variable: that segment was never checked at the mixed pose the
 //!   new `lo` values would give, so those variables keep their `lo`. This keeps the invariant that
 //!   the configuration of all `lo` values is free: the result is collision-free by construction.
-//! * a variable whose interval moves no point of the hand by more than the tolerance is fixed;
-//!   several may be fixed in one step; a cap on the steps fixes the rest.
+//! * a variable whose interval is narrower than its tolerance (radians for a flex value, metres
+//!   of motion of any hand point for the root) is fixed; several may be fixed in one step; a cap
+//!   on the steps fixes the rest.
 //!
 //! The root is minimised first, with the flex values at their valid values, then the flex values
 //! with the root fixed: two stages of the same iteration. Interpolated together, as the paper
@@ -105,9 +106,11 @@ impl SegmentPlacement {
 /// Tuning of the clasp minimisation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ClaspParams {
-    /// A variable is fixed when its valid-invalid interval moves no point of the hand by more
+    /// A flex value is fixed when its valid-invalid interval is narrower than this (radians).
+    pub flex_tolerance: f64,
+    /// The root is fixed when its valid-invalid interval moves no point of the hand by more
     /// than this (metres).
-    pub tolerance: f64,
+    pub root_tolerance: f64,
     /// Cap on the iteration steps of each stage (root, then flex values); what is left unfixed
     /// stays at its valid value.
     pub max_steps: u32,
@@ -120,7 +123,8 @@ pub struct ClaspParams {
 impl Default for ClaspParams {
     fn default() -> Self {
         ClaspParams {
-            tolerance: 0.0005,
+            flex_tolerance: 0.005,
+            root_tolerance: 0.0005,
             max_steps: 24,
             max_motion: 0.005,
         }
@@ -280,6 +284,14 @@ where
     F: FnMut(SegmentId, &SegmentPlacement) -> ObjectSet,
 {
     let (path, clipped) = Path::new(model, valid, target, params.max_motion);
+    // Per variable, the tolerance in the units of `path.motion` (metres of hand motion).
+    let tolerance: [f64; VARIABLE_COUNT] = std::array::from_fn(|v| {
+        if v == ROOT_VARIABLE {
+            params.root_tolerance
+        } else {
+            params.flex_tolerance * model.lever(v)
+        }
+    });
     let mut lo = [0.0f64; VARIABLE_COUNT];
     let mut hi = [1.0f64; VARIABLE_COUNT];
     let mut flags = [ObjectSet::EMPTY; SEGMENT_COUNT];
@@ -308,7 +320,7 @@ where
                 } else if near_step_pending.contains(v) {
                     // Just short of the tolerance past the valid value: if this collides, the
                     // variable is fixed at once.
-                    let near = lo[v] + 0.9 * params.tolerance / path.motion[v];
+                    let near = lo[v] + 0.9 * tolerance[v] / path.motion[v];
                     near.min(0.5 * (lo[v] + hi[v]))
                 } else {
                     0.5 * (lo[v] + hi[v])
@@ -372,7 +384,7 @@ where
             let at_cap = stage_steps >= params.max_steps;
             for &v in &plan.fixing_order {
                 if !unfixed.contains(v)
-                    || !(at_cap || (hi[v] - lo[v]) * path.motion[v] <= params.tolerance)
+                    || !(at_cap || (hi[v] - lo[v]) * path.motion[v] <= tolerance[v])
                 {
                     continue;
                 }
@@ -513,7 +525,7 @@ mod tests {
             assert!(angle > 0.3 && angle < FRAC_PI_2, "MCP {v}: {angle}");
             // Tight: closing further by a few tolerances collides.
             let mut deeper = out.pose;
-            deeper.flex[v] += 3.0 * params.tolerance / model.lever(v);
+            deeper.flex[v] += 3.0 * params.flex_tolerance;
             assert!(
                 !world.hand_hits(&model, &deeper).is_empty(),
                 "MCP {v} stopped short"
@@ -555,7 +567,7 @@ mod tests {
             world.collider(&model),
         );
         let z = out.pose.root.translation.z;
-        assert!(z > 0.0125 && z < 0.0125 + params.tolerance, "{z}");
+        assert!(z > 0.0125 && z < 0.0125 + params.root_tolerance, "{z}");
         assert!(out.touching[model.palm()].contains(0));
         assert!(out.touching[segment(&model, "thumb inner")].is_empty());
         // One step to the target, one just short of the tolerance, then bisection.
@@ -742,7 +754,7 @@ mod tests {
         // clears the tip's flag, and the DIP gets fixed just short of the contact without
         // colliding again: not touching yet.
         let first = tip_run(&rest, f64::INFINITY, 0.7);
-        let tolerance = ClaspParams::default().tolerance / model.lever(6);
+        let tolerance = ClaspParams::default().flex_tolerance;
         let dip = first.pose.flex[6];
         assert!(dip < 0.7 && dip > 0.7 - tolerance, "{dip}");
         assert!(first.touching[tip].is_empty());

@@ -41,8 +41,8 @@ pub struct HandGeometry {
 
 impl HandGeometry {
     /// Builds every segment's mesh and DOP-tree, and those of its contact probe: the segment
-    /// grown by `probe_margin` metres, which must exceed the gap the clasp leaves at a contact
-    /// (its tolerance).
+    /// grown by `probe_margin` metres, which must exceed the gap the clasp may leave at a
+    /// contact.
     pub fn new(model: &HandModel, probe_margin: f64) -> Result<HandGeometry, SegmentMeshError> {
         let segments = model
             .segments()

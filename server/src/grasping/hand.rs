@@ -36,8 +36,8 @@ pub struct GraspParams {
     pub clasp: ClaspParams,
     /// The analysis' gravity direction and thresholds.
     pub analysis: AnalysisParams,
-    /// How far beyond a segment (metres) a contact is looked for; more than the clasp's
-    /// tolerance, the gap it may leave.
+    /// How far beyond a segment (metres) a contact is looked for: more than the gap the clasp
+    /// may leave (its root tolerance, or its flex tolerance times a finger's length).
     pub probe_margin: f64,
     /// Consecutive frames a part must be held by the analysis before it is grasped.
     pub grasp_frames: u32,
@@ -49,11 +49,10 @@ pub struct GraspParams {
 
 impl Default for GraspParams {
     fn default() -> Self {
-        let clasp = ClaspParams::default();
         GraspParams {
-            clasp,
+            clasp: ClaspParams::default(),
             analysis: AnalysisParams::default(),
-            probe_margin: 2.0 * clasp.tolerance,
+            probe_margin: 0.001,
             grasp_frames: 3,
             release_frames: 10,
             cart_epsilon: 1e-9,
@@ -316,6 +315,7 @@ impl GraspingHand {
                 &mut collider,
                 &outcome.touching,
                 &self.last_touching,
+                self.held.map(|h| h.part),
             );
             self.stats += collider.stats;
             self.last_touching = touches.clone();
@@ -402,7 +402,8 @@ struct Analysed {
     pose: Isometry3<f64>,
 }
 
-/// Contacts of the segments touching at the visible hand, and the grasp on every touched part.
+/// Contacts of the segments touching at the visible hand, and the grasp on every touched part
+/// (the held part with the relaxed thresholds that keep a grasp from flickering).
 ///
 /// A segment touches a part when its contact probe reaches the part and either the clasp marked
 /// it touching by the paper's flags this frame, or it touched the part in the last frame. The
@@ -415,6 +416,7 @@ fn analyse(
     collider: &mut SceneCollider,
     flagged: &[ObjectSet; SEGMENT_COUNT],
     last_touching: &[Vec<PartId>; SEGMENT_COUNT],
+    held: Option<PartId>,
 ) -> ([Vec<PartId>; SEGMENT_COUNT], Vec<Analysed>) {
     let poses = model.segment_poses(&visible.flex);
     let mut per_object: Vec<Vec<Touch>> = vec![Vec::new(); collider.obstacles().len()];
@@ -452,11 +454,13 @@ fn analyse(
         .filter_map(|(k, touches)| {
             let pose = collider.object_pose(k, &visible.root);
             let centre = pose * collider.obstacles()[k].geometry.centre_of_mass();
-            classify(touches, &centre, params).map(|grasp| Analysed {
-                part: collider.obstacles()[k].part,
-                grasp,
-                pose,
-            })
+            let part = collider.obstacles()[k].part;
+            let thresholds = if held == Some(part) {
+                params.for_held()
+            } else {
+                *params
+            };
+            classify(touches, &centre, &thresholds).map(|grasp| Analysed { part, grasp, pose })
         })
         .collect();
     (touched, analysed)

@@ -644,8 +644,7 @@ impl HandModel {
 
     /// A bound on how far (metres) any point of the hand moves when `variable` changes by one
     /// radian (for the root: when it rotates by one radian about its origin; its translation
-    /// moves every point one for one). Turns the clasp's tolerance, in metres, into one per
-    /// variable.
+    /// moves every point one for one). Relates the clasp's tolerances to distances.
     pub fn lever(&self, variable: usize) -> f64 {
         self.levers[variable]
     }

@@ -20,7 +20,7 @@ use crate::geometry::shapes;
 const RATE: f64 = 1000.0;
 
 /// A penetration deeper than this (metres) is reported: parry computes in `f32`, whose rounding
-/// at these sizes is well below it, and the clasp leaves a gap of up to its tolerance.
+/// at these sizes is well below it.
 const DEPTH_SLACK: f64 = 1e-6;
 
 /// A part of a scripted scene, with its independent parry copy.
@@ -513,7 +513,7 @@ fn the_back_of_the_hand_pushes_a_box_and_grasps_nothing() {
     let palm_top = run.hand.geometry().mesh(0).bounding_box().1.z;
     let contact = 0.0125 + 0.02 - palm_top;
     let reached = run.frames[pressed].pose.root.translation.z;
-    let tolerance = GraspParams::default().clasp.tolerance;
+    let tolerance = GraspParams::default().clasp.root_tolerance;
     assert!(
         reached <= contact && reached > contact - tolerance,
         "stopped at {reached}, not {contact}: {summary}"
