@@ -50,6 +50,8 @@ enum BenchCommand {
     Tumble(bench::tumble::TumbleArgs),
     /// B2: random poses of one mesh against another (FCL's procedure).
     Random(bench::random::RandomArgs),
+    /// B6: time per clasp minimisation of the hand against parts of 1k to 50k triangles.
+    Grasp(bench::grasp::GraspArgs),
 }
 
 fn main() -> ExitCode {
@@ -69,6 +71,7 @@ fn main() -> ExitCode {
         Command::Bench { benchmark } => match benchmark {
             BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
             BenchCommand::Random(args) => bench::random::run_cli(&args),
+            BenchCommand::Grasp(args) => bench::grasp::run_cli(&args),
         },
     };
     match result {

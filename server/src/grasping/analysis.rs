@@ -26,6 +26,8 @@
 //! goes beyond the paper's rules, which count touching segments only: it keeps a flat hand or
 //! two fingertips pressed on one face from counting as a grasp.
 
+use std::fmt;
+
 use nalgebra::{Point3, Unit, Vector3};
 use parry3d::query::PointQuery;
 use parry3d::shape::{ConvexPolyhedron, Segment as ParrySegment};
@@ -110,6 +112,22 @@ pub enum GraspType {
     Power,
     /// The part resting on the open hand.
     Gravity,
+}
+
+impl fmt::Display for GraspType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            GraspType::Push => "push",
+            GraspType::Precision(PrecisionKind::TipPinch) => "precision:tip_pinch",
+            GraspType::Precision(PrecisionKind::ThreeJawChuck) => "precision:three_jaw_chuck",
+            GraspType::Precision(PrecisionKind::Key) => "precision:key",
+            GraspType::Precision(PrecisionKind::Other) => "precision",
+            GraspType::ThreePointPinch => "three_point_pinch",
+            GraspType::Cigarette => "cigarette",
+            GraspType::Power => "power",
+            GraspType::Gravity => "gravity",
+        })
+    }
 }
 
 impl GraspType {

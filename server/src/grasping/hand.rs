@@ -15,6 +15,7 @@
 //! the part's last pose.
 
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use nalgebra::Isometry3;
 use serde::Serialize;
@@ -115,6 +116,15 @@ pub enum GraspEvent {
     },
 }
 
+/// What the clasp minimisation of one frame did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClaspRun {
+    /// Iteration steps.
+    pub steps: u32,
+    /// Wall time: the figure of benchmark B6, also worth watching at run time.
+    pub time: Duration,
+}
+
 /// The outcome of one input sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HandFrame {
@@ -130,8 +140,9 @@ pub struct HandFrame {
     pub held: Option<(PartId, Isometry3<f64>)>,
     /// Grasps and releases of this frame.
     pub events: Vec<GraspEvent>,
-    /// Iteration steps of the clasp (0 when it did not run).
-    pub clasp_steps: u32,
+    /// The clasp minimisation of this frame; `None` when it did not run (navigation, waiting
+    /// for a free hand).
+    pub clasp: Option<ClaspRun>,
     /// Segment collision checks made this frame.
     pub segment_checks: u32,
     /// What the glove sample needed cleaning (clamped, rejected values).
@@ -250,7 +261,7 @@ impl GraspingHand {
             grasp: self.held.map(|h| h.grasp),
             held: self.held_part_pose(),
             events: Vec::new(),
-            clasp_steps: 0,
+            clasp: None,
             segment_checks: 0,
             flex: flex_report,
         };
@@ -297,6 +308,7 @@ impl GraspingHand {
             }
         } else {
             self.mode = HandMode::Clasping;
+            let started = Instant::now();
             let outcome = clasp(
                 &self.model,
                 &self.plan,
@@ -305,8 +317,11 @@ impl GraspingHand {
                 &self.params.clasp,
                 |s, placement| collider.collisions(s, placement),
             );
+            frame.clasp = Some(ClaspRun {
+                steps: outcome.steps,
+                time: started.elapsed(),
+            });
             self.visible = outcome.pose;
-            frame.clasp_steps = outcome.steps;
             frame.segment_checks = outcome.checks;
             let (touches, analysed) = analyse(
                 &self.model,

@@ -9,6 +9,7 @@ pub mod hand;
 pub mod model;
 #[cfg(test)]
 mod scenarios;
+pub mod script;
 pub mod segment_mesh;
 #[cfg(test)]
 pub(crate) mod testing;

@@ -7,12 +7,13 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use parry3d::query::{PointQuery, contact, intersection_test};
 use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh, TriMeshFlags};
 
-use super::analysis::{GraspType, PrecisionKind};
+use super::analysis::GraspType;
 use super::clasp::HandPose;
 use super::collider::{Obstacle, PartGeometry, PartId};
-use super::hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandInput, HandMode};
+use super::hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandMode};
 use super::model::tests::right_hand;
-use super::model::{FLEX_COUNT, FlexVector, HandModel};
+use super::model::{FLEX_COUNT, HandModel};
+use super::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
 use crate::geometry::TriMesh;
 use crate::geometry::shapes;
 
@@ -44,51 +45,24 @@ impl ScenePart {
             oracle,
         }
     }
-}
 
-/// A hand posture: flex values in degrees by index, the rest zero.
-fn posture(values: &[(usize, f64)]) -> FlexVector {
-    let mut flex = [0.0; FLEX_COUNT];
-    for &(i, degrees) in values {
-        flex[i] = degrees.to_radians();
+    /// The part of a scripted grasp, with about 2,000 triangles.
+    fn scripted(id: PartId, script: ScriptedGrasp) -> ScenePart {
+        ScenePart::new(id, script.part_mesh(2_000), script.part_pose())
     }
-    flex
-}
-
-/// A keyframe of a scripted trajectory.
-#[derive(Clone, Copy)]
-struct Key {
-    /// Seconds from the start.
-    time: f64,
-    /// The cart in the world.
-    cart: Isometry3<f64>,
-    /// The hand root in the cart's frame (the tracker).
-    tracker: Isometry3<f64>,
-    flex: FlexVector,
-}
-
-/// Samples keyframes at [`RATE`], interpolating linearly (rotations by slerp).
-fn sample(keys: &[Key]) -> Vec<Key> {
-    let mut out = Vec::new();
-    for pair in keys.windows(2) {
-        let (a, b) = (pair[0], pair[1]);
-        let n = ((b.time - a.time) * RATE).round() as usize;
-        for i in 0..n {
-            let t = i as f64 / n as f64;
-            out.push(Key {
-                time: a.time + t * (b.time - a.time),
-                cart: a.cart.lerp_slerp(&b.cart, t),
-                tracker: a.tracker.lerp_slerp(&b.tracker, t),
-                flex: std::array::from_fn(|v| a.flex[v] + t * (b.flex[v] - a.flex[v])),
-            });
-        }
-    }
-    out.push(keys[keys.len() - 1]);
-    out
 }
 
 fn pose(translation: [f64; 3], rotation: UnitQuaternion<f64>) -> Isometry3<f64> {
     Isometry3::from_parts(Translation3::from(Vector3::from(translation)), rotation)
+}
+
+fn at(translation: [f64; 3]) -> Isometry3<f64> {
+    pose(translation, UnitQuaternion::identity())
+}
+
+/// Distance between the translations of two poses.
+fn distance(a: &Isometry3<f64>, b: &Isometry3<f64>) -> f64 {
+    (a.translation.vector - b.translation.vector).norm()
 }
 
 /// A scripted run: the hand, the parts, and what every frame gave.
@@ -139,13 +113,9 @@ impl Run {
 
     /// Feeds the samples, moving held parts with the hand and checking every frame for
     /// penetration.
-    fn play(&mut self, samples: &[Key]) {
-        for sample in samples {
-            let input = HandInput {
-                cart: sample.cart,
-                tracker: sample.tracker,
-                flex: sample.flex.map(|v| v as f32),
-            };
+    fn play(&mut self, keys: &[Keyframe]) {
+        for sample in sample(keys, RATE) {
+            let input = sample.input();
             let obstacles: Vec<Obstacle> = self
                 .parts
                 .iter()
@@ -236,7 +206,7 @@ impl Run {
             out += &format!(
                 "\n{i:5} {:?} steps {:2} grasp {:?} held {:?} root {:?} touching {:?}",
                 f.mode,
-                f.clasp_steps,
+                f.clasp.map_or(0, |c| c.steps),
                 f.grasp,
                 f.held.map(|h| h.0),
                 f.pose.root.translation.vector.as_slice(),
@@ -273,212 +243,79 @@ impl Run {
     }
 }
 
-/// A handle: a cylinder of radius 1.6 cm and length 12 cm along x.
-fn handle(id: PartId, centre: [f64; 3]) -> ScenePart {
-    let mesh = shapes::cylinder(0.016, 0.12, 2_000);
-    let along_x = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
-    ScenePart::new(id, mesh, pose(centre, along_x))
-}
-
-/// A screw: a shaft of radius 3 mm and length 16 mm along x with a head of radius 5 mm, 3 mm
-/// long, at its +x end.
-fn screw(id: PartId, centre: [f64; 3]) -> ScenePart {
-    let along_x = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
-    let shaft = shapes::cylinder(0.003, 0.016, 400)
-        .map_vertices(|p| along_x * p)
-        .unwrap();
-    let head = shapes::cylinder(0.005, 0.003, 300)
-        .map_vertices(|p| along_x * p + Vector3::new(0.0095, 0.0, 0.0))
-        .unwrap();
-    let offset = shaft.vertices().len() as u32;
-    let vertices = shaft
-        .vertices()
-        .iter()
-        .chain(head.vertices())
-        .copied()
-        .collect();
-    let triangles = shaft
-        .triangles()
-        .iter()
-        .copied()
-        .chain(head.triangles().iter().map(|t| t.map(|i| i + offset)))
-        .collect();
-    let (mesh, _) = TriMesh::new(vertices, triangles).unwrap();
-    ScenePart::new(id, mesh, pose(centre, UnitQuaternion::identity()))
-}
-
-/// A box of the given edge lengths.
-fn block(id: PartId, size: [f64; 3], centre: [f64; 3]) -> ScenePart {
-    let mesh = shapes::cuboid(Vector3::from(size), 1_200);
-    ScenePart::new(id, mesh, pose(centre, UnitQuaternion::identity()))
-}
-
-/// The open hand: fingers straight, the thumb spread in the plane of the palm.
-fn open_hand() -> FlexVector {
-    posture(&[(0, -30.0), (3, 45.0)])
-}
-
-/// A keyframe with the cart at the origin.
-fn key(time: f64, tracker: Isometry3<f64>, flex: FlexVector) -> Key {
-    Key {
-        time,
-        cart: Isometry3::identity(),
-        tracker,
-        flex,
-    }
-}
-
-fn at(translation: [f64; 3]) -> Isometry3<f64> {
-    pose(translation, UnitQuaternion::identity())
-}
-
-/// Distance between the translations of two poses.
-fn distance(a: &Isometry3<f64>, b: &Isometry3<f64>) -> f64 {
-    (a.translation.vector - b.translation.vector).norm()
-}
-
-/// A fist closing on whatever it holds, the thumb across.
-fn fist() -> FlexVector {
-    posture(&[
-        (0, 60.0),
-        (1, 40.0),
-        (2, 40.0),
-        (3, 10.0),
-        (4, 85.0),
-        (5, 90.0),
-        (6, 70.0),
-        (7, 85.0),
-        (8, 90.0),
-        (9, 70.0),
-        (11, 85.0),
-        (12, 90.0),
-        (13, 70.0),
-        (15, 85.0),
-        (16, 90.0),
-        (17, 70.0),
-    ])
-}
-
-/// The hand comes down on a handle lying across the palm 3 cm below it, presses 5 mm into it
-/// and closes the fist around it (0.55 s).
-fn grasp_handle_keys() -> Vec<Key> {
-    vec![
-        key(0.0, at([0.0, 0.0, 0.02]), open_hand()),
-        key(0.2, at([0.0, 0.0, -0.035]), open_hand()),
-        key(0.5, at([0.0, 0.0, -0.035]), fist()),
-        key(0.55, at([0.0, 0.0, -0.035]), fist()),
-    ]
-}
-
-const HANDLE_CENTRE: [f64; 3] = [-0.005, 0.075, -0.0585];
-
-#[test]
-fn a_power_grasp_of_a_cylinder_handle_holds_it_and_it_follows_the_hand() {
-    let start_pose = handle(7, HANDLE_CENTRE).pose;
-    let mut run = Run::new(vec![handle(7, HANDLE_CENTRE)], at([0.0, 0.0, 0.02]));
-    let tilted = pose(
-        [0.05, 0.1, 0.04],
-        UnitQuaternion::from_euler_angles(0.4, 0.2, 0.3),
-    );
-    let mut keys = grasp_handle_keys();
-    keys.extend([
-        // Carry it away, turning the hand.
-        key(0.85, tilted, fist()),
-        key(0.9, tilted, fist()),
-        // Open the hand.
-        key(1.1, tilted, open_hand()),
-        key(1.2, tilted, open_hand()),
-    ]);
-    run.play(&sample(&keys));
+/// Plays a scripted grasp and checks what every scripted grasp must do: no penetration, one
+/// grasp of the expected type in time, the part carried with the hand at the grasp's offset,
+/// one release after the carrying.
+fn check_scripted_grasp(script: ScriptedGrasp) -> Run {
+    let keys = script.keyframes();
+    let mut run = Run::new(vec![ScenePart::scripted(1, script)], keys[0].tracker);
+    run.play(&keys);
     let summary = run.summary(50);
     run.assert_no_penetration();
+    let milestones = script.milestones();
 
     let grasps = run.grasps();
     assert_eq!(grasps.len(), 1, "{summary}");
     let (grasped_at, part, grasp) = grasps[0];
-    assert_eq!((part, grasp), (7, GraspType::Power), "{summary}");
-    assert!(grasped_at < Run::frame_at(0.55), "{summary}");
-    // While carried the handle keeps its place in the hand, and is still held in a power grasp.
-    let carried = Run::frame_at(0.9);
-    let frame = &run.frames[carried];
-    assert_eq!(frame.grasp, Some(GraspType::Power), "{summary}");
-    let (held, part_pose) = frame.held.expect("held while carried");
-    assert_eq!(held, 7);
-    let offset = frame.pose.root.inv_mul(&part_pose);
-    let GraspEvent::Grasp { hand_to_part, .. } = run.events[0].1 else {
-        unreachable!()
-    };
-    assert!(distance(&offset, &hand_to_part) < 1e-9);
+    assert_eq!((part, grasp), (1, script.expected()), "{summary}");
     assert!(
-        distance(&part_pose, &start_pose) > 0.1,
-        "the handle stayed behind: {summary}"
+        grasped_at < Run::frame_at(milestones.grasped_by),
+        "{summary}"
     );
-    // Opening the hand releases it, once, where it was carried.
+
+    let frame = &run.frames[Run::frame_at(milestones.carried)];
+    assert_eq!(frame.grasp, Some(script.expected()), "{summary}");
+    let (held, part_pose) = frame.held.expect("held while carried");
+    assert_eq!(held, 1);
+    let GraspEvent::Grasp { hand_to_part, .. } = run.events[0].1 else {
+        unreachable!("the first event is the grasp")
+    };
+    assert!(distance(&frame.pose.root.inv_mul(&part_pose), &hand_to_part) < 1e-9);
+    assert!(
+        distance(&part_pose, &script.part_pose()) > 0.04,
+        "the part stayed behind: {summary}"
+    );
+
     let releases = run.releases();
     assert_eq!(releases.len(), 1, "{summary}");
     assert!(
-        releases[0].0 > Run::frame_at(0.9) && releases[0].0 < Run::frame_at(1.2),
+        releases[0].0 > Run::frame_at(milestones.release_after),
         "{summary}"
     );
-    assert!(distance(&run.parts[0].pose, &part_pose) < 1e-9);
     assert!(run.frames.last().unwrap().held.is_none());
+    run
+}
+
+#[test]
+fn a_power_grasp_of_a_cylinder_handle_holds_it_and_it_follows_the_hand() {
+    let run = check_scripted_grasp(ScriptedGrasp::PowerOnHandle);
+    // Opening the hand leaves the handle where it was carried.
+    let GraspEvent::Release { pose, .. } = run.events[1].1 else {
+        unreachable!("the second event is the release")
+    };
+    assert_eq!(run.parts[0].pose, pose);
 }
 
 #[test]
 fn a_tip_pinch_of_a_small_screw_is_a_precision_grasp() {
-    let mut run = Run::new(
-        vec![screw(3, [-0.0295, 0.121, -0.0717])],
-        Isometry3::identity(),
-    );
-    let preshape = posture(&[(0, 30.0), (3, 40.0), (4, 20.0), (5, 15.0), (6, 5.0)]);
-    let pinch = posture(&[
-        (0, 70.0),
-        (3, 25.0),
-        (1, 30.0),
-        (2, 15.0),
-        (4, 60.0),
-        (5, 45.0),
-        (6, 20.0),
-    ]);
-    let lifted = at([0.0, 0.02, 0.05]);
-    let keys = [
-        key(0.0, Isometry3::identity(), preshape),
-        key(0.3, Isometry3::identity(), pinch),
-        key(0.35, Isometry3::identity(), pinch),
-        key(0.6, lifted, pinch),
-        key(0.65, lifted, pinch),
-        key(0.85, lifted, preshape),
-        key(0.9, lifted, preshape),
-    ];
-    run.play(&sample(&keys));
-    let summary = run.summary(50);
-    run.assert_no_penetration();
-    let grasps = run.grasps();
-    assert_eq!(grasps.len(), 1, "{summary}");
-    assert_eq!(
-        (grasps[0].1, grasps[0].2),
-        (3, GraspType::Precision(PrecisionKind::TipPinch)),
-        "{summary}"
-    );
-    let lifted_frame = &run.frames[Run::frame_at(0.65)];
-    let (_, screw_pose) = lifted_frame.held.expect("held while lifted");
-    assert!(
-        (screw_pose.translation.z - (-0.0717 + 0.05)).abs() < 0.005,
-        "{summary}"
-    );
-    assert_eq!(run.releases().len(), 1, "{summary}");
-    assert!(run.frames.last().unwrap().held.is_none());
+    check_scripted_grasp(ScriptedGrasp::TipPinchOfScrew);
+}
+
+#[test]
+fn an_open_hand_under_a_part_carries_it_by_gravity_until_tipped() {
+    check_scripted_grasp(ScriptedGrasp::GravityUnderBlock);
 }
 
 #[test]
 fn the_back_of_the_hand_pushes_a_box_and_grasps_nothing() {
     // A box 2 cm above the back of the palm; the hand rises 3 cm into it, then makes a fist.
     let box_centre = [0.0, 0.06, 0.0125 + 0.02 + 0.04];
+    let cube = shapes::cuboid(Vector3::new(0.08, 0.08, 0.08), 1_200);
     let mut run = Run::new(
-        vec![block(5, [0.08, 0.08, 0.08], box_centre)],
+        vec![ScenePart::new(5, cube, at(box_centre))],
         Isometry3::identity(),
     );
-    let fist = posture(&[
+    let curled = posture(&[
         (4, 80.0),
         (5, 80.0),
         (6, 60.0),
@@ -490,14 +327,15 @@ fn the_back_of_the_hand_pushes_a_box_and_grasps_nothing() {
         (15, 80.0),
         (16, 80.0),
     ]);
+    let k = Keyframe::new;
     let keys = [
-        key(0.0, Isometry3::identity(), open_hand()),
-        key(0.15, at([0.0, 0.0, 0.03]), open_hand()),
-        key(0.2, at([0.0, 0.0, 0.03]), open_hand()),
-        key(0.4, at([0.0, 0.0, 0.03]), fist),
-        key(0.45, at([0.0, 0.0, 0.03]), fist),
+        k(0.0, Isometry3::identity(), open_hand()),
+        k(0.15, at([0.0, 0.0, 0.03]), open_hand()),
+        k(0.2, at([0.0, 0.0, 0.03]), open_hand()),
+        k(0.4, at([0.0, 0.0, 0.03]), curled),
+        k(0.45, at([0.0, 0.0, 0.03]), curled),
     ];
-    run.play(&sample(&keys));
+    run.play(&keys);
     let summary = run.summary(50);
     run.assert_no_penetration();
     assert!(run.events.is_empty(), "{summary}");
@@ -527,76 +365,35 @@ fn the_back_of_the_hand_pushes_a_box_and_grasps_nothing() {
 }
 
 #[test]
-fn an_open_hand_under_a_part_carries_it_by_gravity_until_tipped() {
-    // Palm up: the hand turned half a turn about y. A block 4 x 5 x 3 cm above the palm.
-    let palm_up = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::PI);
-    let centre = [-0.005, 0.055, 0.0125 + 0.02 + 0.015];
-    let mut run = Run::new(
-        vec![block(9, [0.04, 0.05, 0.03], centre)],
-        pose([0.0, 0.0, 0.0], palm_up),
-    );
-    let tipped = palm_up * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 80f64.to_radians());
-    let keys = [
-        key(0.0, pose([0.0, 0.0, 0.0], palm_up), open_hand()),
-        // Up under the block, pressing 5 mm into it.
-        key(0.2, pose([0.0, 0.0, 0.025], palm_up), open_hand()),
-        key(0.25, pose([0.0, 0.0, 0.025], palm_up), open_hand()),
-        // Carry it sideways and up.
-        key(0.5, pose([0.1, 0.05, 0.08], palm_up), open_hand()),
-        key(0.55, pose([0.1, 0.05, 0.08], palm_up), open_hand()),
-        // Tip the hand over: the block would slide off.
-        key(0.75, pose([0.1, 0.05, 0.08], tipped), open_hand()),
-        key(0.8, pose([0.1, 0.05, 0.08], tipped), open_hand()),
-    ];
-    run.play(&sample(&keys));
-    let summary = run.summary(50);
-    run.assert_no_penetration();
-    let grasps = run.grasps();
-    assert_eq!(grasps.len(), 1, "{summary}");
-    assert_eq!(
-        (grasps[0].1, grasps[0].2),
-        (9, GraspType::Gravity),
-        "{summary}"
-    );
-    let carried = &run.frames[Run::frame_at(0.55)];
-    let (_, block_pose) = carried.held.expect("carried");
-    assert!(distance(&block_pose, &at(centre)) > 0.1, "{summary}");
-    assert_eq!(run.releases().len(), 1, "{summary}");
-    assert!(run.releases()[0].0 > Run::frame_at(0.55), "{summary}");
-}
-
-#[test]
 fn the_cart_carries_a_held_part_without_clasping() {
-    let mut run = Run::new(vec![handle(7, HANDLE_CENTRE)], at([0.0, 0.0, 0.02]));
-    let hold = at([0.0, 0.0, -0.035]);
+    let script = ScriptedGrasp::PowerOnHandle;
+    let mut run = Run::new(vec![ScenePart::scripted(7, script)], at([0.0, 0.0, 0.02]));
+    // The grasp of the handle, up to the closed fist.
+    let mut keys: Vec<Keyframe> = script
+        .keyframes()
+        .into_iter()
+        .filter(|k| k.time <= 0.55)
+        .collect();
+    let hold = keys[keys.len() - 1].tracker;
     let walked = pose(
         [0.3, -0.2, 0.0],
         UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.5),
     );
-    let mut keys = grasp_handle_keys();
-    keys.extend([
-        Key {
-            time: 0.85,
+    for time in [0.85, 0.95] {
+        keys.push(Keyframe {
             cart: walked,
-            tracker: hold,
-            flex: fist(),
-        },
-        Key {
-            time: 0.95,
-            cart: walked,
-            tracker: hold,
-            flex: fist(),
-        },
-    ]);
-    run.play(&sample(&keys));
+            ..Keyframe::new(time, hold, fist())
+        });
+    }
+    run.play(&keys);
     let summary = run.summary(50);
     run.assert_no_penetration();
     assert_eq!(run.grasps().len(), 1, "{summary}");
     assert!(run.releases().is_empty(), "{summary}");
     let walking = &run.frames[Run::frame_at(0.7)];
     assert_eq!(
-        (walking.mode, walking.clasp_steps),
-        (HandMode::Navigating, 0),
+        (walking.mode, walking.clasp),
+        (HandMode::Navigating, None),
         "{summary}"
     );
     // After the walk the hand clasps again, still holding the handle where the cart took it.
@@ -604,7 +401,7 @@ fn the_cart_carries_a_held_part_without_clasping() {
     assert_eq!(after.mode, HandMode::Clasping, "{summary}");
     let (_, handle_pose) = after.held.expect("still held");
     let GraspEvent::Grasp { hand_to_part, .. } = run.events[0].1 else {
-        unreachable!()
+        unreachable!("the first event is the grasp")
     };
     assert!(
         distance(&handle_pose, &(walked * hold * hand_to_part)) < 1e-9,
@@ -614,37 +411,26 @@ fn the_cart_carries_a_held_part_without_clasping() {
 
 #[test]
 fn a_hand_carried_into_a_part_by_the_cart_waits_until_moved_free() {
-    // A wall of a box ahead of the hand; the cart walks the hand 10 cm into it.
+    // A wall ahead of the hand; the cart walks the hand 10 cm into it.
+    let wall = shapes::cuboid(Vector3::new(0.2, 0.05, 0.2), 1_200);
     let mut run = Run::new(
-        vec![block(4, [0.2, 0.05, 0.2], [0.0, 0.25, 0.0])],
+        vec![ScenePart::new(4, wall, at([0.0, 0.25, 0.0]))],
         Isometry3::identity(),
     );
     let walked = at([0.0, 0.1, 0.0]);
-    let raised = at([0.0, 0.0, 0.15]);
+    let walking = |time: f64, tracker: Isometry3<f64>| Keyframe {
+        cart: walked,
+        ..Keyframe::new(time, tracker, open_hand())
+    };
     let keys = [
-        key(0.0, Isometry3::identity(), open_hand()),
-        key(0.05, Isometry3::identity(), open_hand()),
-        Key {
-            time: 0.25,
-            cart: walked,
-            tracker: Isometry3::identity(),
-            flex: open_hand(),
-        },
-        Key {
-            time: 0.3,
-            cart: walked,
-            tracker: Isometry3::identity(),
-            flex: open_hand(),
-        },
+        Keyframe::new(0.0, Isometry3::identity(), open_hand()),
+        Keyframe::new(0.05, Isometry3::identity(), open_hand()),
+        walking(0.25, Isometry3::identity()),
+        walking(0.3, Isometry3::identity()),
         // The user lifts the hand out of the wall; it is free above 10 cm.
-        Key {
-            time: 0.5,
-            cart: walked,
-            tracker: raised,
-            flex: open_hand(),
-        },
+        walking(0.5, at([0.0, 0.0, 0.15])),
     ];
-    run.play(&sample(&keys));
+    run.play(&keys);
     let summary = run.summary(20);
     run.assert_no_penetration();
     let modes: Vec<HandMode> = run.frames.iter().map(|f| f.mode).collect();
@@ -667,7 +453,7 @@ fn a_hand_carried_into_a_part_by_the_cart_waits_until_moved_free() {
     let left = run.frames[first_wait].pose;
     for f in &run.frames[first_wait..resumed] {
         assert_eq!(f.pose, left, "the hand moved while waiting: {summary}");
-        assert_eq!(f.clasp_steps, 0);
+        assert_eq!(f.clasp, None);
     }
     assert!(resumed > Run::frame_at(0.3), "{summary}");
     assert!(
