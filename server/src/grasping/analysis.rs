@@ -67,6 +67,15 @@ impl Contact {
     pub fn centre(&self) -> Point3<f64> {
         mean(&self.points)
     }
+
+    /// The contact moved rigidly by `pose` (from the frame it is written in to another).
+    pub fn transformed(&self, pose: &nalgebra::Isometry3<f64>) -> Contact {
+        Contact {
+            points: self.points.iter().map(|p| pose * p).collect(),
+            normal: pose.rotation * self.normal,
+            side: self.side,
+        }
+    }
 }
 
 /// One segment touching the part under analysis.

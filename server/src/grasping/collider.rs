@@ -211,18 +211,22 @@ impl<'a> SceneCollider<'a> {
 
     /// The segment's pose in object `k`'s frame. The held part's relation to the segment does
     /// not depend on the root, so it is computed without it.
-    fn segment_in_object(&self, k: usize, placement: &SegmentPlacement) -> Isometry3<f64> {
+    pub fn segment_in_object(&self, k: usize, placement: &SegmentPlacement) -> Isometry3<f64> {
         match self.held {
             Some((held, offset)) if held == k => offset.inv_mul(&placement.local),
             _ => self.obstacles[k].pose.inv_mul(&placement.world()),
         }
     }
 
-    /// The objects the segment intersects at `placement`.
+    /// The objects the segment intersects at `placement` (the held part is skipped when the
+    /// flex values are valid: it moves with the root).
     pub fn collisions(&mut self, segment: SegmentId, placement: &SegmentPlacement) -> ObjectSet {
         let geometry = &self.hand.segments[segment];
         let mut hit = ObjectSet::EMPTY;
         for k in 0..self.obstacles.len() {
+            if placement.flex_valid && self.held.is_some_and(|(held, _)| held == k) {
+                continue;
+            }
             let to_object = self.segment_in_object(k, placement);
             let part = self.obstacles[k].geometry;
             if !spheres_overlap(&to_object, geometry.bound, part.bound) {
@@ -238,31 +242,29 @@ impl<'a> SceneCollider<'a> {
         hit
     }
 
-    /// How the segment at `placement` touches object `k`: where its probe (the segment grown by
-    /// the probe margin) cuts the part, and which side of the segment that is. `None` when the
-    /// probe does not reach the part.
+    /// How a segment at `to_object` (its pose in object `k`'s frame, see
+    /// [`SceneCollider::segment_in_object`]) touches the object: where its probe (the segment
+    /// grown by the probe margin) cuts the part and which side of the segment that is, with the
+    /// points and normal in the object's frame. `None` when the probe does not reach the part.
     pub fn contact(
         &mut self,
         segment: SegmentId,
         level: JointLevel,
         k: usize,
-        placement: &SegmentPlacement,
+        to_object: &Isometry3<f64>,
     ) -> Option<Contact> {
         let geometry = &self.hand.segments[segment];
-        let to_object = self.segment_in_object(k, placement);
         let part = self.obstacles[k].geometry;
         self.pairs.clear();
         part.tree.intersecting_pairs(
             &geometry.probe_tree,
-            &to_object,
+            to_object,
             &mut self.pairs,
             &mut self.stats,
         );
         if self.pairs.is_empty() {
             return None;
         }
-        let object_pose = self.object_pose(k, &placement.root);
-        let segment_world = placement.world();
         let mut points = Vec::new();
         let mut normal = Vector3::zeros();
         let mut seen = Vec::new();
@@ -279,14 +281,13 @@ impl<'a> SceneCollider<'a> {
                 normal += geometry.probe_normals[probe_triangle as usize];
             }
         }
-        let mut points: Vec<Point3<f64>> = points.iter().map(|p| object_pose * p).collect();
         if points.is_empty() {
             // Only coplanar pairs: fall back to the touching probe triangles' centroids.
             points = seen
                 .iter()
                 .map(|&t| {
                     let [a, b, c] = geometry.probe.triangle(t as usize);
-                    segment_world * Point3::from((a.coords + b.coords + c.coords) / 3.0)
+                    to_object * Point3::from((a.coords + b.coords + c.coords) / 3.0)
                 })
                 .collect();
         }
@@ -294,13 +295,14 @@ impl<'a> SceneCollider<'a> {
         let local = Unit::try_new(normal, 1e-12)?;
         Some(Contact {
             points,
-            normal: segment_world.rotation * local,
+            normal: to_object.rotation * local,
             side: side_of(&local, level),
         })
     }
 
-    /// True when no segment of the hand at `root` with segment poses `local` (root frame)
-    /// intersects any obstacle.
+    /// True when no segment of the hand at `root`, with the segment poses `local` (root frame)
+    /// of its valid flex values, intersects any obstacle (the held part, moving with the root,
+    /// cannot).
     pub fn hand_is_free(&mut self, root: &Isometry3<f64>, local: &[Isometry3<f64>]) -> bool {
         local.iter().enumerate().all(|(s, pose)| {
             self.collisions(
@@ -308,6 +310,7 @@ impl<'a> SceneCollider<'a> {
                 &SegmentPlacement {
                     root: *root,
                     local: *pose,
+                    flex_valid: true,
                 },
             )
             .is_empty()

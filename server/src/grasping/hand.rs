@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 use nalgebra::Isometry3;
 use serde::Serialize;
 
-use super::analysis::{AnalysisParams, GraspType, Touch, classify};
+use super::analysis::{AnalysisParams, Contact, GraspType, Touch, classify};
 use super::clasp::{
     ClaspParams, ClaspPlan, HandPose, ObjectSet, SEGMENT_COUNT, SegmentPlacement, clasp,
 };
@@ -164,8 +164,10 @@ pub struct GraspingHand {
     candidate: Option<(PartId, u32)>,
     /// Frames the held part has not been held by the analysis.
     release_count: u32,
-    /// Per segment, the parts it touched in the last analysed frame.
-    last_touching: [Vec<PartId>; SEGMENT_COUNT],
+    /// Per segment, the contacts of the last analysed frame: what it touched then, and the
+    /// contacts to reuse while the segment has not moved relative to the part (a held part, a
+    /// hand at rest), as finding them costs more than the clasp.
+    contacts: [Vec<CachedContact>; SEGMENT_COUNT],
     /// Running totals of glove cleaning and rejected tracker samples.
     flex_totals: FlexReport,
     rejected_samples: u64,
@@ -193,7 +195,7 @@ impl GraspingHand {
             held: None,
             candidate: None,
             release_count: 0,
-            last_touching: Default::default(),
+            contacts: Default::default(),
             flex_totals: FlexReport::default(),
             rejected_samples: 0,
             stats: QueryStats::default(),
@@ -329,11 +331,10 @@ impl GraspingHand {
                 &self.visible,
                 &mut collider,
                 &outcome.touching,
-                &self.last_touching,
                 self.held.map(|h| h.part),
+                &mut self.contacts,
             );
             self.stats += collider.stats;
-            self.last_touching = touches.clone();
             frame.touching = touches;
             self.update_hold(&analysed, &mut frame.events);
             frame.grasp = self.held.map(|h| h.grasp).or_else(|| {
@@ -409,6 +410,15 @@ impl GraspingHand {
     }
 }
 
+/// A contact found for a segment and a part, in the part's frame, with the segment's pose in
+/// that frame when it was found.
+#[derive(Debug, Clone)]
+struct CachedContact {
+    part: PartId,
+    to_object: Isometry3<f64>,
+    contact: Option<Contact>,
+}
+
 /// The grasp the analysis found on one touched part this frame.
 struct Analysed {
     part: PartId,
@@ -430,8 +440,8 @@ fn analyse(
     visible: &HandPose,
     collider: &mut SceneCollider,
     flagged: &[ObjectSet; SEGMENT_COUNT],
-    last_touching: &[Vec<PartId>; SEGMENT_COUNT],
     held: Option<PartId>,
+    cache: &mut [Vec<CachedContact>; SEGMENT_COUNT],
 ) -> ([Vec<PartId>; SEGMENT_COUNT], Vec<Analysed>) {
     let poses = model.segment_poses(&visible.flex);
     let mut per_object: Vec<Vec<Touch>> = vec![Vec::new(); collider.obstacles().len()];
@@ -442,7 +452,11 @@ fn analyse(
             .obstacles()
             .iter()
             .enumerate()
-            .filter(|(_, o)| last_touching[s].contains(&o.part))
+            .filter(|(_, o)| {
+                cache[s]
+                    .iter()
+                    .any(|c| c.part == o.part && c.contact.is_some())
+            })
             .fold(ObjectSet::EMPTY, |acc, (k, _)| {
                 acc.union(ObjectSet::single(k))
             });
@@ -450,18 +464,35 @@ fn analyse(
         let placement = SegmentPlacement {
             root: visible.root,
             local: poses[s],
+            flex_valid: false,
         };
+        let mut kept = Vec::new();
         for k in objects.iter() {
-            if let Some(contact) = collider.contact(s, segment.level, k, &placement) {
-                touched[s].push(collider.obstacles()[k].part);
+            let part = collider.obstacles()[k].part;
+            let to_object = collider.segment_in_object(k, &placement);
+            let cached = cache[s]
+                .iter()
+                .find(|c| c.part == part && c.to_object == to_object);
+            let contact = match cached {
+                Some(c) => c.contact.clone(),
+                None => collider.contact(s, segment.level, k, &to_object),
+            };
+            if let Some(contact) = &contact {
+                touched[s].push(part);
                 per_object[k].push(Touch {
                     segment: s,
                     finger: segment.finger,
                     level: segment.level,
-                    contact,
+                    contact: contact.transformed(&collider.object_pose(k, &visible.root)),
                 });
             }
+            kept.push(CachedContact {
+                part,
+                to_object,
+                contact,
+            });
         }
+        cache[s] = kept;
     }
     let analysed = per_object
         .iter()
