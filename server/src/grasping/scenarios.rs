@@ -465,3 +465,67 @@ fn a_hand_carried_into_a_part_by_the_cart_waits_until_moved_free() {
         "{summary}"
     );
 }
+
+#[test]
+fn the_grasping_scene_names_a_hand_that_grasps_its_handle() {
+    use crate::scene::Scene;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/grasp_table.toml");
+    let scene = Scene::load(&path).unwrap();
+    let model =
+        Arc::new(HandModel::load(scene.hand.as_ref().expect("the scene names a hand")).unwrap());
+    assert_eq!(model.name(), "right hand, 22 DOF");
+    // The scripted power grasp, moved to where the scene's handle lies.
+    let handle = scene.parts.iter().position(|p| p.name == "handle").unwrap();
+    let script = ScriptedGrasp::PowerOnHandle;
+    let shift = scene.parts[handle].pose * script.part_pose().inverse();
+    let geometry = PartGeometry::new((*scene.parts[handle].mesh).clone());
+    let others: Vec<(PartId, PartGeometry, Isometry3<f64>)> = scene
+        .parts
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != handle)
+        .map(|(i, p)| (i as PartId, PartGeometry::new((*p.mesh).clone()), p.pose))
+        .collect();
+    let keys = script.keyframes();
+    let mut hand = GraspingHand::new(
+        model,
+        GraspParams::default(),
+        HandPose {
+            root: shift * keys[0].tracker,
+            flex: [0.0; FLEX_COUNT],
+        },
+    )
+    .unwrap();
+    let mut handle_pose = scene.parts[handle].pose;
+    let mut grasps = Vec::new();
+    for key in sample(&keys, RATE)
+        .iter()
+        .filter(|k| k.time <= script.milestones().carried)
+    {
+        let mut obstacles = vec![Obstacle {
+            part: handle as PartId,
+            geometry: &geometry,
+            pose: handle_pose,
+        }];
+        obstacles.extend(others.iter().map(|(id, g, pose)| Obstacle {
+            part: *id,
+            geometry: g,
+            pose: *pose,
+        }));
+        let input = Keyframe {
+            tracker: shift * key.tracker,
+            ..*key
+        }
+        .input();
+        let frame = hand.step(&input, &obstacles);
+        grasps.extend(frame.events.iter().filter_map(|e| match e {
+            GraspEvent::Grasp { part, grasp, .. } => Some((*part, *grasp)),
+            GraspEvent::Release { .. } => None,
+        }));
+        if let Some((_, pose)) = frame.held {
+            handle_pose = pose;
+        }
+    }
+    assert_eq!(grasps, vec![(handle as PartId, GraspType::Power)]);
+    assert!(distance(&handle_pose, &scene.parts[handle].pose) > 0.05);
+}
