@@ -517,3 +517,128 @@ fn moved(a: &Isometry3<f64>, b: &Isometry3<f64>, epsilon: f64) -> bool {
     (a.translation.vector - b.translation.vector).norm() > epsilon
         || a.rotation.angle_to(&b.rotation) > epsilon
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasping::analysis::PrecisionKind;
+    use crate::grasping::model::tests::right_hand;
+
+    fn hand() -> GraspingHand {
+        let rest = HandPose {
+            root: Isometry3::identity(),
+            flex: [0.0; FLEX_COUNT],
+        };
+        GraspingHand::new(Arc::new(right_hand()), GraspParams::default(), rest).unwrap()
+    }
+
+    fn analysed(part: PartId, grasp: GraspType) -> Analysed {
+        Analysed {
+            part,
+            grasp,
+            pose: Isometry3::translation(0.0, 0.0, -0.05),
+        }
+    }
+
+    #[test]
+    fn grasp_and_release_wait_for_consecutive_frames() {
+        let mut hand = hand();
+        let params = GraspParams::default();
+        let mut events = Vec::new();
+        let power = [analysed(3, GraspType::Power)];
+        // Interrupted runs of holding frames do not grasp.
+        for _ in 0..params.grasp_frames - 1 {
+            hand.update_hold(&power, &mut events);
+        }
+        hand.update_hold(&[analysed(3, GraspType::Push)], &mut events);
+        for _ in 0..params.grasp_frames - 1 {
+            hand.update_hold(&power, &mut events);
+        }
+        assert!(events.is_empty() && hand.held().is_none());
+        hand.update_hold(&power, &mut events);
+        assert_eq!(
+            events,
+            vec![GraspEvent::Grasp {
+                part: 3,
+                grasp: GraspType::Power,
+                hand_to_part: Isometry3::translation(0.0, 0.0, -0.05),
+            }]
+        );
+        // Short gaps in the grasp do not release; a long one does, once.
+        events.clear();
+        for _ in 0..3 {
+            for _ in 0..params.release_frames - 1 {
+                hand.update_hold(&[], &mut events);
+            }
+            hand.update_hold(
+                &[analysed(3, GraspType::Precision(PrecisionKind::TipPinch))],
+                &mut events,
+            );
+        }
+        assert!(events.is_empty());
+        assert_eq!(
+            hand.held().unwrap().grasp,
+            GraspType::Precision(PrecisionKind::TipPinch)
+        );
+        for _ in 0..params.release_frames {
+            hand.update_hold(&[analysed(3, GraspType::Push)], &mut events);
+        }
+        assert_eq!(events.len(), 1);
+        assert!(matches!(events[0], GraspEvent::Release { part: 3, .. }));
+        assert!(hand.held().is_none());
+    }
+
+    #[test]
+    fn the_firmest_of_several_touched_parts_is_grasped() {
+        let mut hand = hand();
+        let mut events = Vec::new();
+        let both = [
+            analysed(1, GraspType::Gravity),
+            analysed(2, GraspType::Power),
+            analysed(4, GraspType::Push),
+        ];
+        for _ in 0..GraspParams::default().grasp_frames {
+            hand.update_hold(&both, &mut events);
+        }
+        assert_eq!(hand.held().map(|h| h.part), Some(2));
+    }
+
+    #[test]
+    fn bad_samples_are_refused_and_counted() {
+        let mut hand = hand();
+        let mut input = HandInput {
+            cart: Isometry3::identity(),
+            tracker: Isometry3::translation(0.0, 0.0, 0.1),
+            flex: [0.1; FLEX_COUNT],
+        };
+        let first = hand.step(&input, &[]);
+        assert_eq!(first.mode, HandMode::Clasping);
+        input.tracker.translation.x = f64::NAN;
+        let refused = hand.step(&input, &[]);
+        assert_eq!(refused.pose, first.pose);
+        input.tracker.translation.x = 0.0;
+        input.flex[5] = f32::NAN;
+        input.flex[4] = 3.0;
+        let cleaned = hand.step(&input, &[]);
+        assert_eq!(
+            cleaned.flex,
+            FlexReport {
+                clamped: 1,
+                rejected: 1
+            }
+        );
+        assert_eq!(cleaned.pose.flex[5], f64::from(0.1f32));
+        // The clamped target is reached over the next frames, and no further.
+        input.flex[5] = 0.1;
+        let limit = hand.model().limits()[4].max;
+        for _ in 0..100 {
+            hand.step(&input, &[]);
+        }
+        assert_eq!(hand.visible().flex[4], limit);
+        let (totals, refused_samples) = hand.input_counts();
+        assert_eq!(
+            (totals.clamped, totals.rejected, refused_samples),
+            (101, 1, 1)
+        );
+    }
+}
