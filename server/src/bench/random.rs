@@ -10,8 +10,8 @@ use serde::Serialize;
 
 use super::report::{LinePlot, Series, write_json, write_svg_line_plot};
 use super::tumble::{
-    Algo, AlgoResult, BuildResult, BuiltCollider, build_results, build_table, results_table,
-    run_poses,
+    Algo, AlgoResult, BuildResult, BuiltCollider, build_results, build_table, print_disagreements,
+    results_table, run_poses,
 };
 use crate::collision::OrientationSet;
 use crate::geometry::{TriMesh, parse_mesh_spec};
@@ -30,6 +30,8 @@ pub struct RandomConfig {
     pub algos: Vec<Algo>,
     /// Orientation set of the DOP-based algorithms.
     pub orientations: OrientationSet,
+    /// Passes over the poses; each query's time is its fastest pass (see [`run_poses`]).
+    pub rounds: usize,
 }
 
 /// The JSON document of B2.
@@ -45,6 +47,8 @@ pub struct RandomReport {
     pub triangles_b: usize,
     /// DOP orientations used.
     pub k: usize,
+    /// Passes over the poses (each query's time is its fastest pass).
+    pub rounds: usize,
     /// Poses where the algorithms disagreed.
     pub mismatches: usize,
     /// One entry per algorithm (`distance` is null).
@@ -92,13 +96,14 @@ pub fn run_random(a: &TriMesh, b: &TriMesh, config: &RandomConfig) -> Result<Ran
         .map(|&algo| BuiltCollider::new(algo, a, b, &config.orientations))
         .collect();
     let poses = random_poses(config.poses, config.seed);
-    let (results, mismatches) = run_poses(&colliders, &poses, None);
+    let (results, mismatches) = run_poses(&colliders, &poses, None, config.rounds);
     Ok(RandomReport {
         benchmark: "random",
         poses: config.poses,
         triangles_a: a.triangles().len(),
         triangles_b: b.triangles().len(),
         k: config.orientations.k(),
+        rounds: config.rounds,
         mismatches,
         results,
         build: build_results(&colliders),
@@ -126,6 +131,9 @@ pub struct RandomArgs {
     /// Number of DOP orientations (6, 14, 18, 24 or 26).
     #[arg(long, default_value_t = crate::collision::orientation::DEFAULT_K)]
     pub k: usize,
+    /// Passes over the poses; each query's time is its fastest pass (robust to preemption).
+    #[arg(long, default_value_t = 3)]
+    pub rounds: usize,
     /// Write the results as JSON to this file.
     #[arg(long)]
     pub json: Option<std::path::PathBuf>,
@@ -143,15 +151,17 @@ pub fn run_cli(args: &RandomArgs) -> Result<()> {
         seed: args.seed,
         algos: args.algos.clone(),
         orientations: OrientationSet::new(args.k)?,
+        rounds: args.rounds,
     };
     let report = run_random(&a, &b, &config)?;
     println!(
-        "random poses: {} x {} triangles, {} poses, k = {}",
-        report.triangles_a, report.triangles_b, report.poses, report.k
+        "random poses: {} x {} triangles, {} poses, k = {}, fastest of {} rounds",
+        report.triangles_a, report.triangles_b, report.poses, report.k, report.rounds
     );
     print!("{}", results_table(&report.results).render());
     print!("{}", build_table(&report.build).render());
     println!("mismatches: {}", report.mismatches);
+    print_disagreements(&report.results);
     if let Some(path) = &args.json {
         write_json(path, &report)?;
     }
@@ -215,6 +225,7 @@ mod tests {
             seed: 1,
             algos: Algo::DEFAULT.to_vec(),
             orientations: OrientationSet::default(),
+            rounds: 1,
         };
         let report = run_random(&a, &b, &config).unwrap();
         assert_eq!(report.mismatches, 0);
