@@ -78,7 +78,11 @@ struct Run {
 
 impl Run {
     fn new(parts: Vec<ScenePart>, start: Isometry3<f64>) -> Run {
-        let model = Arc::new(right_hand());
+        Run::with_hand(right_hand(), parts, start)
+    }
+
+    fn with_hand(model: HandModel, parts: Vec<ScenePart>, start: Isometry3<f64>) -> Run {
+        let model = Arc::new(model);
         let hand = GraspingHand::new(
             model.clone(),
             GraspParams::default(),
@@ -248,8 +252,15 @@ impl Run {
 /// one release after the carrying.
 fn check_scripted_grasp(script: ScriptedGrasp) -> Run {
     let keys = script.keyframes();
-    let mut run = Run::new(vec![ScenePart::scripted(1, script)], keys[0].tracker);
-    run.play(&keys);
+    let run = Run::new(vec![ScenePart::scripted(1, script)], keys[0].tracker);
+    check_run(run, script, &keys)
+}
+
+/// Plays `keys` (a scripted grasp's, perhaps mirrored) and checks the run as
+/// [`check_scripted_grasp`] describes.
+fn check_run(mut run: Run, script: ScriptedGrasp, keys: &[Keyframe]) -> Run {
+    let start_pose = run.parts[0].pose;
+    run.play(keys);
     let summary = run.summary(50);
     run.assert_no_penetration();
     let milestones = script.milestones();
@@ -272,7 +283,7 @@ fn check_scripted_grasp(script: ScriptedGrasp) -> Run {
     };
     assert!(distance(&frame.pose.root.inv_mul(&part_pose), &hand_to_part) < 1e-9);
     assert!(
-        distance(&part_pose, &script.part_pose()) > 0.04,
+        distance(&part_pose, &start_pose) > 0.04,
         "the part stayed behind: {summary}"
     );
 
@@ -294,6 +305,35 @@ fn a_power_grasp_of_a_cylinder_handle_holds_it_and_it_follows_the_hand() {
         unreachable!("the second event is the release")
     };
     assert_eq!(run.parts[0].pose, pose);
+}
+
+#[test]
+fn the_left_hand_grasps_a_mirrored_handle() {
+    // Everything mirrored in x = 0: poses become S·P·S with S = diag(-1, 1, 1).
+    let mirror = |p: &Isometry3<f64>| {
+        let s = nalgebra::Matrix3::from_diagonal(&Vector3::new(-1.0, 1.0, 1.0));
+        let matrix = s * p.rotation.to_rotation_matrix().matrix() * s;
+        let rotation = nalgebra::Rotation3::from_matrix_unchecked(matrix);
+        let t = p.translation.vector;
+        Isometry3::from_parts(
+            Translation3::new(-t.x, t.y, t.z),
+            UnitQuaternion::from_rotation_matrix(&rotation),
+        )
+    };
+    let script = ScriptedGrasp::PowerOnHandle;
+    let keys: Vec<Keyframe> = script
+        .keyframes()
+        .iter()
+        .map(|k| Keyframe {
+            tracker: mirror(&k.tracker),
+            ..*k
+        })
+        .collect();
+    let left = HandModel::load(&super::model::tests::hands_dir().join("left.toml")).unwrap();
+    // The handle is symmetric under the mirror: the same mesh at the mirrored pose.
+    let handle = ScenePart::new(1, script.part_mesh(2_000), mirror(&script.part_pose()));
+    let run = Run::with_hand(left, vec![handle], keys[0].tracker);
+    check_run(run, script, &keys);
 }
 
 #[test]
