@@ -7,6 +7,7 @@
 pub mod bench;
 pub mod collision;
 pub mod geometry;
+pub mod grasping;
 pub mod runtime;
 pub mod scene;
 pub mod sliding;

@@ -63,6 +63,8 @@ enum BenchCommand {
     Random(bench::random::RandomArgs),
     /// B5: sliding contact, time per contact point and sliding frame rate.
     Slide(bench::slide::SlideBenchArgs),
+    /// B6: time per clasp minimisation of the hand against parts of 1k to 50k triangles.
+    Grasp(bench::grasp::GraspArgs),
 }
 
 fn main() -> ExitCode {
@@ -89,6 +91,7 @@ fn main() -> ExitCode {
             BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
             BenchCommand::Random(args) => bench::random::run_cli(&args),
             BenchCommand::Slide(args) => bench::slide::run_bench(&args).map(drop),
+            BenchCommand::Grasp(args) => bench::grasp::run_cli(&args),
         },
     };
     match result {

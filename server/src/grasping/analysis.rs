@@ -1,0 +1,748 @@
+//! Grasp analysis: from what touches a part, and how, to the type of grasp (the paper's five
+//! rules, refined into the grasp types the paper names).
+//!
+//! Pure functions over the touching segments of one part, their semantics (palm, thumb, finger;
+//! inner, middle, outer) and their contacts (where, which side of the segment, which way). The
+//! order of the rules:
+//!
+//! 1. a contact on the back of the hand or of a finger: **push** (parts are never grasped with
+//!    the back of the hand);
+//! 2. the palm touches with its palmar side, no thumb, every contact pushes upward (against
+//!    gravity, within a tilt) and the part's centre of mass is above the contacts: **gravity**
+//!    (the part rests on the open hand);
+//! 3. only one segment touches: **push** (paper rule 1);
+//! 4. without the palm: thumb and fingers touch, the thumb opposing a finger: **precision**
+//!    (paper rule 3), told apart by the
+//!    fingers involved and the segments used: tip pinch (thumb and one fingertip), key (the thumb
+//!    against the side of the index), three-jaw chuck (thumb, index and middle at their tips),
+//!    otherwise, with thumb and two fingers, the **3-point pinch**; fingers without the thumb:
+//!    **cigarette** when two neighbouring fingers hold the part between their sides, otherwise
+//!    **push** (paper rule 2);
+//! 5. with the palm: a middle or outer segment touches and some digit opposes the palm:
+//!    **power** (paper rule 4), otherwise (only inner segments, paper rule 5, or a flat hand
+//!    pressed on a face) **push**.
+//!
+//! Opposition (two contact normals more than an angle apart, the fingers closing *on* the part)
+//! goes beyond the paper's rules, which count touching segments only: it keeps a flat hand or
+//! two fingertips pressed on one face from counting as a grasp.
+
+use std::fmt;
+
+use nalgebra::{Point3, Unit, Vector3};
+use parry3d::query::PointQuery;
+use parry3d::shape::{ConvexPolyhedron, Segment as ParrySegment};
+use serde::Serialize;
+
+use super::model::{Finger, JointLevel, SegmentId};
+
+/// Which side of a segment a contact is on, in the segment's frame (`-z` palmar, `+y` toward the
+/// tip).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactSide {
+    /// The inside of the hand: finger pads, the palm's palmar face.
+    Palmar,
+    /// The back of the hand or of a finger.
+    Dorsal,
+    /// The side of a segment, toward a neighbouring finger.
+    Lateral,
+    /// The end of a fingertip.
+    Tip,
+}
+
+/// Where and how a segment touches a part.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contact {
+    /// Points of the contact region, in the world.
+    pub points: Vec<Point3<f64>>,
+    /// The segment's mean outward normal over the contact, in the world: the direction from the
+    /// hand into the part.
+    pub normal: Unit<Vector3<f64>>,
+    /// Which side of the segment touches.
+    pub side: ContactSide,
+}
+
+impl Contact {
+    /// The mean of the contact points.
+    pub fn centre(&self) -> Point3<f64> {
+        mean(&self.points)
+    }
+
+    /// The contact moved rigidly by `pose` (from the frame it is written in to another).
+    pub fn transformed(&self, pose: &nalgebra::Isometry3<f64>) -> Contact {
+        Contact {
+            points: self.points.iter().map(|p| pose * p).collect(),
+            normal: pose.rotation * self.normal,
+            side: self.side,
+        }
+    }
+}
+
+/// One segment touching the part under analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Touch {
+    /// The segment.
+    pub segment: SegmentId,
+    /// Its digit, or the palm.
+    pub finger: Finger,
+    /// Its place along the digit.
+    pub level: JointLevel,
+    /// How it touches.
+    pub contact: Contact,
+}
+
+/// The sub-types of precision grasping.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PrecisionKind {
+    /// Thumb and one fingertip (a screw).
+    TipPinch,
+    /// Thumb, index and middle fingertips.
+    ThreeJawChuck,
+    /// The thumb against the side of the index (a key).
+    Key,
+    /// Thumb and fingers in another combination.
+    Other,
+}
+
+/// The grasp a hand has on a part.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GraspType {
+    /// Touching without holding: the part can be pushed, not carried.
+    Push,
+    /// Thumb and fingers, without the palm.
+    Precision(PrecisionKind),
+    /// Thumb and two fingers with more than their tips (a pen held to write).
+    ThreePointPinch,
+    /// Two neighbouring fingers holding the part between their sides.
+    Cigarette,
+    /// The whole hand: palm and the outer segments of the fingers.
+    Power,
+    /// The part resting on the open hand.
+    Gravity,
+}
+
+impl fmt::Display for GraspType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            GraspType::Push => "push",
+            GraspType::Precision(PrecisionKind::TipPinch) => "precision:tip_pinch",
+            GraspType::Precision(PrecisionKind::ThreeJawChuck) => "precision:three_jaw_chuck",
+            GraspType::Precision(PrecisionKind::Key) => "precision:key",
+            GraspType::Precision(PrecisionKind::Other) => "precision",
+            GraspType::ThreePointPinch => "three_point_pinch",
+            GraspType::Cigarette => "cigarette",
+            GraspType::Power => "power",
+            GraspType::Gravity => "gravity",
+        })
+    }
+}
+
+impl GraspType {
+    /// True for every type that holds the part (all but push).
+    pub fn holds(self) -> bool {
+        self != GraspType::Push
+    }
+
+    /// How firmly the type holds, to choose between parts touched at once: power, 3-point,
+    /// precision, cigarette, gravity, push.
+    pub fn firmness(self) -> u8 {
+        match self {
+            GraspType::Power => 5,
+            GraspType::ThreePointPinch => 4,
+            GraspType::Precision(_) => 3,
+            GraspType::Cigarette => 2,
+            GraspType::Gravity => 1,
+            GraspType::Push => 0,
+        }
+    }
+}
+
+/// Tuning of the analysis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnalysisParams {
+    /// The direction against gravity, in the world.
+    pub up: Unit<Vector3<f64>>,
+    /// The largest angle (radians) between a contact normal and `up` for a part to rest on it.
+    pub max_rest_tilt: f64,
+    /// How far (metres) the centre of mass may lie outside the contacts, seen from above, for a
+    /// part to rest on the hand.
+    pub support_margin: f64,
+    /// The smallest angle (radians) between two contact normals for the contacts to oppose each
+    /// other, as fingers closing on a part do (a flat hand pressed on a face does not).
+    pub min_opposition: f64,
+    /// How much the angles above are relaxed (radians) to keep holding a part already held, so
+    /// that a grasp near a threshold does not flicker.
+    pub hold_slack: f64,
+}
+
+impl AnalysisParams {
+    /// The thresholds for a part already held: tilt and opposition relaxed by `hold_slack`.
+    pub fn for_held(&self) -> AnalysisParams {
+        AnalysisParams {
+            max_rest_tilt: self.max_rest_tilt + self.hold_slack,
+            min_opposition: (self.min_opposition - self.hold_slack).max(0.0),
+            ..*self
+        }
+    }
+}
+
+impl Default for AnalysisParams {
+    fn default() -> Self {
+        AnalysisParams {
+            up: Vector3::z_axis(),
+            max_rest_tilt: 45f64.to_radians(),
+            support_margin: 0.01,
+            min_opposition: 60f64.to_radians(),
+            hold_slack: 15f64.to_radians(),
+        }
+    }
+}
+
+/// The grasp that `touches` (every segment touching one part) have on a part whose centre of
+/// mass is at `centre_of_mass` (world); `None` when nothing touches.
+pub fn classify(
+    touches: &[Touch],
+    centre_of_mass: &Point3<f64>,
+    params: &AnalysisParams,
+) -> Option<GraspType> {
+    if touches.is_empty() {
+        return None;
+    }
+    if touches
+        .iter()
+        .any(|t| t.contact.side == ContactSide::Dorsal)
+    {
+        return Some(GraspType::Push);
+    }
+    let palm = touches.iter().any(|t| t.finger == Finger::Palm);
+    let thumb = touches.iter().any(|t| t.finger == Finger::Thumb);
+    if palm && !thumb && rests_on_hand(touches, centre_of_mass, params) {
+        return Some(GraspType::Gravity);
+    }
+    if touches.len() == 1 {
+        return Some(GraspType::Push);
+    }
+    let fingers: Vec<Finger> = distinct(
+        touches
+            .iter()
+            .map(|t| t.finger)
+            .filter(|f| !matches!(f, Finger::Palm | Finger::Thumb)),
+    );
+    let opposed = |a: Finger, b: &dyn Fn(&Touch) -> bool| {
+        let max_cos = params.min_opposition.cos();
+        touches.iter().filter(|t| t.finger == a).any(|ta| {
+            touches
+                .iter()
+                .filter(|tb| b(tb))
+                .any(|tb| ta.contact.normal.dot(&tb.contact.normal) < max_cos)
+        })
+    };
+    let grasp = if palm {
+        let beyond_inner = touches
+            .iter()
+            .any(|t| matches!(t.level, JointLevel::Middle | JointLevel::Outer));
+        if beyond_inner && opposed(Finger::Palm, &|t| t.finger != Finger::Palm) {
+            GraspType::Power
+        } else {
+            GraspType::Push
+        }
+    } else if thumb && !fingers.is_empty() {
+        if opposed(Finger::Thumb, &|t| t.finger != Finger::Thumb) {
+            precision(touches, &fingers)
+        } else {
+            GraspType::Push
+        }
+    } else if is_cigarette(touches, &fingers) {
+        GraspType::Cigarette
+    } else {
+        GraspType::Push
+    };
+    Some(grasp)
+}
+
+/// Thumb and fingers without the palm: which precision grasp (or 3-point pinch).
+fn precision(touches: &[Touch], fingers: &[Finger]) -> GraspType {
+    let tips_only = touches.iter().all(|t| t.level == JointLevel::Outer);
+    match fingers {
+        [_] if tips_only => GraspType::Precision(PrecisionKind::TipPinch),
+        [Finger::Index] => {
+            let index_side = touches.iter().any(|t| {
+                t.finger == Finger::Index
+                    && t.level != JointLevel::Outer
+                    && t.contact.side == ContactSide::Lateral
+            });
+            if index_side {
+                GraspType::Precision(PrecisionKind::Key)
+            } else {
+                GraspType::Precision(PrecisionKind::Other)
+            }
+        }
+        [Finger::Index, Finger::Middle] if tips_only => {
+            GraspType::Precision(PrecisionKind::ThreeJawChuck)
+        }
+        [_, _] => GraspType::ThreePointPinch,
+        _ => GraspType::Precision(PrecisionKind::Other),
+    }
+}
+
+/// Two neighbouring fingers, no thumb, each touching with its side, pressing toward each other.
+fn is_cigarette(touches: &[Touch], fingers: &[Finger]) -> bool {
+    let [a, b] = fingers else { return false };
+    let (Some(pa), Some(pb)) = (a.position(), b.position()) else {
+        return false;
+    };
+    if pa.abs_diff(pb) != 1
+        || touches
+            .iter()
+            .any(|t| t.contact.side != ContactSide::Lateral)
+    {
+        return false;
+    }
+    let centre = |f: Finger| -> (Point3<f64>, Vector3<f64>) {
+        let mine: Vec<&Touch> = touches.iter().filter(|t| t.finger == f).collect();
+        let points: Vec<Point3<f64>> = mine.iter().map(|t| t.contact.centre()).collect();
+        let normal = mine.iter().fold(Vector3::zeros(), |acc, t| {
+            acc + t.contact.normal.into_inner()
+        });
+        (mean(&points), normal)
+    };
+    let (ca, na) = centre(*a);
+    let (cb, nb) = centre(*b);
+    na.dot(&(cb - ca)) > 0.0 && nb.dot(&(ca - cb)) > 0.0
+}
+
+/// Every contact pushes upward and the centre of mass lies above the region the contacts span.
+fn rests_on_hand(touches: &[Touch], centre_of_mass: &Point3<f64>, params: &AnalysisParams) -> bool {
+    let min_cos = params.max_rest_tilt.cos();
+    if touches
+        .iter()
+        .any(|t| t.contact.normal.dot(&params.up) < min_cos)
+    {
+        return false;
+    }
+    let up = params.up.into_inner();
+    let flatten = |p: &Point3<f64>| p - up * p.coords.dot(&up);
+    let support: Vec<Point3<f64>> = touches
+        .iter()
+        .flat_map(|t| t.contact.points.iter().map(flatten))
+        .collect();
+    distance_to_hull(&support, &flatten(centre_of_mass), &up) <= params.support_margin
+}
+
+/// Distance from `query` to the convex hull of `points`, all in one plane with normal `up`
+/// (zero inside). The hull is taken as a thin prism so that parry's 3-D hull serves; collinear
+/// or single points fall back to the segment between the extremes.
+fn distance_to_hull(points: &[Point3<f64>], query: &Point3<f64>, up: &Vector3<f64>) -> f64 {
+    if points.is_empty() {
+        return f64::INFINITY;
+    }
+    // Work in f32 near the query, where parry computes; centimetre-sized regions keep their
+    // precision.
+    let local = |p: &Point3<f64>| (p - query.coords).cast::<f32>();
+    let lift = up.cast::<f32>() * 0.001;
+    let prism: Vec<parry3d::math::Point<f32>> = points
+        .iter()
+        .flat_map(|p| {
+            let q = local(p);
+            [q - lift, q + lift]
+        })
+        .collect();
+    let origin = parry3d::math::Point::<f32>::origin();
+    if let Some(hull) = ConvexPolyhedron::from_convex_hull(&prism) {
+        return f64::from(hull.distance_to_local_point(&origin, true));
+    }
+    let start = local(&points[0]);
+    let end = points
+        .iter()
+        .map(local)
+        .max_by(|a, b| (a - start).norm().total_cmp(&(b - start).norm()))
+        .unwrap_or(start);
+    f64::from(ParrySegment::new(start, end).distance_to_local_point(&origin, true))
+}
+
+fn mean(points: &[Point3<f64>]) -> Point3<f64> {
+    let sum = points
+        .iter()
+        .fold(Vector3::zeros(), |acc, p| acc + p.coords);
+    Point3::from(sum / points.len().max(1) as f64)
+}
+
+/// The distinct values of `items`, sorted by their position across the hand.
+fn distinct(items: impl Iterator<Item = Finger>) -> Vec<Finger> {
+    let mut out: Vec<Finger> = Vec::new();
+    for f in items {
+        if !out.contains(&f) {
+            out.push(f);
+        }
+    }
+    out.sort_by_key(|f| f.position());
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn touch(
+        finger: Finger,
+        level: JointLevel,
+        side: ContactSide,
+        normal: [f64; 3],
+        points: &[[f64; 3]],
+    ) -> Touch {
+        Touch {
+            segment: 0,
+            finger,
+            level,
+            contact: Contact {
+                points: points.iter().map(|&p| Point3::from(p)).collect(),
+                normal: Unit::new_normalize(Vector3::from(normal)),
+                side,
+            },
+        }
+    }
+
+    use ContactSide::{Dorsal, Lateral, Palmar, Tip};
+    use Finger::{Index, Middle, Palm, Pinky, Ring, Thumb};
+    use JointLevel::{Inner, Middle as Mid, Outer};
+
+    /// The palm's palmar face touching a part above it, around the origin, 8 cm square.
+    fn palm_under() -> Touch {
+        touch(
+            Palm,
+            JointLevel::Palm,
+            Palmar,
+            [0., 0., 1.],
+            &[
+                [-0.04, -0.04, 0.],
+                [0.04, -0.04, 0.],
+                [0.04, 0.04, 0.],
+                [-0.04, 0.04, 0.],
+            ],
+        )
+    }
+
+    fn flat_finger_under(finger: Finger, level: JointLevel, x: f64) -> Touch {
+        touch(
+            finger,
+            level,
+            Palmar,
+            [0., 0.1, 1.],
+            &[[x, 0.06, 0.], [x, 0.09, 0.]],
+        )
+    }
+
+    fn classify_default(touches: &[Touch], com: [f64; 3]) -> Option<GraspType> {
+        classify(touches, &Point3::from(com), &AnalysisParams::default())
+    }
+
+    #[test]
+    fn nothing_touching_is_no_grasp_and_the_back_of_the_hand_only_pushes() {
+        assert_eq!(classify_default(&[], [0.; 3]), None);
+        let back = touch(
+            Palm,
+            JointLevel::Palm,
+            Dorsal,
+            [0., 0., 1.],
+            &[[0., 0., 0.]],
+        );
+        assert_eq!(
+            classify_default(std::slice::from_ref(&back), [0., 0., 0.05]),
+            Some(GraspType::Push)
+        );
+        // Even with fingers wrapped around the other side.
+        let wrap = touch(Index, Outer, Palmar, [0., 0., -1.], &[[0., 0.05, 0.05]]);
+        assert_eq!(
+            classify_default(&[back, wrap], [0., 0., 0.05]),
+            Some(GraspType::Push)
+        );
+    }
+
+    #[test]
+    fn a_part_resting_on_the_open_hand_is_a_gravity_grasp() {
+        let hand = [
+            palm_under(),
+            flat_finger_under(Index, Mid, -0.03),
+            flat_finger_under(Middle, Outer, -0.01),
+        ];
+        assert_eq!(
+            classify_default(&hand, [0.0, 0.02, 0.05]),
+            Some(GraspType::Gravity)
+        );
+        assert_eq!(
+            classify_default(&hand[..1], [0.01, -0.01, 0.03]),
+            Some(GraspType::Gravity)
+        );
+        // Centre of mass beyond the hand's edge: it would tip off; the flat hand only pushes.
+        assert_eq!(
+            classify_default(&hand, [0.0, 0.2, 0.05]),
+            Some(GraspType::Push)
+        );
+        assert_eq!(
+            classify_default(&hand[..1], [0.1, 0.0, 0.05]),
+            Some(GraspType::Push)
+        );
+        // A palm pressed on the side of a part pushes it.
+        let side = touch(
+            Palm,
+            JointLevel::Palm,
+            Palmar,
+            [1., 0., 0.],
+            &[[0., -0.04, -0.04], [0., 0.04, 0.04], [0., 0.04, -0.04]],
+        );
+        assert_eq!(
+            classify_default(&[side], [0.05, 0.0, 0.0]),
+            Some(GraspType::Push)
+        );
+        // With the thumb holding on it is no longer resting.
+        let thumb = touch(Thumb, Outer, Palmar, [1., 0., 0.], &[[-0.05, 0.0, 0.02]]);
+        assert_eq!(
+            classify_default(&[palm_under(), thumb], [0., 0., 0.05]),
+            Some(GraspType::Power)
+        );
+    }
+
+    #[test]
+    fn the_paper_rules_for_push_and_power() {
+        // Rule 1: a single segment.
+        let tip = touch(Index, Outer, Tip, [0., 1., 0.], &[[0., 0.15, 0.]]);
+        assert_eq!(
+            classify_default(&[tip], [0., 0.2, 0.]),
+            Some(GraspType::Push)
+        );
+        // Rule 2: fingers, no thumb, no palm, on one face.
+        let fingers = [
+            touch(Index, Outer, Tip, [0., 1., 0.], &[[-0.03, 0.15, 0.]]),
+            touch(Middle, Outer, Tip, [0., 1., 0.], &[[-0.01, 0.16, 0.]]),
+            touch(Ring, Outer, Tip, [0., 1., 0.], &[[0.01, 0.15, 0.]]),
+        ];
+        assert_eq!(
+            classify_default(&fingers, [0., 0.2, 0.]),
+            Some(GraspType::Push)
+        );
+        // Rule 4: the palm and wrapping outer segments (a handle below the palm, axis along x).
+        let palm = touch(
+            Palm,
+            JointLevel::Palm,
+            Palmar,
+            [0., 0., -1.],
+            &[[0., 0.06, -0.0125]],
+        );
+        let wrap = [
+            palm.clone(),
+            touch(Index, Mid, Palmar, [0., -0.7, 0.7], &[[-0.03, 0.1, -0.05]]),
+            touch(
+                Middle,
+                Outer,
+                Palmar,
+                [0., -1., 0.3],
+                &[[-0.01, 0.07, -0.04]],
+            ),
+            touch(
+                Thumb,
+                Outer,
+                Palmar,
+                [0.3, 0.6, 0.7],
+                &[[-0.05, 0.04, -0.05]],
+            ),
+        ];
+        assert_eq!(
+            classify_default(&wrap, [0., 0.06, -0.03]),
+            Some(GraspType::Power)
+        );
+        // Rule 5: the palm and inner segments only.
+        let inner = [
+            palm.clone(),
+            touch(
+                Index,
+                Inner,
+                Palmar,
+                [0., -0.7, 0.7],
+                &[[-0.03, 0.1, -0.03]],
+            ),
+        ];
+        assert_eq!(
+            classify_default(&inner, [0., 0.06, -0.03]),
+            Some(GraspType::Push)
+        );
+        // A flat hand pressed down on a face: outer segments touch but nothing opposes the palm.
+        let flat = [
+            palm,
+            touch(
+                Middle,
+                Outer,
+                Palmar,
+                [0., 0.1, -1.],
+                &[[-0.01, 0.17, -0.01]],
+            ),
+        ];
+        assert_eq!(
+            classify_default(&flat, [0., 0.1, -0.05]),
+            Some(GraspType::Push)
+        );
+    }
+
+    #[test]
+    fn precision_grasps_and_their_kinds() {
+        let thumb_tip = touch(Thumb, Outer, Tip, [0.8, 0.6, 0.], &[[-0.02, 0.12, -0.03]]);
+        let index_tip = touch(
+            Index,
+            Outer,
+            Palmar,
+            [-0.8, -0.6, 0.],
+            &[[-0.01, 0.13, -0.03]],
+        );
+        let middle_tip = touch(
+            Middle,
+            Outer,
+            Palmar,
+            [-0.6, -0.8, 0.],
+            &[[0.0, 0.135, -0.03]],
+        );
+        let com = [-0.015, 0.125, -0.03];
+        assert_eq!(
+            classify_default(&[thumb_tip.clone(), index_tip.clone()], com),
+            Some(GraspType::Precision(PrecisionKind::TipPinch))
+        );
+        assert_eq!(
+            classify_default(
+                &[thumb_tip.clone(), index_tip.clone(), middle_tip.clone()],
+                com
+            ),
+            Some(GraspType::Precision(PrecisionKind::ThreeJawChuck))
+        );
+        // The middle finger's side instead of its tip: a 3-point pinch.
+        let middle_side = touch(Middle, Mid, Lateral, [-1., 0., 0.], &[[0.0, 0.12, -0.03]]);
+        assert_eq!(
+            classify_default(&[thumb_tip.clone(), index_tip.clone(), middle_side], com),
+            Some(GraspType::ThreePointPinch)
+        );
+        // The thumb pad on the side of the index's middle segment: a key grasp.
+        let index_side = touch(Index, Mid, Lateral, [-1., 0., 0.], &[[-0.035, 0.14, 0.0]]);
+        let thumb_pad = touch(Thumb, Outer, Palmar, [1., 0., 0.], &[[-0.045, 0.14, 0.0]]);
+        assert_eq!(
+            classify_default(&[thumb_pad, index_side], [-0.04, 0.14, 0.0]),
+            Some(GraspType::Precision(PrecisionKind::Key))
+        );
+        // Thumb and four fingers around a disc.
+        let all = [
+            thumb_tip.clone(),
+            index_tip.clone(),
+            middle_tip,
+            touch(
+                Ring,
+                Outer,
+                Palmar,
+                [-0.5, -0.8, 0.],
+                &[[0.01, 0.13, -0.03]],
+            ),
+            touch(
+                Pinky,
+                Outer,
+                Palmar,
+                [-0.3, -0.9, 0.],
+                &[[0.03, 0.12, -0.03]],
+            ),
+        ];
+        assert_eq!(
+            classify_default(&all, com),
+            Some(GraspType::Precision(PrecisionKind::Other))
+        );
+        // Thumb and index both pressing on one face, side by side: no opposition, a push.
+        let same_way = touch(Thumb, Outer, Tip, [-0.8, -0.6, 0.], &[[-0.02, 0.12, -0.03]]);
+        assert_eq!(
+            classify_default(&[same_way, index_tip], com),
+            Some(GraspType::Push)
+        );
+    }
+
+    #[test]
+    fn a_cigarette_is_held_between_the_sides_of_neighbouring_fingers() {
+        let index = touch(Index, Mid, Lateral, [1., 0., 0.], &[[-0.021, 0.15, 0.0]]);
+        let middle = touch(Middle, Mid, Lateral, [-1., 0., 0.], &[[-0.019, 0.15, 0.0]]);
+        assert_eq!(
+            classify_default(&[index.clone(), middle], [-0.02, 0.15, 0.03]),
+            Some(GraspType::Cigarette)
+        );
+        // Pressing apart (the part outside the pair) is no cigarette grasp.
+        let out_index = touch(Index, Mid, Lateral, [-1., 0., 0.], &[[-0.04, 0.15, 0.0]]);
+        let out_middle = touch(Middle, Mid, Lateral, [1., 0., 0.], &[[0.0, 0.15, 0.0]]);
+        assert_eq!(
+            classify_default(&[out_index, out_middle], [-0.02, 0.15, 0.0]),
+            Some(GraspType::Push)
+        );
+        // Fingers that are not neighbours.
+        let ring = touch(Ring, Mid, Lateral, [-1., 0., 0.], &[[0.0, 0.15, 0.0]]);
+        assert_eq!(
+            classify_default(&[index.clone(), ring], [-0.01, 0.15, 0.0]),
+            Some(GraspType::Push)
+        );
+        // Pads instead of sides.
+        let pad = touch(Middle, Mid, Palmar, [-1., 0., 0.], &[[-0.019, 0.15, 0.0]]);
+        assert_eq!(
+            classify_default(&[index, pad], [-0.02, 0.15, 0.0]),
+            Some(GraspType::Push)
+        );
+    }
+
+    #[test]
+    fn a_held_part_keeps_its_grasp_with_relaxed_thresholds() {
+        // Palm and thumb 55 degrees apart: not opposed enough to take the part, enough to keep it.
+        let palm = touch(
+            Palm,
+            JointLevel::Palm,
+            Palmar,
+            [0., 0., -1.],
+            &[[0., 0.06, -0.0125]],
+        );
+        let (s, c) = 55f64.to_radians().sin_cos();
+        let thumb = touch(Thumb, Mid, Palmar, [s, 0., -c], &[[-0.04, 0.05, -0.03]]);
+        let params = AnalysisParams::default();
+        let com = Point3::new(0., 0.06, -0.03);
+        assert_eq!(
+            classify(&[palm.clone(), thumb.clone()], &com, &params),
+            Some(GraspType::Push)
+        );
+        assert_eq!(
+            classify(&[palm, thumb], &com, &params.for_held()),
+            Some(GraspType::Power)
+        );
+        // Resting tilted 50 degrees: kept but not taken.
+        let (s, c) = 50f64.to_radians().sin_cos();
+        let tilted = touch(
+            Palm,
+            JointLevel::Palm,
+            Palmar,
+            [s, 0., c],
+            &[[-0.03, -0.03, 0.0], [0.03, -0.03, 0.0], [0.0, 0.03, 0.0]],
+        );
+        let above = Point3::new(0.0, 0.0, 0.02);
+        assert_eq!(
+            classify(std::slice::from_ref(&tilted), &above, &params),
+            Some(GraspType::Push)
+        );
+        assert_eq!(
+            classify(&[tilted], &above, &params.for_held()),
+            Some(GraspType::Gravity)
+        );
+    }
+
+    #[test]
+    fn firmness_ranks_the_holding_types() {
+        let order = [
+            GraspType::Push,
+            GraspType::Gravity,
+            GraspType::Cigarette,
+            GraspType::Precision(PrecisionKind::TipPinch),
+            GraspType::ThreePointPinch,
+            GraspType::Power,
+        ];
+        for pair in order.windows(2) {
+            assert!(pair[0].firmness() < pair[1].firmness());
+        }
+        assert!(!GraspType::Push.holds());
+        assert!(order[1..].iter().all(|g| g.holds()));
+    }
+}

@@ -1,0 +1,796 @@
+//! The clasp minimisation (the paper's section 4, Figure 10): move the hand from its last valid
+//! configuration toward a new target as far as it can go without any segment intersecting a
+//! part, and find which segments touch what.
+//!
+//! The hand's configuration is the root pose `M` and the 22 flex values `F`: 23 variables. Each
+//! variable has an interval between its valid value (`lo`, from the last valid configuration,
+//! known to be free) and its invalid value (`hi`, the target until a collision says otherwise),
+//! kept as interpolation parameters in `[0, 1]`: flex values linearly, the root's position linearly
+//! and its rotation by slerp. Each step tries one configuration:
+//!
+//! * every unfixed variable at a trial value inside its interval (the target first; after a
+//!   collision at the target, a step just past the fixing tolerance, since a hand pressed against
+//!   a part is usually at it already; otherwise the middle);
+//! * the segments that move are checked for collision, the palm first, then from the
+//!   fingertips toward the palm; a segment whose moving variables are all blamed by a collision
+//!   already is not checked, since its answer could change nothing but its own collision flag
+//!   (and near misses, a segment resting a fraction of a millimetre from a part, are the
+//!   costliest queries);
+//! * a variable is *colliding* if a segment depending on it collides: its `hi` becomes the trial;
+//! * the other variables' `lo` become the trial, except where a segment depends on both a
+//!   colliding and a non-colliding variable: that segment was never checked at the mixed pose the
+//!   new `lo` values would give, so those variables keep their `lo`. This keeps the invariant that
+//!   the configuration of all `lo` values is free: the result is collision-free by construction.
+//! * a variable whose interval is narrower than its tolerance (radians for a flex value, metres
+//!   of motion of any hand point for the root) is fixed; several may be fixed in one step; a cap
+//!   on the steps fixes the rest.
+//!
+//! The root is minimised first, with the flex values at their valid values, then the flex values
+//! with the root fixed: two stages of the same iteration. Interpolated together, as the paper
+//! has it, the root would be blamed for every collision of every segment, since every segment
+//! depends on it: fingers pressing on a part (the glove closes further than the virtual fingers
+//! can) would stop the whole hand, and a hand holding a part could not carry it anywhere.
+//!
+//! Touch flags follow the paper: a segment's collision flag is set whenever it collides; when a
+//! variable the segment's joint owns is fixed, the segment is marked touching if its flag is set;
+//! then the flags of the segments further down the chain are cleared, because their collisions may
+//! have been caused by this joint's motion. Variables fixed in the same step are taken from the
+//! fingertips toward the root, so that a fingertip resting on a part while the whole finger
+//! presses on is marked before its parents clear its flag.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+
+use super::model::{FlexVector, HandModel, ROOT_VARIABLE, SegmentId, VARIABLE_COUNT, VariableSet};
+
+/// The number of segments of every hand: the palm and five digits of three segments.
+pub const SEGMENT_COUNT: usize = 16;
+
+/// A set of objects, bit `k` standing for the collider's object `k` (at most 64 objects near a
+/// hand at once).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct ObjectSet(pub u64);
+
+impl ObjectSet {
+    /// No object.
+    pub const EMPTY: ObjectSet = ObjectSet(0);
+
+    /// The set holding only object `k` (`k < 64`).
+    pub fn single(k: usize) -> Self {
+        ObjectSet(1 << k)
+    }
+
+    /// True when no object is in the set.
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// True when object `k` is in the set.
+    pub fn contains(self, k: usize) -> bool {
+        k < 64 && self.0 & (1 << k) != 0
+    }
+
+    /// The objects in either set.
+    pub fn union(self, other: ObjectSet) -> Self {
+        ObjectSet(self.0 | other.0)
+    }
+
+    /// The objects, in increasing order.
+    pub fn iter(self) -> impl Iterator<Item = usize> {
+        (0..64).filter(move |&k| self.contains(k))
+    }
+}
+
+/// A hand configuration: the root pose `M` (world) and the flex vector `F`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandPose {
+    /// The hand root (the tracked wrist) in the world.
+    pub root: Isometry3<f64>,
+    /// The 22 joint angles, radians.
+    pub flex: FlexVector,
+}
+
+/// Where a segment is during a trial: the hand root in the world and the segment relative to
+/// the root. Objects attached to the hand are checked in the root's frame, so that moving the
+/// root never makes them collide.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentPlacement {
+    /// The hand root in the world.
+    pub root: Isometry3<f64>,
+    /// The segment in the root's frame.
+    pub local: Isometry3<f64>,
+    /// True when every flex value is at its valid value, so that the segment is where it was
+    /// relative to the root in the valid configuration: objects attached to the hand cannot
+    /// collide with it and need no check.
+    pub flex_valid: bool,
+}
+
+impl SegmentPlacement {
+    /// The segment in the world.
+    pub fn world(&self) -> Isometry3<f64> {
+        self.root * self.local
+    }
+}
+
+/// Tuning of the clasp minimisation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClaspParams {
+    /// A flex value is fixed when its valid-invalid interval is narrower than this (radians).
+    pub flex_tolerance: f64,
+    /// The root is fixed when its valid-invalid interval moves no point of the hand by more
+    /// than this (metres).
+    pub root_tolerance: f64,
+    /// Cap on the iteration steps of each stage (root, then flex values); what is left unfixed
+    /// stays at its valid value.
+    pub max_steps: u32,
+    /// The most any variable may move the hand per minimisation (metres). A target farther away
+    /// is approached over several frames, so a jump of the tracker or glove cannot carry a
+    /// segment through a thin part; at the input rates of trackers and gloves it never limits.
+    pub max_motion: f64,
+}
+
+impl Default for ClaspParams {
+    fn default() -> Self {
+        ClaspParams {
+            flex_tolerance: 0.005,
+            root_tolerance: 0.0005,
+            max_steps: 24,
+            max_motion: 0.005,
+        }
+    }
+}
+
+/// What one minimisation found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClaspOutcome {
+    /// The new valid configuration: collision-free if the start was.
+    pub pose: HandPose,
+    /// Per segment, the objects it was marked touching by the touch-flag rules.
+    pub touching: [ObjectSet; SEGMENT_COUNT],
+    /// Iteration steps taken.
+    pub steps: u32,
+    /// Segment collision checks made.
+    pub checks: u32,
+    /// True when every variable reached its target.
+    pub reached_target: bool,
+}
+
+/// The hand's motion from a valid configuration toward a target, as interpolation of the 23
+/// variables with parameters in `[0, 1]`.
+struct Path {
+    from: HandPose,
+    to: HandPose,
+    /// Root rotation from `from` to `to`, as a rotation vector in the `from` root's frame.
+    rotation: nalgebra::Vector3<f64>,
+    /// Per variable, a bound on how far a hand point moves over the whole path (metres).
+    motion: [f64; VARIABLE_COUNT],
+}
+
+impl Path {
+    fn new(model: &HandModel, from: &HandPose, to: &HandPose, max_motion: f64) -> (Path, bool) {
+        let mut to = *to;
+        let mut clipped = false;
+        let mut motion = [0.0; VARIABLE_COUNT];
+        for (v, (goal, start)) in to.flex.iter_mut().zip(&from.flex).enumerate() {
+            let delta = *goal - start;
+            motion[v] = delta.abs() * model.lever(v);
+            if motion[v] > max_motion {
+                *goal = start + delta * max_motion / motion[v];
+                motion[v] = max_motion;
+                clipped = true;
+            }
+        }
+        let mut rotation = (from.root.rotation.inverse() * to.root.rotation).scaled_axis();
+        let mut translation = to.root.translation.vector - from.root.translation.vector;
+        let root_motion = translation.norm() + rotation.norm() * model.lever(ROOT_VARIABLE);
+        motion[ROOT_VARIABLE] = root_motion;
+        if root_motion > max_motion {
+            let scale = max_motion / root_motion;
+            rotation *= scale;
+            translation *= scale;
+            motion[ROOT_VARIABLE] = max_motion;
+            clipped = true;
+        }
+        to.root = Isometry3::from_parts(
+            Translation3::from(from.root.translation.vector + translation),
+            from.root.rotation * UnitQuaternion::from_scaled_axis(rotation),
+        );
+        (
+            Path {
+                from: *from,
+                to,
+                rotation,
+                motion,
+            },
+            clipped,
+        )
+    }
+
+    /// The configuration with each variable at its parameter.
+    fn at(&self, t: &[f64; VARIABLE_COUNT]) -> HandPose {
+        let flex = std::array::from_fn(|v| {
+            self.from.flex[v] + t[v] * (self.to.flex[v] - self.from.flex[v])
+        });
+        let s = t[ROOT_VARIABLE];
+        let translation = self
+            .from
+            .root
+            .translation
+            .vector
+            .lerp(&self.to.root.translation.vector, s);
+        let rotation =
+            self.from.root.rotation * UnitQuaternion::from_scaled_axis(self.rotation * s);
+        HandPose {
+            root: Isometry3::from_parts(Translation3::from(translation), rotation),
+            flex,
+        }
+    }
+}
+
+/// Per-model facts the minimisation needs, computed once.
+#[derive(Debug, Clone)]
+pub struct ClaspPlan {
+    /// Per segment, the variables its pose depends on.
+    depends: [VariableSet; SEGMENT_COUNT],
+    /// Per variable, the segments whose joint owns it.
+    owners: [u16; VARIABLE_COUNT],
+    /// Per variable, the segments depending on it but not owning it (whose flags its fixing clears).
+    dependents: [u16; VARIABLE_COUNT],
+    /// The variables from the fingertips toward the root: the order of fixing within a step.
+    fixing_order: [usize; VARIABLE_COUNT],
+    /// The palm, then the segments from the fingertips toward the palm: the order of checking
+    /// within a step.
+    checking_order: [SegmentId; SEGMENT_COUNT],
+}
+
+impl ClaspPlan {
+    /// Derives the dependency structure of `model`, which must have [`SEGMENT_COUNT`] segments
+    /// (every validated hand model has).
+    pub fn new(model: &HandModel) -> ClaspPlan {
+        let segments = model.segments();
+        assert_eq!(
+            segments.len(),
+            SEGMENT_COUNT,
+            "a validated hand has {SEGMENT_COUNT} segments"
+        );
+        let depends = std::array::from_fn(|s| segments[s].variables);
+        let mut owners = [0u16; VARIABLE_COUNT];
+        let mut dependents = [0u16; VARIABLE_COUNT];
+        let mut depth = [0usize; VARIABLE_COUNT];
+        let mut segment_depth = [0usize; SEGMENT_COUNT];
+        for (s, segment) in segments.iter().enumerate() {
+            segment_depth[s] = segment.parent.map_or(0, |p| segment_depth[p] + 1);
+            for v in segment.own_variables.iter() {
+                owners[v] |= 1 << s;
+                depth[v] = depth[v].max(segment_depth[s]);
+            }
+            for v in segment.variables.without(segment.own_variables).iter() {
+                dependents[v] |= 1 << s;
+            }
+        }
+        let mut fixing_order: [usize; VARIABLE_COUNT] = std::array::from_fn(|v| v);
+        fixing_order.sort_by_key(|&v| std::cmp::Reverse(depth[v]));
+        // The palm first: it owns the root, whose fixing clears every other segment's flag, so
+        // its flag is the one a root collision must set. Then the fingertips toward the palm.
+        let mut checking_order: [SegmentId; SEGMENT_COUNT] = std::array::from_fn(|s| s);
+        checking_order.sort_by_key(|&s| (s != model.palm(), std::cmp::Reverse(segment_depth[s])));
+        ClaspPlan {
+            depends,
+            owners,
+            dependents,
+            fixing_order,
+            checking_order,
+        }
+    }
+}
+
+/// Runs the clasp minimisation from the valid configuration `valid` toward `target`.
+///
+/// `collides(segment, placement)` answers which objects the segment intersects at a trial
+/// placement (empty when none); the minimisation never looks at geometry itself, so it works with
+/// any collision test. The returned configuration is free of collisions provided `valid` is.
+pub fn clasp<F>(
+    model: &HandModel,
+    plan: &ClaspPlan,
+    valid: &HandPose,
+    target: &HandPose,
+    params: &ClaspParams,
+    mut collides: F,
+) -> ClaspOutcome
+where
+    F: FnMut(SegmentId, &SegmentPlacement) -> ObjectSet,
+{
+    let (path, clipped) = Path::new(model, valid, target, params.max_motion);
+    // Per variable, the tolerance in the units of `path.motion` (metres of hand motion).
+    let tolerance: [f64; VARIABLE_COUNT] = std::array::from_fn(|v| {
+        if v == ROOT_VARIABLE {
+            params.root_tolerance
+        } else {
+            params.flex_tolerance * model.lever(v)
+        }
+    });
+    let mut lo = [0.0f64; VARIABLE_COUNT];
+    let mut hi = [1.0f64; VARIABLE_COUNT];
+    let mut flags = [ObjectSet::EMPTY; SEGMENT_COUNT];
+    let mut touching = [ObjectSet::EMPTY; SEGMENT_COUNT];
+    let mut poses = [Isometry3::identity(); SEGMENT_COUNT];
+    let mut steps = 0;
+    let mut checks = 0;
+
+    let root = VariableSet::single(ROOT_VARIABLE);
+    for stage in [root, VariableSet::ALL.without(root)] {
+        // A stage whose variables do not move would only re-check the valid configuration.
+        let mut unfixed = if stage.iter().all(|v| path.motion[v] == 0.0) {
+            VariableSet::EMPTY
+        } else {
+            stage
+        };
+        let mut tried = false;
+        let mut near_step_pending = VariableSet::EMPTY;
+        let mut stage_steps = 0;
+        while !unfixed.is_empty() {
+            // 1. Trial values.
+            let mut trial = lo;
+            for v in unfixed.iter() {
+                trial[v] = if !tried {
+                    1.0
+                } else if near_step_pending.contains(v) {
+                    // Just short of the tolerance past the valid value: if this collides, the
+                    // variable is fixed at once.
+                    let near = lo[v] + 0.9 * tolerance[v] / path.motion[v];
+                    near.min(0.5 * (lo[v] + hi[v]))
+                } else {
+                    0.5 * (lo[v] + hi[v])
+                };
+            }
+            let first_trial = !tried;
+            tried = true;
+            near_step_pending = VariableSet::EMPTY;
+
+            // 2. Check the segments that move.
+            let pose = path.at(&trial);
+            model.forward_kinematics(&pose.flex, &mut poses);
+            // A segment none of whose variables leaves its valid value is where the valid
+            // configuration has it: free, no need to check.
+            let moved = unfixed
+                .iter()
+                .filter(|&v| trial[v] != lo[v] && path.motion[v] > 0.0)
+                .fold(VariableSet::EMPTY, |acc, v| acc.or(VariableSet::single(v)));
+            let flex_valid = !moved.intersects(VariableSet::ALL.without(root));
+            let mut colliding = VariableSet::EMPTY;
+            for &s in &plan.checking_order {
+                // Checking a segment whose moving variables are all blamed already could change
+                // nothing but its own touch flag: skip it (fingertips, checked early, collide
+                // most often and spare their fingers' other segments).
+                let moving = plan.depends[s].and(moved);
+                if moving.is_empty() || moving.without(colliding).is_empty() {
+                    continue;
+                }
+                checks += 1;
+                let hit = collides(
+                    s,
+                    &SegmentPlacement {
+                        root: pose.root,
+                        local: poses[s],
+                        flex_valid,
+                    },
+                );
+                if !hit.is_empty() {
+                    flags[s] = flags[s].union(hit);
+                    colliding = colliding.or(plan.depends[s]);
+                }
+            }
+            colliding = colliding.and(unfixed);
+
+            // 3. Raise the valid end where the new configuration of valid values was checked
+            //    whole.
+            let mut raised = unfixed.without(colliding);
+            loop {
+                let before = raised;
+                for depends in &plan.depends {
+                    let moving = depends.and(unfixed);
+                    if moving.intersects(raised) && !moving.without(raised).is_empty() {
+                        raised = raised.without(moving);
+                    }
+                }
+                if raised == before {
+                    break;
+                }
+            }
+            for v in colliding.iter() {
+                hi[v] = trial[v];
+                if first_trial {
+                    near_step_pending = near_step_pending.or(VariableSet::single(v));
+                }
+            }
+            for v in raised.iter() {
+                lo[v] = trial[v];
+            }
+            steps += 1;
+            stage_steps += 1;
+
+            // 4. Fix what is close enough (everything at the cap), fingertips first.
+            let at_cap = stage_steps >= params.max_steps;
+            for &v in &plan.fixing_order {
+                if !unfixed.contains(v)
+                    || !(at_cap || (hi[v] - lo[v]) * path.motion[v] <= tolerance[v])
+                {
+                    continue;
+                }
+                unfixed = unfixed.without(VariableSet::single(v));
+                for s in bits(plan.owners[v]) {
+                    touching[s] = touching[s].union(flags[s]);
+                }
+                for s in bits(plan.dependents[v]) {
+                    flags[s] = ObjectSet::EMPTY;
+                }
+            }
+        }
+    }
+
+    let reached_target =
+        !clipped && (0..VARIABLE_COUNT).all(|v| lo[v] == 1.0 || path.motion[v] == 0.0);
+    ClaspOutcome {
+        pose: path.at(&lo),
+        touching,
+        steps,
+        checks,
+        reached_target,
+    }
+}
+
+/// The indices of the set bits of a segment mask.
+fn bits(mask: u16) -> impl Iterator<Item = usize> {
+    (0..SEGMENT_COUNT).filter(move |&s| mask & (1 << s) != 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasping::model::FLEX_COUNT;
+    use crate::grasping::model::tests::right_hand;
+    use crate::grasping::testing::BallWorld;
+    use nalgebra::{Point3, Vector3};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use std::f64::consts::FRAC_PI_2;
+
+    const INDEX_MCP: usize = 4;
+    const MCPS: [usize; 4] = [4, 7, 11, 15];
+
+    fn at_height(z: f64, flex: FlexVector) -> HandPose {
+        HandPose {
+            root: Isometry3::translation(0.0, 0.0, z),
+            flex,
+        }
+    }
+
+    fn unlimited() -> ClaspParams {
+        ClaspParams {
+            max_motion: f64::INFINITY,
+            ..ClaspParams::default()
+        }
+    }
+
+    fn segment(model: &HandModel, name: &str) -> SegmentId {
+        model
+            .segments()
+            .iter()
+            .position(|s| s.name == name)
+            .unwrap()
+    }
+
+    fn floor() -> BallWorld {
+        BallWorld {
+            floor: Some(0.0),
+            ..BallWorld::default()
+        }
+    }
+
+    #[test]
+    fn a_free_target_is_reached_in_one_step_per_stage() {
+        let model = right_hand();
+        let plan = ClaspPlan::new(&model);
+        let world = BallWorld {
+            floor: Some(-1.0),
+            ..BallWorld::default()
+        };
+        let mut target = at_height(0.1, [0.3; FLEX_COUNT]);
+        target.root.rotation = UnitQuaternion::from_euler_angles(0.2, -0.1, 0.4);
+        let start = at_height(0.0, [0.0; FLEX_COUNT]);
+        let out = clasp(
+            &model,
+            &plan,
+            &start,
+            &target,
+            &unlimited(),
+            world.collider(&model),
+        );
+        assert!(out.reached_target);
+        // One step for the root, one for the flex values.
+        assert_eq!((out.steps, out.checks), (2, 2 * SEGMENT_COUNT as u32));
+        assert!(out.touching.iter().all(|t| t.is_empty()));
+        assert!((out.pose.root.translation.vector - target.root.translation.vector).norm() < 1e-12);
+        assert!(out.pose.root.rotation.angle_to(&target.root.rotation) < 1e-12);
+        assert_eq!(out.pose.flex, target.flex);
+        // A hand that does not move needs no check at all.
+        let still = clasp(
+            &model,
+            &plan,
+            &start,
+            &start,
+            &unlimited(),
+            world.collider(&model),
+        );
+        assert_eq!((still.steps, still.checks), (0, 0));
+        assert!(still.reached_target);
+    }
+
+    #[test]
+    fn fingers_closing_onto_a_floor_stop_tight_against_it_and_touch_it() {
+        let model = right_hand();
+        let plan = ClaspPlan::new(&model);
+        let world = floor();
+        let start = at_height(0.05, [0.0; FLEX_COUNT]);
+        let mut target = start;
+        for v in MCPS {
+            target.flex[v] = FRAC_PI_2;
+        }
+        let params = unlimited();
+        let out = clasp(
+            &model,
+            &plan,
+            &start,
+            &target,
+            &params,
+            world.collider(&model),
+        );
+        assert!(
+            world.hand_hits(&model, &out.pose).is_empty(),
+            "the result collides"
+        );
+        for v in MCPS {
+            let angle = out.pose.flex[v];
+            assert!(angle > 0.3 && angle < FRAC_PI_2, "MCP {v}: {angle}");
+            // Tight: closing further by a few tolerances collides.
+            let mut deeper = out.pose;
+            deeper.flex[v] += 3.0 * params.flex_tolerance;
+            assert!(
+                !world.hand_hits(&model, &deeper).is_empty(),
+                "MCP {v} stopped short"
+            );
+        }
+        for name in ["index outer", "middle outer", "ring outer", "pinky outer"] {
+            assert_eq!(
+                out.touching[segment(&model, name)],
+                ObjectSet::single(0),
+                "{name}"
+            );
+        }
+        // The thumb does not move and does not reach the floor.
+        for name in ["thumb inner", "thumb middle", "thumb outer"] {
+            assert!(out.touching[segment(&model, name)].is_empty(), "{name}");
+        }
+        assert!(!out.reached_target);
+    }
+
+    #[test]
+    fn a_blocked_root_stops_at_the_floor_with_the_palm_touching() {
+        let model = right_hand();
+        let plan = ClaspPlan::new(&model);
+        let world = floor();
+        // An open flat hand: the thumb rolled back into the plane of the palm and spread. The
+        // palm is the lowest part, 1.25 cm below the root; the thumb's metacarpal reaches
+        // 0.2 cm + 0.95 cm.
+        let mut open = [0.0; FLEX_COUNT];
+        open[0] = -30f64.to_radians();
+        open[3] = 45f64.to_radians();
+        let params = unlimited();
+        let (start, target) = (at_height(0.05, open), at_height(0.0, open));
+        let out = clasp(
+            &model,
+            &plan,
+            &start,
+            &target,
+            &params,
+            world.collider(&model),
+        );
+        let z = out.pose.root.translation.z;
+        assert!(z > 0.0125 && z < 0.0125 + params.root_tolerance, "{z}");
+        assert!(out.touching[model.palm()].contains(0));
+        assert!(out.touching[segment(&model, "thumb inner")].is_empty());
+        // One step to the target, one just short of the tolerance, then bisection.
+        assert!(out.steps <= 10, "{}", out.steps);
+    }
+
+    #[test]
+    fn random_minimisations_never_end_in_collision() {
+        let model = right_hand();
+        let plan = ClaspPlan::new(&model);
+        let mut rng = ChaCha8Rng::seed_from_u64(6);
+        let random_flex = |rng: &mut ChaCha8Rng| -> FlexVector {
+            std::array::from_fn(|v| {
+                let limit = &model.limits()[v];
+                rng.random_range(limit.min..limit.max)
+            })
+        };
+        let mut cases = 0;
+        let mut reached = 0;
+        let mut touched = 0;
+        while cases < 300 {
+            let world = BallWorld {
+                floor: None,
+                balls: (0..rng.random_range(2..6))
+                    .map(|_| {
+                        let x = rng.random_range(-0.1..0.1);
+                        let y = rng.random_range(-0.05..0.2);
+                        let z = rng.random_range(-0.1..0.1);
+                        (Point3::new(x, y, z), rng.random_range(0.005..0.03))
+                    })
+                    .collect(),
+            };
+            let start = HandPose {
+                root: Isometry3::identity(),
+                flex: random_flex(&mut rng),
+            };
+            if !world.hand_hits(&model, &start).is_empty() {
+                continue;
+            }
+            let offset = Vector3::from_fn(|_, _| rng.random_range(-0.03..0.03));
+            let turn = Vector3::from_fn(|_, _| rng.random_range(-0.4..0.4));
+            let target = HandPose {
+                root: Isometry3::new(offset, turn),
+                flex: random_flex(&mut rng),
+            };
+            let out = clasp(
+                &model,
+                &plan,
+                &start,
+                &target,
+                &unlimited(),
+                world.collider(&model),
+            );
+            cases += 1;
+            assert!(
+                world.hand_hits(&model, &out.pose).is_empty(),
+                "case {cases} ends in collision"
+            );
+            for v in 0..FLEX_COUNT {
+                let (a, b) = (
+                    start.flex[v].min(target.flex[v]),
+                    start.flex[v].max(target.flex[v]),
+                );
+                assert!(out.pose.flex[v] >= a - 1e-12 && out.pose.flex[v] <= b + 1e-12);
+            }
+            // The root moves first with the flex values where they were: when that and the
+            // target are free, the target is reached.
+            let root_first = HandPose {
+                root: target.root,
+                flex: start.flex,
+            };
+            let path_free = world.hand_hits(&model, &target).is_empty()
+                && world.hand_hits(&model, &root_first).is_empty();
+            assert_eq!(out.reached_target, path_free, "case {cases}");
+            assert!(out.steps <= 2 * ClaspParams::default().max_steps);
+            reached += usize::from(path_free);
+            touched += usize::from(out.touching.iter().any(|t| !t.is_empty()));
+        }
+        // The cases exercise both outcomes.
+        assert!(
+            reached > 20 && cases - reached > 20,
+            "{reached} of {cases} free"
+        );
+        assert!(touched > 20, "{touched}");
+    }
+
+    #[test]
+    fn a_jump_is_approached_by_at_most_the_largest_motion() {
+        let model = right_hand();
+        let plan = ClaspPlan::new(&model);
+        let world = BallWorld::default();
+        let params = ClaspParams::default();
+        let mut target = at_height(0.1, [0.0; FLEX_COUNT]);
+        target.flex[INDEX_MCP] = 1.0;
+        let start = at_height(0.0, [0.0; FLEX_COUNT]);
+        let out = clasp(
+            &model,
+            &plan,
+            &start,
+            &target,
+            &params,
+            world.collider(&model),
+        );
+        assert!(!out.reached_target);
+        assert!((out.pose.root.translation.z - params.max_motion).abs() < 1e-12);
+        let index_motion = out.pose.flex[INDEX_MCP] * model.lever(INDEX_MCP);
+        assert!((index_motion - params.max_motion).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_step_cap_leaves_unfixed_values_at_their_valid_end() {
+        let model = right_hand();
+        let plan = ClaspPlan::new(&model);
+        let world = floor();
+        let start = at_height(0.05, [0.0; FLEX_COUNT]);
+        let mut target = at_height(-0.02, [0.0; FLEX_COUNT]);
+        target.flex[INDEX_MCP] = 1.2;
+        let params = ClaspParams {
+            max_steps: 1,
+            ..unlimited()
+        };
+        let out = clasp(
+            &model,
+            &plan,
+            &start,
+            &target,
+            &params,
+            world.collider(&model),
+        );
+        // One step per stage: the root and the finger both collide at their targets.
+        assert_eq!(out.steps, 2);
+        assert_eq!(out.pose.root, start.root);
+        assert_eq!(out.pose.flex[INDEX_MCP], 0.0);
+        assert!(out.touching[model.palm()].contains(0));
+    }
+
+    /// One minimisation from `start` toward a target where the index MCP closes a little and
+    /// the DIP a long way; the tip collides only while the MCP is past `mcp_limit` or the DIP
+    /// past `dip_limit`.
+    fn tip_run(start: &HandPose, mcp_limit: f64, dip_limit: f64) -> ClaspOutcome {
+        let model = right_hand();
+        let plan = ClaspPlan::new(&model);
+        let tip = segment(&model, "index outer");
+        let mut target = at_height(0.0, [0.0; FLEX_COUNT]);
+        target.flex[4] = 0.1;
+        target.flex[6] = 1.4;
+        clasp(
+            &model,
+            &plan,
+            start,
+            &target,
+            &unlimited(),
+            |s, placement| {
+                // Recover the joint angles from the tip's pose: its origin swings about the MCP (at
+                // y = 0.095 on the palm), its rotation about -x is MCP + DIP (the PIP stays at 0).
+                let origin = placement.local.translation.vector;
+                let mcp = (-origin.z).atan2(origin.y - 0.095);
+                let dip = placement.local.rotation.scaled_axis().x.abs() - mcp;
+                let collides = s == tip && (mcp > mcp_limit || dip > dip_limit);
+                if collides {
+                    ObjectSet::single(0)
+                } else {
+                    ObjectSet::EMPTY
+                }
+            },
+        )
+    }
+
+    #[test]
+    fn fixing_a_joint_clears_the_flags_of_the_segments_it_carries() {
+        let model = right_hand();
+        let tip = segment(&model, "index outer");
+        let rest = at_height(0.0, [0.0; FLEX_COUNT]);
+        // The tip's collisions come from the MCP: once the MCP is fixed they are forgotten and
+        // the tip is not touching. (The DIP, blamed for the tip's collisions too, stops short of
+        // its target in this minimisation.)
+        let out = tip_run(&rest, 0.05, f64::INFINITY);
+        assert!(out.touching[tip].is_empty());
+        assert!(out.pose.flex[6] > 0.0 && out.pose.flex[6] < 1.4);
+        let mcp = out.pose.flex[4];
+        assert!(mcp < 0.05 && mcp > 0.05 - 0.001, "{mcp}");
+
+        // The tip's collisions come from its own joint. The MCP, blamed too and fixed first,
+        // clears the tip's flag, and the DIP gets fixed just short of the contact without
+        // colliding again: not touching yet.
+        let first = tip_run(&rest, f64::INFINITY, 0.7);
+        let tolerance = ClaspParams::default().flex_tolerance;
+        let dip = first.pose.flex[6];
+        assert!(dip < 0.7 && dip > 0.7 - tolerance, "{dip}");
+        assert!(first.touching[tip].is_empty());
+        // In the next frame the hand starts at the contact: the step just past it collides, both
+        // values are fixed in the same step, the DIP first, and the tip is touching.
+        let second = tip_run(&first.pose, f64::INFINITY, 0.7);
+        assert_eq!(second.touching[tip], ObjectSet::single(0));
+        assert_eq!(second.steps, 2);
+        assert_eq!(second.pose.flex, first.pose.flex);
+    }
+}

@@ -1,0 +1,389 @@
+//! The hand against the parts near it: each segment's DOP-tree tested against each part's, and
+//! the contacts of touching segments, found with a slightly inflated copy of the segment.
+
+use nalgebra::{Isometry3, Point3, Unit, Vector3};
+
+use super::analysis::{Contact, ContactSide};
+use super::clasp::{ObjectSet, SegmentPlacement};
+use super::model::{HandModel, JointLevel, SegmentId};
+use super::segment_mesh::{SegmentMeshError, swept_hull_mesh};
+use crate::collision::{DopTree, MeshCollider, QueryStats};
+use crate::geometry::TriMesh;
+
+/// The caller's name for a part (its index in the scene).
+pub type PartId = u32;
+
+/// Most contact points kept per segment and part: enough to outline a contact region.
+const MAX_CONTACT_POINTS: usize = 48;
+
+/// The most objects a collider handles at once (bits of an [`ObjectSet`]).
+pub const MAX_OBJECTS: usize = 64;
+
+/// Collision geometry of one segment, in its own frame.
+#[derive(Debug, Clone)]
+struct SegmentGeometry {
+    mesh: TriMesh,
+    tree: DopTree,
+    probe: TriMesh,
+    probe_tree: DopTree,
+    /// Outward unit normal of each probe triangle.
+    probe_normals: Vec<Vector3<f64>>,
+    /// Bounding sphere of the probe mesh.
+    bound: (Point3<f64>, f64),
+}
+
+/// The collision geometry of a whole hand, built once per hand model.
+#[derive(Debug, Clone)]
+pub struct HandGeometry {
+    segments: Vec<SegmentGeometry>,
+    probe_margin: f64,
+}
+
+impl HandGeometry {
+    /// Builds every segment's mesh and DOP-tree, and those of its contact probe: the segment
+    /// grown by `probe_margin` metres, which must exceed the gap the clasp may leave at a
+    /// contact.
+    pub fn new(model: &HandModel, probe_margin: f64) -> Result<HandGeometry, SegmentMeshError> {
+        let segments = model
+            .segments()
+            .iter()
+            .map(|segment| {
+                let mesh = swept_hull_mesh(&segment.shape, 0.0)?;
+                let probe = swept_hull_mesh(&segment.shape, probe_margin)?;
+                let centre = mean_vertex(&probe);
+                let probe_normals = probe
+                    .triangles()
+                    .iter()
+                    .enumerate()
+                    .map(|(i, _)| {
+                        let [a, b, c] = probe.triangle(i);
+                        let n = (b - a).cross(&(c - a)).normalize();
+                        // The hull is convex: outward is away from its centre.
+                        if n.dot(&(a - centre)) < 0.0 { -n } else { n }
+                    })
+                    .collect();
+                let radius = probe
+                    .vertices()
+                    .iter()
+                    .map(|v| (v - centre).norm())
+                    .fold(0.0, f64::max);
+                Ok(SegmentGeometry {
+                    tree: DopTree::build(&mesh),
+                    probe_tree: DopTree::build(&probe),
+                    mesh,
+                    probe,
+                    probe_normals,
+                    bound: (centre, radius),
+                })
+            })
+            .collect::<Result<Vec<_>, SegmentMeshError>>()?;
+        Ok(HandGeometry {
+            segments,
+            probe_margin,
+        })
+    }
+
+    /// The collision mesh of a segment, in its frame.
+    pub fn mesh(&self, segment: SegmentId) -> &TriMesh {
+        &self.segments[segment].mesh
+    }
+
+    /// How much the contact probe is grown beyond the segment (metres).
+    pub fn probe_margin(&self) -> f64 {
+        self.probe_margin
+    }
+}
+
+/// A part as the hand needs it, built once per part: its mesh, DOP-tree, bounding sphere and
+/// centre of mass.
+#[derive(Debug, Clone)]
+pub struct PartGeometry {
+    mesh: TriMesh,
+    tree: DopTree,
+    bound: (Point3<f64>, f64),
+    centre_of_mass: Point3<f64>,
+}
+
+impl PartGeometry {
+    /// Builds the part's DOP-tree. The centre of mass is the area-weighted centroid of the
+    /// surface: right for hollow parts and for symmetric solids, and defined for open meshes
+    /// with inconsistent winding, where a volume centroid is not.
+    pub fn new(mesh: TriMesh) -> PartGeometry {
+        let tree = DopTree::build(&mesh);
+        let (lo, hi) = mesh.bounding_box();
+        let centre = nalgebra::center(&lo, &hi);
+        let radius = mesh
+            .vertices()
+            .iter()
+            .map(|v| (v - centre).norm())
+            .fold(0.0, f64::max);
+        let mut area = 0.0;
+        let mut weighted = Vector3::zeros();
+        for i in 0..mesh.triangles().len() {
+            let [a, b, c] = mesh.triangle(i);
+            let w = (b - a).cross(&(c - a)).norm();
+            area += w;
+            weighted += (a.coords + b.coords + c.coords) * (w / 3.0);
+        }
+        PartGeometry {
+            tree,
+            bound: (centre, radius),
+            centre_of_mass: Point3::from(weighted / area),
+            mesh,
+        }
+    }
+
+    /// The part's mesh, in its frame.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
+
+    /// The part's DOP-tree.
+    pub fn tree(&self) -> &DopTree {
+        &self.tree
+    }
+
+    /// The centre of mass, in the part's frame.
+    pub fn centre_of_mass(&self) -> Point3<f64> {
+        self.centre_of_mass
+    }
+}
+
+/// A part near the hand: what the caller passes every frame.
+#[derive(Debug, Clone, Copy)]
+pub struct Obstacle<'a> {
+    /// The caller's id of the part.
+    pub part: PartId,
+    /// Its geometry.
+    pub geometry: &'a PartGeometry,
+    /// Its pose in the world (ignored for the part the hand holds, which follows the hand).
+    pub pose: Isometry3<f64>,
+}
+
+/// The collision test the clasp uses: segments against the obstacles of one frame; the held part
+/// (if any) is placed in the hand root's frame.
+pub struct SceneCollider<'a> {
+    hand: &'a HandGeometry,
+    obstacles: &'a [Obstacle<'a>],
+    /// Index into `obstacles` of the held part, and the part's pose in the root's frame.
+    held: Option<(usize, Isometry3<f64>)>,
+    /// Work done by the queries so far.
+    pub stats: QueryStats,
+    pairs: Vec<[u32; 2]>,
+}
+
+impl<'a> SceneCollider<'a> {
+    /// A collider over at most [`MAX_OBJECTS`] obstacles (the rest are ignored); `held` names
+    /// the held part and its pose relative to the hand root.
+    pub fn new(
+        hand: &'a HandGeometry,
+        obstacles: &'a [Obstacle<'a>],
+        held: Option<(PartId, Isometry3<f64>)>,
+    ) -> Self {
+        let obstacles = &obstacles[..obstacles.len().min(MAX_OBJECTS)];
+        let held = held.and_then(|(part, offset)| {
+            obstacles
+                .iter()
+                .position(|o| o.part == part)
+                .map(|k| (k, offset))
+        });
+        SceneCollider {
+            hand,
+            obstacles,
+            held,
+            stats: QueryStats::default(),
+            pairs: Vec::new(),
+        }
+    }
+
+    /// The obstacles, in object order (bit `k` of an [`ObjectSet`] is `obstacles()[k]`).
+    pub fn obstacles(&self) -> &[Obstacle<'a>] {
+        self.obstacles
+    }
+
+    /// The pose of object `k` in the world when the hand root is at `root`.
+    pub fn object_pose(&self, k: usize, root: &Isometry3<f64>) -> Isometry3<f64> {
+        match self.held {
+            Some((held, offset)) if held == k => root * offset,
+            _ => self.obstacles[k].pose,
+        }
+    }
+
+    /// The segment's pose in object `k`'s frame. The held part's relation to the segment does
+    /// not depend on the root, so it is computed without it.
+    pub fn segment_in_object(&self, k: usize, placement: &SegmentPlacement) -> Isometry3<f64> {
+        match self.held {
+            Some((held, offset)) if held == k => offset.inv_mul(&placement.local),
+            _ => self.obstacles[k].pose.inv_mul(&placement.world()),
+        }
+    }
+
+    /// The objects the segment intersects at `placement` (the held part is skipped when the
+    /// flex values are valid: it moves with the root).
+    pub fn collisions(&mut self, segment: SegmentId, placement: &SegmentPlacement) -> ObjectSet {
+        let geometry = &self.hand.segments[segment];
+        let mut hit = ObjectSet::EMPTY;
+        for k in 0..self.obstacles.len() {
+            if placement.flex_valid && self.held.is_some_and(|(held, _)| held == k) {
+                continue;
+            }
+            let to_object = self.segment_in_object(k, placement);
+            let part = self.obstacles[k].geometry;
+            if !spheres_overlap(&to_object, geometry.bound, part.bound) {
+                continue;
+            }
+            if part
+                .tree
+                .intersects(&geometry.tree, &to_object, &mut self.stats)
+            {
+                hit = hit.union(ObjectSet::single(k));
+            }
+        }
+        hit
+    }
+
+    /// How a segment at `to_object` (its pose in object `k`'s frame, see
+    /// [`SceneCollider::segment_in_object`]) touches the object: where its probe (the segment
+    /// grown by the probe margin) cuts the part and which side of the segment that is, with the
+    /// points and normal in the object's frame. `None` when the probe does not reach the part.
+    pub fn contact(
+        &mut self,
+        segment: SegmentId,
+        level: JointLevel,
+        k: usize,
+        to_object: &Isometry3<f64>,
+    ) -> Option<Contact> {
+        let geometry = &self.hand.segments[segment];
+        let part = self.obstacles[k].geometry;
+        self.pairs.clear();
+        part.tree.intersecting_pairs(
+            &geometry.probe_tree,
+            to_object,
+            &mut self.pairs,
+            &mut self.stats,
+        );
+        if self.pairs.is_empty() {
+            return None;
+        }
+        let mut points = Vec::new();
+        let mut normal = Vector3::zeros();
+        let mut seen = Vec::new();
+        for &[part_triangle, probe_triangle] in &self.pairs {
+            let probe_corners = geometry
+                .probe
+                .triangle(probe_triangle as usize)
+                .map(|p| to_object * p);
+            let part_corners = part.mesh.triangle(part_triangle as usize);
+            triangle_crossings(&probe_corners, &part_corners, &mut points);
+            triangle_crossings(&part_corners, &probe_corners, &mut points);
+            if !seen.contains(&probe_triangle) {
+                seen.push(probe_triangle);
+                normal += geometry.probe_normals[probe_triangle as usize];
+            }
+        }
+        if points.is_empty() {
+            // Only coplanar pairs: fall back to the touching probe triangles' centroids.
+            points = seen
+                .iter()
+                .map(|&t| {
+                    let [a, b, c] = geometry.probe.triangle(t as usize);
+                    to_object * Point3::from((a.coords + b.coords + c.coords) / 3.0)
+                })
+                .collect();
+        }
+        thin_out(&mut points, MAX_CONTACT_POINTS);
+        let local = Unit::try_new(normal, 1e-12)?;
+        Some(Contact {
+            points,
+            normal: to_object.rotation * local,
+            side: side_of(&local, level),
+        })
+    }
+
+    /// True when no segment of the hand at `root`, with the segment poses `local` (root frame)
+    /// of its valid flex values, intersects any obstacle (the held part, moving with the root,
+    /// cannot).
+    pub fn hand_is_free(&mut self, root: &Isometry3<f64>, local: &[Isometry3<f64>]) -> bool {
+        local.iter().enumerate().all(|(s, pose)| {
+            self.collisions(
+                s,
+                &SegmentPlacement {
+                    root: *root,
+                    local: *pose,
+                    flex_valid: true,
+                },
+            )
+            .is_empty()
+        })
+    }
+}
+
+/// True when the segment's bounding sphere (segment frame, placed by `to_object`) and the part's
+/// (object frame) overlap.
+fn spheres_overlap(
+    to_object: &Isometry3<f64>,
+    segment: (Point3<f64>, f64),
+    part: (Point3<f64>, f64),
+) -> bool {
+    (to_object * segment.0 - part.0).norm() <= segment.1 + part.1
+}
+
+/// Which side of a segment an outward normal (segment frame) points to.
+fn side_of(normal: &Vector3<f64>, level: JointLevel) -> ContactSide {
+    if normal.z > 0.5 {
+        ContactSide::Dorsal
+    } else if level == JointLevel::Outer && normal.y > 0.5 {
+        ContactSide::Tip
+    } else if -normal.z >= normal.x.abs() {
+        ContactSide::Palmar
+    } else {
+        ContactSide::Lateral
+    }
+}
+
+/// Appends the points where the edges of triangle `a` cross triangle `b`.
+fn triangle_crossings(a: &[Point3<f64>; 3], b: &[Point3<f64>; 3], out: &mut Vec<Point3<f64>>) {
+    for i in 0..3 {
+        if let Some(p) = segment_triangle(&a[i], &a[(i + 1) % 3], b) {
+            out.push(p);
+        }
+    }
+}
+
+/// Where the segment `p`–`q` crosses triangle `t` (Möller–Trumbore), if it does; segments in
+/// the triangle's plane give none.
+fn segment_triangle(p: &Point3<f64>, q: &Point3<f64>, t: &[Point3<f64>; 3]) -> Option<Point3<f64>> {
+    let d = q - p;
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let h = d.cross(&e2);
+    let det = e1.dot(&h);
+    if det.abs() <= 1e-14 * e1.norm() * e2.norm() * d.norm() {
+        return None;
+    }
+    let s = p - t[0];
+    let u = s.dot(&h) / det;
+    let qv = s.cross(&e1);
+    let v = d.dot(&qv) / det;
+    let along = e2.dot(&qv) / det;
+    ((0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along))
+        .then(|| p + d * along)
+}
+
+/// Keeps at most `max` points, evenly spread over the list.
+fn thin_out(points: &mut Vec<Point3<f64>>, max: usize) {
+    if points.len() > max {
+        let step = points.len() as f64 / max as f64;
+        *points = (0..max)
+            .map(|i| points[(i as f64 * step) as usize])
+            .collect();
+    }
+}
+
+fn mean_vertex(mesh: &TriMesh) -> Point3<f64> {
+    let sum = mesh
+        .vertices()
+        .iter()
+        .fold(Vector3::zeros(), |acc, v| acc + v.coords);
+    Point3::from(sum / mesh.vertices().len() as f64)
+}
