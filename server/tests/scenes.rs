@@ -8,7 +8,8 @@ use std::sync::Arc;
 
 use nalgebra::{Point2, Point3};
 use vas_server::geometry::{TriMesh, load_mesh};
-use vas_server::scene::{Scene, SceneError, SlidingMetaphor, default_scene_path};
+use vas_server::scene::{Scene, SceneError, default_scene_path};
+use vas_server::sliding::Metaphor;
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs")
@@ -216,8 +217,8 @@ movable = true
     assert_eq!(three.group, "default");
     assert_eq!(scene.hand, Some(dir.join("hand.toml")));
     assert_eq!(scene.params.dop_orientations, 18);
-    assert_eq!(scene.params.sliding.metaphor, SlidingMetaphor::SpiralSpring);
-    assert_eq!(scene.params.sliding.contact_tolerance, 1e-4, "default kept");
+    assert_eq!(scene.params.sliding.metaphor, Metaphor::SpiralSpring);
+    assert_eq!(scene.params.sliding.contact_tolerance, None, "default kept");
     assert_eq!(
         (scene.rates.publish_hz, scene.rates.collision_hz),
         (30.0, 500.0)

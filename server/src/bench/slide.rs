@@ -22,7 +22,7 @@ use super::report::{
 };
 use crate::collision::{DopTree, MeshCollider, ParryMesh, QueryStats};
 use crate::geometry::{TriMesh, shapes};
-use crate::scene::{Scene, SlidingMetaphor, SlidingParams};
+use crate::scene::Scene;
 use crate::sliding::world::{Obstacle, PairwiseWorld, SlideBody, WorldStats};
 use crate::sliding::{
     Event, Metaphor, Pose, RestReason, SlideMachine, SlideParams, SlideState, SlideStats,
@@ -432,20 +432,6 @@ pub fn slide_in_unit(allowance: bool) -> Scenario {
     }
 }
 
-/// The sliding parameters of a scene config.
-pub fn slide_params(sliding: &SlidingParams) -> SlideParams {
-    SlideParams {
-        metaphor: match sliding.metaphor {
-            SlidingMetaphor::RubberBand => Metaphor::RubberBand,
-            SlidingMetaphor::SpiralSpring => Metaphor::SpiralSpring,
-            SlidingMetaphor::Incremental => Metaphor::Incremental,
-        },
-        contact_tolerance: Some(sliding.contact_tolerance),
-        max_iterations: sliding.max_iterations,
-        ..SlideParams::default()
-    }
-}
-
 /// A scenario from a scene config: the movable part named `grasped` is grasped at its configured
 /// pose, every part of interest to it is an obstacle, and `path` gives the ghost's poses from
 /// the start pose.
@@ -460,7 +446,7 @@ pub fn scene_scenario(
         .position(|p| p.name == grasped)
         .with_context(|| format!("{}: no part named {grasped}", scene.source.display()))?;
     let part = &scene.parts[index];
-    let params = slide_params(&scene.params.sliding);
+    let params = scene.params.sliding.clone();
     let obstacles = (0..scene.parts.len())
         .filter(|&other| scene.pair_of_interest(index, other))
         .map(|other| {

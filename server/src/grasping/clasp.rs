@@ -39,6 +39,7 @@
 //! presses on is marked before its parents clear its flag.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use serde::{Deserialize, Serialize};
 
 use super::model::{FlexVector, HandModel, ROOT_VARIABLE, SegmentId, VARIABLE_COUNT, VariableSet};
 
@@ -111,8 +112,10 @@ impl SegmentPlacement {
     }
 }
 
-/// Tuning of the clasp minimisation.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Tuning of the clasp minimisation, read from a scene's `[params.clasp]` table; every field has
+/// a default.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct ClaspParams {
     /// A flex value is fixed when its valid-invalid interval is narrower than this (radians).
     pub flex_tolerance: f64,
@@ -136,6 +139,49 @@ impl Default for ClaspParams {
             max_steps: 24,
             max_motion: 0.005,
         }
+    }
+}
+
+/// A clasp parameter outside its valid range: the key and the reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("clasp.{key}: {reason}")]
+pub struct ClaspParamError {
+    /// The offending key, relative to the `[clasp]` table.
+    pub key: &'static str,
+    /// Why its value is refused.
+    pub reason: String,
+}
+
+/// The most steps a stage may be allowed: far more than any minimisation needs, so that a typo
+/// cannot make one frame's minimisation run for seconds.
+const MAX_STEPS_LIMIT: u32 = 10_000;
+
+impl ClaspParams {
+    /// Checks every value's range, so that a scene with bad clasp parameters is refused at load.
+    pub fn validate(&self) -> Result<(), ClaspParamError> {
+        let within = |key: &'static str, value: f64, max: f64, unit: &str| {
+            if value.is_finite() && value > 0.0 && value <= max {
+                Ok(())
+            } else {
+                Err(ClaspParamError {
+                    key,
+                    reason: format!("must be positive and at most {max} {unit}, got {value}"),
+                })
+            }
+        };
+        within("flex_tolerance", self.flex_tolerance, 0.5, "rad")?;
+        within("root_tolerance", self.root_tolerance, 0.1, "m")?;
+        within("max_motion", self.max_motion, 1.0, "m")?;
+        if !(1..=MAX_STEPS_LIMIT).contains(&self.max_steps) {
+            return Err(ClaspParamError {
+                key: "max_steps",
+                reason: format!(
+                    "must be between 1 and {MAX_STEPS_LIMIT}, got {}",
+                    self.max_steps
+                ),
+            });
+        }
+        Ok(())
     }
 }
 
@@ -456,6 +502,34 @@ mod tests {
 
     const INDEX_MCP: usize = 4;
     const MCPS: [usize; 4] = [4, 7, 11, 15];
+
+    #[test]
+    fn a_table_with_some_keys_fills_the_rest_with_defaults() {
+        let params: ClaspParams = toml::from_str("flex_tolerance = 0.01\nmax_steps = 12").unwrap();
+        params.validate().unwrap();
+        assert_eq!((params.flex_tolerance, params.max_steps), (0.01, 12));
+        let defaults = ClaspParams::default();
+        defaults.validate().unwrap();
+        assert_eq!(params.root_tolerance, defaults.root_tolerance);
+        assert_eq!(params.max_motion, defaults.max_motion);
+    }
+
+    #[test]
+    fn bad_clasp_values_are_refused_with_their_key() {
+        let unknown = toml::from_str::<ClaspParams>("max_iterations = 16").unwrap_err();
+        assert!(unknown.to_string().contains("max_iterations"), "{unknown}");
+        for (text, key) in [
+            ("flex_tolerance = inf", "flex_tolerance"),
+            ("flex_tolerance = 0.6", "flex_tolerance"),
+            ("root_tolerance = -1e-3", "root_tolerance"),
+            ("max_motion = 0.0", "max_motion"),
+            ("max_steps = 0", "max_steps"),
+            ("max_steps = 10001", "max_steps"),
+        ] {
+            let params: ClaspParams = toml::from_str(text).unwrap();
+            assert_eq!(params.validate().unwrap_err().key, key, "{text}");
+        }
+    }
 
     fn at_height(z: f64, flex: FlexVector) -> HandPose {
         HandPose {

@@ -28,7 +28,7 @@ pub mod segment_mesh;
 pub(crate) mod testing;
 
 pub use analysis::{GraspType, PrecisionKind};
-pub use clasp::{ClaspParams, HandPose};
+pub use clasp::{ClaspParamError, ClaspParams, HandPose};
 pub use collider::{Obstacle, PartGeometry, PartId};
 pub use hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandInput, HandMode};
 pub use model::{

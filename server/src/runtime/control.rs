@@ -8,7 +8,8 @@ use vas_protocol::{
 };
 
 use super::simulation::Simulation;
-use crate::scene::{self, Part, Scene};
+use crate::scene::{Part, Scene};
+use crate::sliding::Metaphor;
 
 /// Carries out `request` on the simulation and builds the answer.
 ///
@@ -101,9 +102,9 @@ fn load_scene(
 
 fn set_metaphor(simulation: &mut Simulation, code: u32) -> Result<PartDescription, Refusal> {
     let metaphor = match SlidingMetaphor::try_from(code) {
-        Ok(SlidingMetaphor::RubberBand) => scene::SlidingMetaphor::RubberBand,
-        Ok(SlidingMetaphor::RubberBandSpiralSpring) => scene::SlidingMetaphor::SpiralSpring,
-        Ok(SlidingMetaphor::IncrementalMotion) => scene::SlidingMetaphor::Incremental,
+        Ok(SlidingMetaphor::RubberBand) => Metaphor::RubberBand,
+        Ok(SlidingMetaphor::RubberBandSpiralSpring) => Metaphor::SpiralSpring,
+        Ok(SlidingMetaphor::IncrementalMotion) => Metaphor::Incremental,
         Err(unknown) => return Err((ControlStatus::InvalidRequest, unknown.to_string())),
     };
     tracing::info!(%metaphor, "sliding metaphor set on request");
@@ -251,7 +252,7 @@ mod tests {
         );
         assert_eq!(
             simulation.scene().params.sliding.metaphor,
-            scene::SlidingMetaphor::Incremental
+            Metaphor::Incremental
         );
         assert_eq!(
             status(&answer(&mut simulation, &ControlRequest::reset())),

@@ -11,7 +11,8 @@ use vas_protocol::{
     InputStats, PartState, PartsFrameHeader, TrackerSample, TrackerTarget, WirePose,
 };
 
-use crate::scene::{Scene, SlidingMetaphor};
+use crate::scene::Scene;
+use crate::sliding::Metaphor;
 
 /// The scene, the valid part poses, the latest validated hand target and the input counters.
 pub struct Simulation {
@@ -144,7 +145,7 @@ impl Simulation {
     }
 
     /// Selects how grasped parts follow the hand from now on.
-    pub fn set_sliding_metaphor(&mut self, metaphor: SlidingMetaphor) {
+    pub fn set_sliding_metaphor(&mut self, metaphor: Metaphor) {
         self.scene.params.sliding.metaphor = metaphor;
     }
 

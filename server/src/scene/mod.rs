@@ -48,9 +48,7 @@ use thiserror::Error;
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{GeometryError, Point, TriMesh, load_mesh};
 use params::Problem;
-pub use params::{
-    AlgorithmParams, ClaspParams, DOP_ORIENTATION_COUNTS, Rates, SlidingMetaphor, SlidingParams,
-};
+pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates};
 
 /// How far from 1 a rotation quaternion's norm may be (relative), as a config writes it with a
 /// limited number of digits.
@@ -294,20 +292,25 @@ impl Scene {
             }
         );
         let (p, sl, cl) = (&self.params, &self.params.sliding, &self.params.clasp);
+        let contact_tolerance = sl
+            .contact_tolerance
+            .map_or("1e-4 of the part's size".to_owned(), |t| format!("{t} m"));
         let _ = writeln!(
             s,
-            "params: {}-DOPs; sliding {} (contact tolerance {} m, angle tolerance {} rad, \
-             {} bisection steps, {} iterations); clasp (flex tolerance {} rad, root tolerance {} m, \
-             {} iterations)",
+            "params: {}-DOPs; sliding {} (contact tolerance {contact_tolerance}, lift {}, \
+             {} iterations, {} stall cycles, cluster angle {} rad, {} slide-in units); \
+             clasp (flex tolerance {} rad, root tolerance {} m, {} steps, max motion {} m)",
             p.dop_orientations,
             sl.metaphor,
-            sl.contact_tolerance,
-            sl.angle_tolerance,
-            sl.max_bisection_steps,
+            sl.lift,
             sl.max_iterations,
+            sl.stall_cycles,
+            sl.cluster_angle,
+            sl.allowances.len(),
             cl.flex_tolerance,
             cl.root_tolerance,
-            cl.max_iterations
+            cl.max_steps,
+            cl.max_motion
         );
         let r = &self.rates;
         let _ = writeln!(

@@ -1,6 +1,8 @@
 //! The sliding parameters a scene sets: metaphor, tolerances, stopping criterion, force output and
 //! slide-in allowances.
 
+use std::fmt;
+
 use serde::{Deserialize, Serialize};
 
 use super::force::ForceParams;
@@ -22,6 +24,17 @@ impl Metaphor {
     /// Whether sliding under this metaphor may rotate the part.
     pub fn rotates(self) -> bool {
         !matches!(self, Metaphor::RubberBand)
+    }
+}
+
+/// The name as a config spells it (`rubber-band`), for summaries and logs.
+impl fmt::Display for Metaphor {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Metaphor::RubberBand => "rubber-band",
+            Metaphor::SpiralSpring => "spiral-spring",
+            Metaphor::Incremental => "incremental",
+        })
     }
 }
 
@@ -211,5 +224,17 @@ mod tests {
         assert_eq!(same.validate().unwrap_err().key, "allowances[0].parts");
         let stiff: SlideParams = toml::from_str("[force]\nstiffness = -3.0").unwrap();
         assert_eq!(stiff.validate().unwrap_err().key, "force.stiffness");
+    }
+
+    #[test]
+    fn metaphor_names_match_the_config_spelling() {
+        for metaphor in [
+            Metaphor::RubberBand,
+            Metaphor::SpiralSpring,
+            Metaphor::Incremental,
+        ] {
+            let quoted = serde_json::to_string(&metaphor).unwrap();
+            assert_eq!(quoted, format!("\"{metaphor}\""));
+        }
     }
 }
