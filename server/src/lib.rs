@@ -4,4 +4,5 @@
 //! `geometry` ← `collision` ← `sliding`, `grasping` ← `scene` ← `runtime`.
 //! Only `runtime` knows about threads and IPC; every other module is a plain library.
 
+pub mod collision;
 pub mod geometry;

@@ -1,0 +1,4 @@
+//! Collision detection: the pipeline of filters of PAPER §2 and its stages.
+
+pub mod broad_phase;
+pub mod separating_plane;
