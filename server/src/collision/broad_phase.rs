@@ -80,6 +80,8 @@ pub struct SweepAndPrune {
     /// Where each box's lower and upper endpoints sit in each axis.
     positions: Vec<[[u32; 2]; 3]>,
     overlaps: Vec<Vec<u32>>,
+    /// Overlaps that ended since the last [`SweepAndPrune::drain_ended`].
+    ended: Vec<[u32; 2]>,
     swaps: u64,
 }
 
@@ -203,6 +205,7 @@ impl SweepAndPrune {
             self.overlaps[a as usize].push(b);
             self.overlaps[b as usize].push(a);
         } else if !overlapping && listed {
+            self.ended.push([a, b]);
             for (from, to) in [(a, b), (b, a)] {
                 let list = &mut self.overlaps[from as usize];
                 let at = list
@@ -212,6 +215,13 @@ impl SweepAndPrune {
                 list.swap_remove(at);
             }
         }
+    }
+
+    /// The overlaps that ended (box pairs that stopped overlapping, or one of them was removed)
+    /// since the last call: a caller keeping per-pair state drops it here. A caller that keeps
+    /// none should still drain it now and then.
+    pub fn drain_ended(&mut self) -> std::vec::Drain<'_, [u32; 2]> {
+        self.ended.drain(..)
     }
 
     /// The boxes overlapping box `id` (empty for an absent id).
@@ -298,6 +308,7 @@ mod tests {
         let world = 20.0;
         let mut sap = SweepAndPrune::new();
         let mut boxes: Vec<Option<Aabb>> = vec![None; count];
+        let mut previous = BTreeSet::new();
         for frame in 0..400 {
             for _ in 0..rng.random_range(1..30) {
                 let id = rng.random_range(0..count);
@@ -333,7 +344,16 @@ mod tests {
                     }
                 }
             }
-            assert_eq!(listed(&sap, count), brute_force(&boxes), "frame {frame}");
+            let now = brute_force(&boxes);
+            let ended: BTreeSet<(u32, u32)> = sap
+                .drain_ended()
+                .map(|[a, b]| (a.min(b), a.max(b)))
+                .collect();
+            for pair in previous.difference(&now) {
+                assert!(ended.contains(pair), "the end of {pair:?} was not reported");
+            }
+            assert_eq!(listed(&sap, count), now, "frame {frame}");
+            previous = now;
             for (id, b) in boxes.iter().enumerate() {
                 assert_eq!(sap.bounds(id as u32), *b);
             }
