@@ -17,8 +17,9 @@ mod concurrent;
 mod exact;
 
 pub use concurrent::ConcurrentPipeline;
-pub use exact::{ExactTest, MeshCollider, ParryMesh, QueryStats};
+pub use exact::ExactTest;
 
+use super::QueryStats;
 use super::broad_phase::{Aabb, SweepAndPrune};
 use super::interest::{GroupId, InterestKey, InterestMatrix};
 use super::separating_plane::{PlaneSearch, SeparatingPlane};
@@ -500,7 +501,9 @@ impl<C: ExactTest> CollisionPipeline<C> {
             pairs_out: work.iter().filter(|item| item.colliding).count() as u64,
             time: stage_start.elapsed(),
         };
-        stats.exact_work.triangle_tests = work.iter().map(|item| item.stats.triangle_tests).sum();
+        for item in &work {
+            stats.exact_work += item.stats;
+        }
 
         for item in work {
             let state = self.pairs.entry(item.pair).or_default();

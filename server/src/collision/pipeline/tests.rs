@@ -1,14 +1,13 @@
 //! The pipeline against brute force: every pair of the scene tested exactly, each frame.
 
 use super::*;
+use crate::collision::{DopTree, ParryMesh};
 use crate::geometry::{Point, TriMesh};
 use nalgebra::{Translation3, UnitQuaternion};
 use parry3d::shape::Ball;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
-
-type Model = Arc<CollisionModel<ParryMesh>>;
 
 /// An ellipsoid with half-axes `axes`, bent into a banana when `bend` is non-zero (so that its
 /// hull is looser than the mesh).
@@ -25,17 +24,14 @@ fn shape(axes: Vector3<f64>, bend: f64) -> TriMesh {
     TriMesh::new(points, triangles).unwrap().0
 }
 
-fn model(mesh: &TriMesh) -> Model {
-    Arc::new(CollisionModel::new(
-        ParryMesh::new(mesh),
-        ConvexHull::of(mesh),
-    ))
+fn model<C: ExactTest>(mesh: &TriMesh) -> Arc<CollisionModel<C>> {
+    Arc::new(CollisionModel::new(C::build(mesh), ConvexHull::of(mesh)))
 }
 
 /// The test's own copy of each object, to check the pipeline against.
-struct Body {
+struct Body<C> {
     mesh: TriMesh,
-    model: Model,
+    model: Arc<CollisionModel<C>>,
     pose: Isometry3<f64>,
     velocity: Vector3<f64>,
     spin: Vector3<f64>,
@@ -43,16 +39,16 @@ struct Body {
     is_static: bool,
 }
 
-struct Scene {
+struct Scene<C> {
     rng: ChaCha8Rng,
-    bodies: BTreeMap<ObjectId, Body>,
-    shapes: Vec<(TriMesh, Model)>,
+    bodies: BTreeMap<ObjectId, Body<C>>,
+    shapes: Vec<(TriMesh, Arc<CollisionModel<C>>)>,
     size: f64,
     /// The rules the oracle applies: group 1 never meets group 2, and one object pair is off.
     disallowed_object_pair: Option<(ObjectId, ObjectId)>,
 }
 
-impl Scene {
+impl<C: ExactTest> Scene<C> {
     fn new(seed: u64) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let shapes = (0..6)
@@ -92,7 +88,7 @@ impl Scene {
         )
     }
 
-    fn add(&mut self, pipeline: &mut CollisionPipeline<ParryMesh>) -> ObjectId {
+    fn add(&mut self, pipeline: &mut CollisionPipeline<C>) -> ObjectId {
         let (mesh, model) = self.shapes[self.rng.random_range(0..self.shapes.len())].clone();
         let pose = self.random_pose();
         let is_static = self.rng.random_bool(0.2);
@@ -225,8 +221,19 @@ fn sorted_triangles(mut report: FrameReport) -> Vec<CollidingPair> {
 }
 
 #[test]
-fn pairs_equal_brute_force_over_thousands_of_random_frames() {
-    let mut scene = Scene::new(21);
+fn pairs_equal_brute_force_over_thousands_of_random_frames_with_parry() {
+    pairs_equal_brute_force::<ParryMesh>(21);
+}
+
+#[test]
+fn pairs_equal_brute_force_over_thousands_of_random_frames_with_dop_trees() {
+    pairs_equal_brute_force::<DopTree>(24);
+}
+
+/// Runs a random scene of 30 objects for 2,500 frames and compares every frame's colliding pairs
+/// (and every tenth frame's triangle pairs) with brute force, using the same exact test `C`.
+fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) {
+    let mut scene = Scene::<C>::new(seed);
     let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
     for _ in 0..30 {
         scene.add(&mut pipeline);
@@ -291,7 +298,7 @@ fn pairs_equal_brute_force_over_thousands_of_random_frames() {
 
 #[test]
 fn concurrent_runner_gives_the_same_reports_as_the_pipeline() {
-    let mut scene = Scene::new(22);
+    let mut scene = Scene::<DopTree>::new(22);
     let mut serial = CollisionPipeline::new(PipelineConfig::default());
     for _ in 0..25 {
         scene.add(&mut serial);
@@ -340,7 +347,7 @@ fn concurrent_runner_gives_the_same_reports_as_the_pipeline() {
 
 #[test]
 fn bad_poses_and_stale_ids_are_refused() {
-    let mut scene = Scene::new(23);
+    let mut scene = Scene::<ParryMesh>::new(23);
     let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
     let id = scene.add(&mut pipeline);
     let mut nan = Isometry3::identity();

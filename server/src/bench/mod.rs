@@ -1,0 +1,5 @@
+//! Benchmark procedures of BENCHMARKS.md, shared by the `vas-server bench` subcommands and tests.
+
+pub mod random;
+pub mod report;
+pub mod tumble;

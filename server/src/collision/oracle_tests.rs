@@ -1,0 +1,230 @@
+//! Every collider against independent oracles: brute force over all triangle pairs, and parry.
+//!
+//! Near-touching poses, where rounding (parry works in `f32`) may decide, are recognised by
+//! re-running brute force at slightly moved poses; only those may disagree with parry.
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector4};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::triangle::triangles_intersect;
+use super::*;
+use crate::geometry::TriMesh;
+
+/// A soup of `n` random triangles of about `size` inside the box [-1, 1]^3.
+pub(crate) fn random_soup(rng: &mut ChaCha8Rng, n: usize, size: f64) -> TriMesh {
+    let mut vertices = Vec::new();
+    for _ in 0..n {
+        let centre = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        for _ in 0..3 {
+            let offset = Vector3::new(
+                rng.random_range(-size..size),
+                rng.random_range(-size..size),
+                rng.random_range(-size..size),
+            );
+            vertices.push(Point3::from(centre + offset));
+        }
+    }
+    let triangles = (0..n as u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    TriMesh::new(vertices, triangles).unwrap().0
+}
+
+/// A closed torus (major radius 1, minor `r`) of `2 nu nv` triangles.
+pub(crate) fn torus(r: f64, nu: u32, nv: u32) -> TriMesh {
+    let mut vertices = Vec::new();
+    for i in 0..nu {
+        let u = std::f64::consts::TAU * i as f64 / nu as f64;
+        for j in 0..nv {
+            let v = std::f64::consts::TAU * j as f64 / nv as f64;
+            let ring = 1.0 + r * v.cos();
+            vertices.push(Point3::new(ring * u.cos(), ring * u.sin(), r * v.sin()));
+        }
+    }
+    let index = |i: u32, j: u32| (i % nu) * nv + (j % nv);
+    let mut triangles = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let (a, b, c, d) = (
+                index(i, j),
+                index(i + 1, j),
+                index(i + 1, j + 1),
+                index(i, j + 1),
+            );
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    TriMesh::new(vertices, triangles).unwrap().0
+}
+
+/// A uniformly random rotation and a translation uniform in [-reach, reach]^3.
+pub(crate) fn random_pose(rng: &mut ChaCha8Rng, reach: f64) -> Isometry3<f64> {
+    let q = loop {
+        let v = Vector4::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let n = v.norm();
+        if n > 0.1 && n <= 1.0 {
+            break UnitQuaternion::from_quaternion(nalgebra::Quaternion::from(v / n));
+        }
+    };
+    let t = Vector3::new(
+        rng.random_range(-reach..reach),
+        rng.random_range(-reach..reach),
+        rng.random_range(-reach..reach),
+    );
+    Isometry3::from_parts(Translation3::from(t), q)
+}
+
+/// Every intersecting pair by testing all of them, sorted.
+pub(crate) fn brute_force_pairs(
+    a: &TriMesh,
+    b: &TriMesh,
+    b_to_a: &Isometry3<f64>,
+) -> Vec<[u32; 2]> {
+    let moved: Vec<_> = (0..b.triangles().len())
+        .map(|j| b.triangle(j).map(|p| b_to_a * p))
+        .collect();
+    let mut pairs = Vec::new();
+    for i in 0..a.triangles().len() {
+        let ta = a.triangle(i);
+        for (j, tb) in moved.iter().enumerate() {
+            if triangles_intersect(&ta, tb) {
+                pairs.push([i as u32, j as u32]);
+            }
+        }
+    }
+    pairs
+}
+
+/// True when moving B by `epsilon` in some direction changes the brute-force answer.
+fn near_touching(a: &TriMesh, b: &TriMesh, pose: &Isometry3<f64>, epsilon: f64) -> bool {
+    let answer = !brute_force_pairs(a, b, pose).is_empty();
+    [Vector3::x(), Vector3::y(), Vector3::z()]
+        .iter()
+        .flat_map(|axis| [axis * epsilon, -axis * epsilon])
+        .any(|shift| {
+            let moved = Translation3::from(shift) * pose;
+            brute_force_pairs(a, b, &moved).is_empty() == answer
+        })
+}
+
+fn sorted(mut pairs: Vec<[u32; 2]>) -> Vec<[u32; 2]> {
+    pairs.sort_unstable();
+    pairs
+}
+
+/// Checks every collider on `poses` random poses of `b` against `a`: first hit and all pairs
+/// against brute force, first hit against parry (up to near-touching poses). Returns the number
+/// of colliding poses.
+fn check_all(a: &TriMesh, b: &TriMesh, poses: usize, reach: f64, seed: u64) -> usize {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let sets: Vec<OrientationSet> = orientation::SUPPORTED_K
+        .iter()
+        .map(|&k| OrientationSet::new(k).unwrap())
+        .collect();
+    let dops: Vec<(DopTree, DopTree)> = sets
+        .iter()
+        .map(|s| {
+            (
+                DopTree::with_options(a, s, 1 + s.k() % 4),
+                DopTree::with_options(b, s, 1 + s.k() % 3),
+            )
+        })
+        .collect();
+    let brute = (KdopBruteForceTree::build(a), KdopBruteForceTree::build(b));
+    let obb = (ObbTree::build(a), ObbTree::build(b));
+    let parry = (ParryMesh::build(a), ParryMesh::build(b));
+    let mut colliding = 0;
+    let mut parry_disagreements = 0;
+    for _ in 0..poses {
+        let pose = random_pose(&mut rng, reach);
+        let expected = sorted(brute_force_pairs(a, b, &pose));
+        let hit = !expected.is_empty();
+        colliding += hit as usize;
+        let mut stats = QueryStats::default();
+        for (k, (da, db)) in orientation::SUPPORTED_K.iter().zip(&dops) {
+            assert_eq!(da.intersects(db, &pose, &mut stats), hit, "doptree k {k}");
+            let mut pairs = Vec::new();
+            da.intersecting_pairs(db, &pose, &mut pairs, &mut stats);
+            assert_eq!(sorted(pairs), expected, "doptree k {k} pairs");
+        }
+        let (da, db) = &dops[3];
+        assert_eq!(da.intersects_parallel(db, &pose, &mut stats), hit);
+        let mut pairs = Vec::new();
+        da.intersecting_pairs_parallel(db, &pose, &mut pairs, &mut stats);
+        assert_eq!(sorted(pairs), expected, "parallel pairs");
+        assert_eq!(brute.0.intersects(&brute.1, &pose, &mut stats), hit, "kdop");
+        let mut pairs = Vec::new();
+        brute
+            .0
+            .intersecting_pairs(&brute.1, &pose, &mut pairs, &mut stats);
+        assert_eq!(sorted(pairs), expected, "kdop pairs");
+        assert_eq!(obb.0.intersects(&obb.1, &pose, &mut stats), hit, "obb");
+        let mut pairs = Vec::new();
+        obb.0
+            .intersecting_pairs(&obb.1, &pose, &mut pairs, &mut stats);
+        assert_eq!(sorted(pairs), expected, "obb pairs");
+        if parry.0.intersects(&parry.1, &pose, &mut stats) != hit {
+            assert!(
+                near_touching(a, b, &pose, 1e-4),
+                "parry disagrees at a pose that is not near touching: {pose}"
+            );
+            parry_disagreements += 1;
+        }
+    }
+    assert!(
+        parry_disagreements * 100 <= poses,
+        "{parry_disagreements} near-touching disagreements with parry in {poses} poses"
+    );
+    colliding
+}
+
+#[test]
+fn random_soups_agree_with_brute_force_and_parry() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    for round in 0..4 {
+        let a = random_soup(&mut rng, 40, 0.3);
+        let b = random_soup(&mut rng, 25 + 10 * round, 0.4);
+        let colliding = check_all(&a, &b, 500, 2.0, round as u64);
+        assert!(
+            colliding > 100 && colliding < 450,
+            "{colliding} colliding poses"
+        );
+    }
+}
+
+#[test]
+fn tori_agree_with_brute_force_and_parry() {
+    let a = torus(0.35, 24, 12);
+    let b = torus(0.2, 16, 8);
+    let colliding = check_all(&a, &b, 600, 2.0, 9);
+    assert!(
+        colliding > 100 && colliding < 550,
+        "{colliding} colliding poses"
+    );
+}
+
+#[test]
+fn identical_touching_copies_collide() {
+    // Two copies at the identity share every triangle: every algorithm must report contact.
+    let mesh = torus(0.35, 12, 6);
+    let mut stats = QueryStats::default();
+    let id = Isometry3::identity();
+    let dop = DopTree::build(&mesh);
+    assert!(dop.intersects(&dop, &id, &mut stats));
+    let obb = ObbTree::build(&mesh);
+    assert!(obb.intersects(&obb, &id, &mut stats));
+    let brute = KdopBruteForceTree::build(&mesh);
+    assert!(brute.intersects(&brute, &id, &mut stats));
+    assert!(stats.tri_tests > 0 && stats.bv_tests > 0 && stats.realignments > 0);
+}

@@ -1,0 +1,263 @@
+//! Orientation sets of k-DOPs and the "generic DOP" that makes O(k) re-alignment possible.
+//!
+//! A k-DOP is the intersection of k half-spaces `n_i . x <= d_i` with fixed unit normals `n_i`.
+//! Normals come in opposite pairs: `n_{i + k/2} = -n_i`, so a DOP is also k/2 intervals (slabs).
+//!
+//! Re-alignment (the paper's §2.1): a DOP of the second object, rotated by R, is enclosed by a DOP
+//! of the first object's orientations. For a direction `u` (a first-object normal expressed in
+//! the second object's frame), pick three of the set's normals whose cone contains `u`:
+//! `u = λ1 n_j1 + λ2 n_j2 + λ3 n_j3` with `λ >= 0`. Then for every `x` of the DOP,
+//! `u . x = Σ λ_l (n_jl . x) <= Σ λ_l d_jl`: the new offset is an affine combination of three old
+//! ones, whatever the offsets are, so it is always conservative. It is exact when the DOP has the
+//! combinatorial structure of the cone chosen; the cones are taken from the vertices of a
+//! *generic* DOP (every vertex on exactly three planes), whose normal cones tile the sphere.
+
+use nalgebra::{Matrix3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use thiserror::Error;
+
+/// The orientation-set sizes supported: 6 (box), 14, 18, 24 and 26.
+pub const SUPPORTED_K: [usize; 5] = [6, 14, 18, 24, 26];
+
+/// The default number of orientations: the fastest in the tumbling benchmark on this machine.
+pub const DEFAULT_K: usize = 24;
+
+/// Why an orientation set could not be made.
+#[derive(Debug, Error, PartialEq, Eq)]
+pub enum OrientationError {
+    /// `k` is not one of [`SUPPORTED_K`].
+    #[error("unsupported number of DOP orientations {0}: choose one of 6, 14, 18, 24, 26")]
+    Unsupported(usize),
+}
+
+/// One vertex of the generic DOP: the three planes through it and the matrix that turns a
+/// direction into the coefficients of those planes' normals.
+#[derive(Debug, Clone)]
+struct GenericVertex {
+    /// Indices (into the k normals) of the three planes through the vertex.
+    planes: [u8; 3],
+    /// The vertex's position on the generic DOP, used to find the vertex supporting a direction.
+    position: Vector3<f64>,
+    /// `(N^T)^-1` where the rows of N are the three normals: `λ = coefficients * u`.
+    coefficients: Matrix3<f64>,
+}
+
+/// A fixed set of k DOP normals with its generic DOP, shared by every tree built with it.
+#[derive(Debug, Clone)]
+pub struct OrientationSet {
+    /// The k/2 unit axes; normal `i < k/2` is `axes[i]`, normal `i + k/2` is `-axes[i]`.
+    axes: Vec<Vector3<f64>>,
+    /// Vertices of the generic DOP; their normal cones cover the sphere.
+    vertices: Vec<GenericVertex>,
+}
+
+/// The support cone of a direction: three plane indices and their non-negative coefficients.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SupportCone {
+    /// Indices of the three normals spanning the cone.
+    pub planes: [u8; 3],
+    /// Non-negative coefficients with `u = Σ lambda_l n_planes[l]`.
+    pub lambda: [f64; 3],
+}
+
+impl OrientationSet {
+    /// The set of `k` orientations: 6 = the coordinate axes; 14 = axes and the 4 cube diagonals;
+    /// 18 = axes and the 6 edge diagonals `(1, ±1, 0)`; 26 = all of those; 24 = the 12 directions
+    /// `(0, ±1, ±2)` and their permutations (face normals of the tetrakis hexahedron, an evenly
+    /// spread set of 12 directions).
+    pub fn new(k: usize) -> Result<Self, OrientationError> {
+        let coordinate = [[1., 0., 0.], [0., 1., 0.], [0., 0., 1.]];
+        let corner = [[1., 1., 1.], [1., 1., -1.], [1., -1., 1.], [-1., 1., 1.]];
+        let edge = [
+            [1., 1., 0.],
+            [1., 0., 1.],
+            [0., 1., 1.],
+            [1., -1., 0.],
+            [1., 0., -1.],
+            [0., 1., -1.],
+        ];
+        let tetrakis = [
+            [0., 1., 2.],
+            [0., -1., 2.],
+            [0., 2., 1.],
+            [0., -2., 1.],
+            [1., 0., 2.],
+            [-1., 0., 2.],
+            [2., 0., 1.],
+            [-2., 0., 1.],
+            [1., 2., 0.],
+            [-1., 2., 0.],
+            [2., 1., 0.],
+            [-2., 1., 0.],
+        ];
+        let raw: Vec<[f64; 3]> = match k {
+            6 => coordinate.to_vec(),
+            14 => [&coordinate[..], &corner[..]].concat(),
+            18 => [&coordinate[..], &edge[..]].concat(),
+            24 => tetrakis.to_vec(),
+            26 => [&coordinate[..], &corner[..], &edge[..]].concat(),
+            _ => return Err(OrientationError::Unsupported(k)),
+        };
+        let axes: Vec<Vector3<f64>> = raw.iter().map(|a| Vector3::from(*a).normalize()).collect();
+        let vertices = generic_vertices(&axes);
+        Ok(OrientationSet { axes, vertices })
+    }
+
+    /// Number of orientations (half-spaces) k.
+    pub fn k(&self) -> usize {
+        2 * self.axes.len()
+    }
+
+    /// The k/2 unit axes; normal `i` is `axes[i]` and normal `i + k/2` is `-axes[i]`.
+    pub fn axes(&self) -> &[Vector3<f64>] {
+        &self.axes
+    }
+
+    /// Normal `i` in `0..k`.
+    pub fn normal(&self, i: usize) -> Vector3<f64> {
+        let h = self.axes.len();
+        if i < h {
+            self.axes[i]
+        } else {
+            -self.axes[i - h]
+        }
+    }
+
+    /// Number of vertices of the generic DOP (`2k - 4` for a simple polytope).
+    pub fn generic_vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// Plane triples and matrices to compute, from a DOP's offsets, the vertex positions of a DOP
+    /// with the generic structure: `x = inverse * (d_j1, d_j2, d_j3)`. Used by the brute-force
+    /// re-alignment baseline.
+    pub fn vertex_solvers(&self) -> Vec<([u8; 3], Matrix3<f64>)> {
+        self.vertices
+            .iter()
+            .map(|v| (v.planes, v.coefficients.transpose()))
+            .collect()
+    }
+
+    /// The generic vertex supporting direction `u` (any length) and the coefficients expressing
+    /// `u` in its three normals; the coefficients are non-negative (rounding clamped away).
+    pub fn support_cone(&self, u: &Vector3<f64>) -> SupportCone {
+        let best = self
+            .vertices
+            .iter()
+            .max_by(|a, b| u.dot(&a.position).total_cmp(&u.dot(&b.position)))
+            .expect("a generic DOP has vertices");
+        let lambda = best.coefficients * u;
+        SupportCone {
+            planes: best.planes,
+            lambda: [lambda.x.max(0.0), lambda.y.max(0.0), lambda.z.max(0.0)],
+        }
+    }
+}
+
+impl Default for OrientationSet {
+    /// The set of [`DEFAULT_K`] orientations.
+    fn default() -> Self {
+        OrientationSet::new(DEFAULT_K).expect("the default k is supported")
+    }
+}
+
+/// Vertices of a generic DOP: offsets `1 + small random perturbation` (fixed seed), perturbed
+/// again until every vertex lies on exactly three planes.
+fn generic_vertices(axes: &[Vector3<f64>]) -> Vec<GenericVertex> {
+    let h = axes.len();
+    let k = 2 * h;
+    let normal = |i: usize| if i < h { axes[i] } else { -axes[i - h] };
+    let mut rng = ChaCha8Rng::seed_from_u64(0x0d0b);
+    for _attempt in 0..1000 {
+        let offsets: Vec<f64> = (0..k)
+            .map(|_| 1.0 + rng.random_range(-0.05..0.05))
+            .collect();
+        let mut vertices = Vec::new();
+        let mut degenerate = false;
+        'triples: for i in 0..k {
+            for j in i + 1..k {
+                for l in j + 1..k {
+                    let rows = Matrix3::from_rows(&[
+                        normal(i).transpose(),
+                        normal(j).transpose(),
+                        normal(l).transpose(),
+                    ]);
+                    let Some(inverse) = rows.try_inverse() else {
+                        continue;
+                    };
+                    if rows.determinant().abs() < 1e-6 {
+                        continue;
+                    }
+                    let x = inverse * Vector3::new(offsets[i], offsets[j], offsets[l]);
+                    let slack: Vec<f64> = (0..k).map(|m| offsets[m] - normal(m).dot(&x)).collect();
+                    if slack.iter().any(|&s| s < -1e-9) {
+                        continue;
+                    }
+                    if slack.iter().filter(|&&s| s < 1e-7).count() > 3 {
+                        degenerate = true;
+                        break 'triples;
+                    }
+                    vertices.push(GenericVertex {
+                        planes: [i as u8, j as u8, l as u8],
+                        position: x,
+                        coefficients: rows
+                            .transpose()
+                            .try_inverse()
+                            .expect("the transpose of an invertible matrix is invertible"),
+                    });
+                }
+            }
+        }
+        if !degenerate && vertices.len() == 2 * k - 4 {
+            return vertices;
+        }
+    }
+    unreachable!("random perturbation of the unit DOP gives a simple polytope almost surely")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::Rng;
+
+    #[test]
+    fn every_supported_set_has_a_simple_generic_dop() {
+        for k in SUPPORTED_K {
+            let set = OrientationSet::new(k).unwrap();
+            assert_eq!(set.k(), k);
+            assert_eq!(set.generic_vertex_count(), 2 * k - 4, "k = {k}");
+            for i in 0..set.axes().len() {
+                assert!((set.normal(i) + set.normal(i + k / 2)).norm() < 1e-15);
+            }
+        }
+        assert_eq!(
+            OrientationSet::new(10).unwrap_err(),
+            OrientationError::Unsupported(10)
+        );
+    }
+
+    #[test]
+    fn support_cone_reconstructs_the_direction_with_non_negative_coefficients() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for k in SUPPORTED_K {
+            let set = OrientationSet::new(k).unwrap();
+            for _ in 0..2000 {
+                let u = Vector3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                );
+                let cone = set.support_cone(&u);
+                let rebuilt: Vector3<f64> = (0..3)
+                    .map(|l| set.normal(cone.planes[l] as usize) * cone.lambda[l])
+                    .sum();
+                assert!(
+                    (rebuilt - u).norm() < 1e-9 * (1.0 + u.norm()),
+                    "k {k} u {u}"
+                );
+                assert!(cone.lambda.iter().all(|&l| l >= 0.0));
+            }
+        }
+    }
+}
