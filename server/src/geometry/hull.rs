@@ -523,6 +523,40 @@ mod tests {
     }
 
     #[test]
+    fn hulls_of_procedural_shapes_and_real_meshes_enclose_them() {
+        use crate::geometry::shapes::{self, ShapeKind};
+        use clap::ValueEnum;
+        let mut rng = ChaCha8Rng::seed_from_u64(10);
+        for kind in ShapeKind::value_variants() {
+            for triangles in [100, 3000] {
+                let mesh = shapes::build(*kind, triangles);
+                let hull = ConvexHull::of(&mesh);
+                assert_eq!(hull.source(), HullSource::ConvexHull, "{kind}");
+                assert!(
+                    hull.tolerance() < 1e-4 * hull.radius(),
+                    "{kind}: {}",
+                    hull.tolerance()
+                );
+                assert_encloses(&hull, &mesh, &mut rng);
+            }
+        }
+        let meshes = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/meshes");
+        for name in [
+            "fcl_env",
+            "fcl_rob",
+            "low_poly_bunny",
+            "ur5e_wrist3",
+            "ur5e_base",
+        ] {
+            let path = std::path::Path::new(meshes).join(format!("{name}.obj"));
+            let mesh = crate::geometry::load_mesh(&path).unwrap();
+            let hull = ConvexHull::of(&mesh);
+            assert_eq!(hull.source(), HullSource::ConvexHull, "{name}");
+            assert_encloses(&hull, &mesh, &mut rng);
+        }
+    }
+
+    #[test]
     fn failed_hull_falls_back_to_the_bounding_box() {
         let boxed =
             ConvexHull::bounding_box(Point::new(-1.0, -2.0, 0.0), Point::new(1.0, 2.0, 0.0));
