@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
+use vas_server::bench;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::write_obj;
 
@@ -30,6 +31,17 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Run a benchmark of BENCHMARKS.md.
+    Bench {
+        #[command(subcommand)]
+        benchmark: BenchCommand,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum BenchCommand {
+    /// B3: orbiting spheres, separating plane against GJK (the paper's Figure 4).
+    Orbit(bench::orbit::OrbitArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +55,9 @@ fn main() -> ExitCode {
             triangles,
             out,
         } => write_shape(kind, triangles, &out),
+        Command::Bench { benchmark } => match benchmark {
+            BenchCommand::Orbit(args) => bench::orbit::run_cli(&args),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

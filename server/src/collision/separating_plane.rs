@@ -6,8 +6,9 @@
 //! the plane normal, found by hill-climbing ([`ConvexHull::extremal_vertex`]), so a step costs a
 //! short walk on each hull instead of a scan. With the offset kept midway between the two extremal
 //! vertices, the update of the normal is n ← n + η (q − p) (in coordinates centred between the
-//! hulls and scaled to their size); η is a temperature that cools (simulated annealing) and the
-//! search stops after at most 300 loops.
+//! hulls and scaled to their size). η is a temperature (simulated annealing): it starts high and
+//! cools whenever a step fails to widen the gap, and the search stops when it is cold or after at
+//! most 300 loops.
 //!
 //! The plane found and the extremal vertices are kept per pair ([`SeparatingPlane`]), so the next
 //! frame starts from them (temporal coherence): for coherent motion one check of the cached plane
@@ -28,11 +29,12 @@ pub struct PlaneSearch {
     pub max_loops: u32,
     /// The temperature η of the first loop.
     pub initial_temperature: f64,
-    /// The temperature of loop k is `initial_temperature / (1 + k / cooling_loops)`.
-    pub cooling_loops: f64,
-    /// Give up after this many loops without a better gap: the pair is then very likely
-    /// intersecting, and the exact test decides.
-    pub patience: u32,
+    /// Factor applied to η after every loop that fails to widen the best gap so far: the search
+    /// takes big steps while they pay and anneals when it starts to oscillate.
+    pub cooling: f64,
+    /// The search gives up when η falls below this: the steps are then too small to matter, and
+    /// the pair is touching or intersecting (the exact test decides).
+    pub min_temperature: f64,
 }
 
 impl Default for PlaneSearch {
@@ -40,8 +42,8 @@ impl Default for PlaneSearch {
         PlaneSearch {
             max_loops: 300,
             initial_temperature: 1.0,
-            cooling_loops: 8.0,
-            patience: 24,
+            cooling: 0.8,
+            min_temperature: 1e-3,
         }
     }
 }
@@ -127,55 +129,91 @@ impl SeparatingPlane {
                 normal
             }
         };
-        let mut best = (f64::NEG_INFINITY, normal, self.vertex_a, self.vertex_b);
-        let mut since_best = 0;
+        let mut best = Best {
+            gap: f64::NEG_INFINITY,
+            normal,
+            vertex_a: self.vertex_a,
+            vertex_b: self.vertex_b,
+            step: Vector3::zeros(),
+        };
+        let mut temperature = search.initial_temperature;
         let mut loops = 0;
         while loops < search.max_loops {
             loops += 1;
             let (vertex_a, max_a) = a.extremal_vertex(&normal, self.vertex_a);
             let normal_in_b = rotation.inverse_transform_vector(&normal);
             let (vertex_b, max_b) = b.extremal_vertex(&-normal_in_b, self.vertex_b);
-            self.vertex_a = vertex_a;
-            self.vertex_b = vertex_b;
             let min_b = -max_b + normal.dot(translation);
             let gap = min_b - max_a;
             if gap > margin {
                 self.normal_in_a = Some(normal);
+                self.vertex_a = vertex_a;
+                self.vertex_b = vertex_b;
                 return PlaneCheck {
                     separated: true,
                     loops,
                 };
             }
-            if gap > best.0 {
-                best = (gap, normal, vertex_a, vertex_b);
-                since_best = 0;
-            } else {
-                since_best += 1;
-                if since_best > search.patience {
-                    break;
-                }
-            }
-            // Both extremal vertices violate the plane through the midpoint: apply the
-            // perceptron rule for both, (-p) and (+q), in the normalised coordinates.
+            // Both extremal vertices violate the plane through the midpoint: the perceptron rule
+            // for both, (-p) and (+q), moves the normal along q - p (normalised coordinates).
             let p: &Point3<f64> = &a.vertices()[vertex_a as usize];
             let q = b_to_a * b.vertices()[vertex_b as usize];
-            let temperature =
-                search.initial_temperature / (1.0 + f64::from(loops - 1) / search.cooling_loops);
-            match (normal + (q - p) * (scale * temperature)).try_normalize(0.0) {
+            let step = (q - p) * scale;
+            let (base, direction) = if gap > best.gap {
+                best = Best {
+                    gap,
+                    normal,
+                    vertex_a,
+                    vertex_b,
+                    step,
+                };
+                (normal, step)
+            } else {
+                // The step overshot a ridge where two vertex pairs are extremal: cool, go back to
+                // the best plane and step along the shortest convex combination of the two
+                // pairs' updates, which widens both their gaps.
+                temperature *= search.cooling;
+                if temperature < search.min_temperature {
+                    break;
+                }
+                (best.normal, shortest_on_segment(&best.step, &step))
+            };
+            self.vertex_a = vertex_a;
+            self.vertex_b = vertex_b;
+            match (base + direction * temperature).try_normalize(0.0) {
                 Some(next) => normal = next,
                 None => break,
             }
         }
         // Not found: keep the best plane seen, the best start for the next frame.
-        let (_, normal, vertex_a, vertex_b) = best;
-        self.normal_in_a = Some(normal);
-        self.vertex_a = vertex_a;
-        self.vertex_b = vertex_b;
+        self.normal_in_a = Some(best.normal);
+        self.vertex_a = best.vertex_a;
+        self.vertex_b = best.vertex_b;
         PlaneCheck {
             separated: false,
             loops,
         }
     }
+}
+
+/// The widest-gap plane of a search so far, with the perceptron step taken from it.
+struct Best {
+    gap: f64,
+    normal: Vector3<f64>,
+    vertex_a: u32,
+    vertex_b: u32,
+    step: Vector3<f64>,
+}
+
+/// The point of segment [a, b] closest to the origin.
+fn shortest_on_segment(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
+    let ab = b - a;
+    let length_squared = ab.norm_squared();
+    if length_squared == 0.0 {
+        return *a;
+    }
+    let t = (-a.dot(&ab) / length_squared).clamp(0.0, 1.0);
+    a + ab * t
 }
 
 #[cfg(test)]
