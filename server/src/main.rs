@@ -42,6 +42,8 @@ enum Command {
 enum BenchCommand {
     /// B3: orbiting spheres, separating plane against GJK (the paper's Figure 4).
     Orbit(bench::orbit::OrbitArgs),
+    /// B4: objects bouncing in a cube, the whole pipeline against threads (the paper's Figure 5).
+    Bounce(bench::bounce::BounceArgs),
 }
 
 fn main() -> ExitCode {
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
         } => write_shape(kind, triangles, &out),
         Command::Bench { benchmark } => match benchmark {
             BenchCommand::Orbit(args) => bench::orbit::run_cli(&args),
+            BenchCommand::Bounce(args) => bench::bounce::run_cli(&args),
         },
     };
     match result {

@@ -1,5 +1,6 @@
 //! Benchmark procedures of BENCHMARKS.md, shared by the `vas-server bench` subcommands and tests.
 
+pub mod bounce;
 pub mod orbit;
 pub mod random;
 pub mod report;

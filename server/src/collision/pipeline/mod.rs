@@ -8,6 +8,9 @@
 //! objects that did not move keep their last answer. Each stage counts the pairs it took in and let
 //! through, and its time.
 //!
+//! A pair that collided when last tested skips the pre-check (it would most likely fail to find a
+//! plane, after many loops) and goes straight to the exact test.
+//!
 //! The back end is parallel on the current rayon pool: the pre-checks and the exact tests of a
 //! frame are spread over the threads with work stealing (coarse grain), and when fewer pairs than
 //! threads reach the exact test, each pair's own traversal is split (fine grain).
@@ -233,6 +236,8 @@ struct PairWork {
     pair: PairKey,
     b_to_a: Isometry3<f64>,
     plane: SeparatingPlane,
+    /// The pair collided when last tested: the pre-check would most likely fail, so it is skipped.
+    was_colliding: bool,
     separated: bool,
     loops: u32,
     colliding: bool,
@@ -436,18 +441,19 @@ impl<C: ExactTest> CollisionPipeline<C> {
 
         let mut work: Vec<PairWork> = candidates
             .iter()
-            .map(|&(a, b)| PairWork {
-                pair: (a, b),
-                b_to_a: self.live(a).pose.inv_mul(&self.live(b).pose),
-                plane: self
-                    .pairs
-                    .get(&(a, b))
-                    .map_or_else(SeparatingPlane::new, |state| state.plane),
-                separated: false,
-                loops: 0,
-                colliding: false,
-                triangles: None,
-                stats: QueryStats::default(),
+            .map(|&(a, b)| {
+                let state = self.pairs.get(&(a, b));
+                PairWork {
+                    pair: (a, b),
+                    b_to_a: self.live(a).pose.inv_mul(&self.live(b).pose),
+                    plane: state.map_or_else(SeparatingPlane::new, |state| state.plane),
+                    was_colliding: state.is_some_and(|state| state.contact.is_some()),
+                    separated: false,
+                    loops: 0,
+                    colliding: false,
+                    triangles: None,
+                    stats: QueryStats::default(),
+                }
             })
             .collect();
 
@@ -455,7 +461,8 @@ impl<C: ExactTest> CollisionPipeline<C> {
         if self.config.separating_plane {
             let search = self.config.plane_search;
             let slots = &self.slots;
-            for_each_pair(&mut work, 16, |item| {
+            let unknown = work.iter_mut().filter(|item| !item.was_colliding).collect();
+            for_each_pair(unknown, 16, |item| {
                 let [a, b] = models(slots, item.pair);
                 let check = item.plane.check(a.hull(), b.hull(), &item.b_to_a, &search);
                 item.separated = check.separated;
@@ -473,10 +480,8 @@ impl<C: ExactTest> CollisionPipeline<C> {
         let stage_start = Instant::now();
         let split = (unseparated as usize) < rayon::current_num_threads();
         let slots = &self.slots;
-        for_each_pair(&mut work, 1, |item| {
-            if item.separated {
-                return;
-            }
+        let unseparated_items = work.iter_mut().filter(|item| !item.separated).collect();
+        for_each_pair(unseparated_items, 1, |item| {
             let [a, b] = models(slots, item.pair);
             let (a, b) = (a.exact(), b.exact());
             item.colliding = match detail {
@@ -523,12 +528,18 @@ impl<C: ExactTest> CollisionPipeline<C> {
     /// Moves the queued objects' boxes and returns the overlapping pairs that involve a moved
     /// object, each once as (smaller index, larger index).
     fn broad_phase_stage(&mut self) -> Vec<PairKey> {
-        for &index in &self.queue {
-            if let Some(object) = &self.slots[index as usize].object {
-                let bounds = Aabb::transformed(object.model.local_bounds(), &object.pose);
-                self.broad_phase.update(index, bounds);
-            }
-        }
+        let updates: Vec<(u32, Aabb)> = self
+            .queue
+            .iter()
+            .filter_map(|&index| {
+                let object = self.slots[index as usize].object.as_ref()?;
+                Some((
+                    index,
+                    Aabb::transformed(object.model.local_bounds(), &object.pose),
+                ))
+            })
+            .collect();
+        self.broad_phase.update_many(&updates);
         self.drop_ended_pairs();
         let mut candidates = Vec::new();
         for &index in &self.queue {
@@ -604,11 +615,15 @@ fn pose<C>(slots: &[Slot<C>], index: u32) -> Isometry3<f64> {
 
 /// Runs `f` on every item, in parallel on the current rayon pool when it has more than one
 /// thread (work stealing balances uneven items), in chunks of at least `min_len` items.
-fn for_each_pair(work: &mut [PairWork], min_len: usize, f: impl Fn(&mut PairWork) + Sync + Send) {
+fn for_each_pair(
+    items: Vec<&mut PairWork>,
+    min_len: usize,
+    f: impl Fn(&mut PairWork) + Sync + Send,
+) {
     if rayon::current_num_threads() == 1 {
-        work.iter_mut().for_each(f);
+        items.into_iter().for_each(f);
     } else {
-        work.par_iter_mut().with_min_len(min_len).for_each(f);
+        items.into_par_iter().with_min_len(min_len).for_each(f);
     }
 }
 
