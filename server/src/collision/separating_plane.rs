@@ -60,7 +60,8 @@ pub struct PlaneCheck {
 /// The separating-plane state of one object pair, kept from frame to frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeparatingPlane {
-    /// Unit normal in A's frame, pointing from A towards B; `None` before the first check.
+    /// Unit normal in A's frame, pointing from A towards B, of the plane that separated the pair
+    /// in the last check; `None` if it did not (or before the first check).
     normal_in_a: Option<Vector3<f64>>,
     /// A's vertex extremal along the normal, where A's next climb starts.
     vertex_a: u32,
@@ -85,9 +86,9 @@ impl SeparatingPlane {
         }
     }
 
-    /// The current plane as (unit normal, offset) in A's frame, with A on the side where
-    /// `normal · x < offset`; `None` before the first check. When the last check proved
-    /// separation, it is a plane that proves it.
+    /// The plane of the last check that proved separation, as (unit normal, offset) in A's frame
+    /// with A on the side where `normal · x < offset`, for the pose `b_to_a`; `None` if the last
+    /// check found no plane.
     pub fn plane_in_a(
         &self,
         a: &ConvexHull,
@@ -111,6 +112,30 @@ impl SeparatingPlane {
         b_to_a: &Isometry3<f64>,
         search: &PlaneSearch,
     ) -> PlaneCheck {
+        let cached = self.normal_in_a.is_some();
+        let first = self.search(a, b, b_to_a, search, search.max_loops);
+        if first.separated || !cached {
+            return first;
+        }
+        // The cached plane led nowhere (the pose moved too far for coherence to help): one more
+        // search from scratch, within the same loop budget.
+        let second = self.search(a, b, b_to_a, search, search.max_loops - first.loops);
+        PlaneCheck {
+            separated: second.separated,
+            loops: first.loops + second.loops,
+        }
+    }
+
+    /// One perceptron search of at most `max_loops` loops, from the cached plane if there is one,
+    /// else from the line between the centres.
+    fn search(
+        &mut self,
+        a: &ConvexHull,
+        b: &ConvexHull,
+        b_to_a: &Isometry3<f64>,
+        search: &PlaneSearch,
+        max_loops: u32,
+    ) -> PlaneCheck {
         let rotation = &b_to_a.rotation;
         let translation = &b_to_a.translation.vector;
         let centre_b = b_to_a * b.centre();
@@ -132,13 +157,11 @@ impl SeparatingPlane {
         let mut best = Best {
             gap: f64::NEG_INFINITY,
             normal,
-            vertex_a: self.vertex_a,
-            vertex_b: self.vertex_b,
             step: Vector3::zeros(),
         };
         let mut temperature = search.initial_temperature;
         let mut loops = 0;
-        while loops < search.max_loops {
+        while loops < max_loops {
             loops += 1;
             let (vertex_a, max_a) = a.extremal_vertex(&normal, self.vertex_a);
             let normal_in_b = rotation.inverse_transform_vector(&normal);
@@ -160,13 +183,7 @@ impl SeparatingPlane {
             let q = b_to_a * b.vertices()[vertex_b as usize];
             let step = (q - p) * scale;
             let (base, direction) = if gap > best.gap {
-                best = Best {
-                    gap,
-                    normal,
-                    vertex_a,
-                    vertex_b,
-                    step,
-                };
+                best = Best { gap, normal, step };
                 (normal, step)
             } else {
                 // The step overshot a ridge where two vertex pairs are extremal: cool, go back to
@@ -185,10 +202,9 @@ impl SeparatingPlane {
                 None => break,
             }
         }
-        // Not found: keep the best plane seen, the best start for the next frame.
-        self.normal_in_a = Some(best.normal);
-        self.vertex_a = best.vertex_a;
-        self.vertex_b = best.vertex_b;
+        // Not found: only a plane that separated is worth keeping; the next check starts afresh
+        // from the line between the centres.
+        self.normal_in_a = None;
         PlaneCheck {
             separated: false,
             loops,
@@ -200,8 +216,6 @@ impl SeparatingPlane {
 struct Best {
     gap: f64,
     normal: Vector3<f64>,
-    vertex_a: u32,
-    vertex_b: u32,
     step: Vector3<f64>,
 }
 
