@@ -44,8 +44,9 @@ pub struct BounceArgs {
     /// About how many triangles each object has.
     #[arg(long, default_value_t = 1000)]
     pub triangles: usize,
-    /// Fraction of the cube's volume filled by the objects' bounding spheres.
-    #[arg(long, default_value_t = 0.05)]
+    /// Fraction of the cube's volume filled by the objects' bounding spheres. Denser scenes send
+    /// more pairs to the parallel back end (the paper: speed-ups need a dense enough scene).
+    #[arg(long, default_value_t = 0.1)]
     pub fill: f64,
     /// Seed of the scene.
     #[arg(long, default_value_t = 5)]
@@ -53,6 +54,9 @@ pub struct BounceArgs {
     /// Frames run before timing starts (the first frame tests every pair from cold).
     #[arg(long, default_value_t = 10)]
     pub warmup: u32,
+    /// Run without the separating-plane stage (pairs go from the boxes to the exact test).
+    #[arg(long)]
+    pub no_separating_plane: bool,
     /// Where to write the JSON results.
     #[arg(long, default_value = "bounce.json")]
     pub out: PathBuf,
@@ -236,7 +240,10 @@ fn run_scene(
         .map(|i| models[i % models.len()].hull().radius())
         .collect();
     let mut scene = Scene::new(count, radii, side, args.seed);
-    let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
+    let mut pipeline = CollisionPipeline::new(PipelineConfig {
+        separating_plane: !args.no_separating_plane,
+        ..PipelineConfig::default()
+    });
     let mut ids: Vec<ObjectId> = Vec::with_capacity(count);
     let mut index_of = std::collections::HashMap::new();
     for (i, pose) in scene.poses.iter().enumerate() {

@@ -188,11 +188,12 @@ impl SweepAndPrune {
             self.boxes[id as usize] = Some(aabb);
         }
         for axis in 0..3 {
-            for at in 0..self.axes[axis].len() {
-                let endpoint = self.axes[axis][at];
-                let bounds =
-                    self.boxes[endpoint.owner() as usize].expect("endpoints of live boxes");
-                self.axes[axis][at].value = if endpoint.is_upper() {
+            let boxes = &self.boxes;
+            for endpoint in &mut self.axes[axis] {
+                let bounds = boxes[endpoint.owner() as usize]
+                    .as_ref()
+                    .expect("endpoints of live boxes");
+                endpoint.value = if endpoint.is_upper() {
                     bounds.max[axis]
                 } else {
                     bounds.min[axis]
@@ -205,9 +206,7 @@ impl SweepAndPrune {
                 while to > 0 && moving.goes_before(self.axes[axis][to - 1]) {
                     let other = self.axes[axis][to - 1];
                     self.axes[axis][to] = other;
-                    if moving.is_upper() != other.is_upper() && moving.owner() != other.owner() {
-                        self.retest(moving.owner(), other.owner());
-                    }
+                    self.crossed(moving, other);
                     to -= 1;
                 }
                 self.axes[axis][to] = moving;
@@ -235,7 +234,7 @@ impl SweepAndPrune {
     }
 
     /// Swaps `moving` with its neighbour at `other_at`, updating positions and the overlap of the
-    /// two boxes if a lower end passed an upper end.
+    /// two boxes.
     fn swap(&mut self, axis: usize, other_at: usize, moving: Endpoint) {
         let endpoints = &mut self.axes[axis];
         let other = endpoints[other_at];
@@ -247,31 +246,40 @@ impl SweepAndPrune {
         self.positions[other.owner() as usize][axis][usize::from(other.is_upper())] =
             moving_at as u32;
         self.swaps += 1;
-        if moving.is_upper() != other.is_upper() && moving.owner() != other.owner() {
-            self.retest(moving.owner(), other.owner());
+        if other_at < moving_at {
+            self.crossed(moving, other);
+        } else {
+            self.crossed(other, moving);
         }
     }
 
-    /// Sets the overlap of boxes `a` and `b` from their current bounds.
-    fn retest(&mut self, a: u32, b: u32) {
-        let overlapping = match (self.boxes[a as usize], self.boxes[b as usize]) {
-            (Some(box_a), Some(box_b)) => box_a.overlaps(&box_b),
-            _ => false,
-        };
+    /// Records that endpoint `first` now comes before endpoint `second` on some axis. A lower end
+    /// before another box's upper end may start an overlap (tested on all axes); an upper end
+    /// before another box's lower end ends any overlap of the two boxes.
+    fn crossed(&mut self, first: Endpoint, second: Endpoint) {
+        let (a, b) = (first.owner(), second.owner());
+        if a == b || first.is_upper() == second.is_upper() {
+            return;
+        }
         let listed = self.overlaps[a as usize].contains(&b);
-        if overlapping && !listed {
+        if first.is_upper() {
+            if listed {
+                self.ended.push([a, b]);
+                for (from, to) in [(a, b), (b, a)] {
+                    let list = &mut self.overlaps[from as usize];
+                    let at = list
+                        .iter()
+                        .position(|&x| x == to)
+                        .expect("overlaps are symmetric");
+                    list.swap_remove(at);
+                }
+            }
+        } else if !listed
+            && let (Some(box_a), Some(box_b)) = (self.boxes[a as usize], self.boxes[b as usize])
+            && box_a.overlaps(&box_b)
+        {
             self.overlaps[a as usize].push(b);
             self.overlaps[b as usize].push(a);
-        } else if !overlapping && listed {
-            self.ended.push([a, b]);
-            for (from, to) in [(a, b), (b, a)] {
-                let list = &mut self.overlaps[from as usize];
-                let at = list
-                    .iter()
-                    .position(|&x| x == to)
-                    .expect("overlaps are symmetric");
-                list.swap_remove(at);
-            }
         }
     }
 

@@ -376,3 +376,46 @@ fn bad_poses_and_stale_ids_are_refused() {
     );
     assert!(pipeline.queue_move(reused, Isometry3::identity()).is_ok());
 }
+
+#[test]
+fn answers_do_not_depend_on_the_separating_plane_stage() {
+    let mut scene = Scene::<DopTree>::new(25);
+    let mut with_plane = CollisionPipeline::new(PipelineConfig::default());
+    for _ in 0..25 {
+        scene.add(&mut with_plane);
+    }
+    let mut without_plane = CollisionPipeline::new(PipelineConfig {
+        separating_plane: false,
+        ..PipelineConfig::default()
+    });
+    for body in scene.bodies.values() {
+        without_plane
+            .add(ObjectDesc {
+                model: Arc::clone(&body.model),
+                pose: body.pose,
+                group: GroupId(body.group),
+                is_static: body.is_static,
+            })
+            .unwrap();
+    }
+    let (mut plane_tests, mut direct_tests) = (0, 0);
+    for frame in 0..300 {
+        for (id, pose) in scene.step() {
+            with_plane.queue_move(id, pose).unwrap();
+            without_plane.queue_move(id, pose).unwrap();
+        }
+        let expected = with_plane.run_frame(Detail::Pairs);
+        let report = without_plane.run_frame(Detail::Pairs);
+        assert_eq!(report.colliding, expected.colliding, "frame {frame}");
+        assert_eq!(
+            report.stats.separating_plane.pairs_out,
+            report.stats.separating_plane.pairs_in
+        );
+        plane_tests += expected.stats.exact.pairs_in;
+        direct_tests += report.stats.exact.pairs_in;
+    }
+    assert!(
+        plane_tests * 2 < direct_tests,
+        "{plane_tests} exact tests with the plane stage, {direct_tests} without"
+    );
+}
