@@ -8,6 +8,7 @@
 //! a moved object are simply its overlap list.
 
 use nalgebra::{Isometry3, Point3, Vector3};
+use rayon::prelude::*;
 
 /// An axis-aligned box in the scene's frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,17 +72,62 @@ impl Endpoint {
     }
 }
 
+/// Refreshes the endpoint values of one axis from `boxes`, re-sorts them by insertion sort (every
+/// pair of endpoints whose order changed is swapped once, recorded in `crossings`), updates
+/// `positions`, and returns the number of swaps.
+fn resort_axis(
+    axis: usize,
+    boxes: &[Option<Aabb>],
+    endpoints: &mut [Endpoint],
+    positions: &mut [[u32; 2]],
+    crossings: &mut Vec<(Endpoint, Endpoint)>,
+) -> u64 {
+    crossings.clear();
+    for endpoint in endpoints.iter_mut() {
+        let bounds = boxes[endpoint.owner() as usize]
+            .as_ref()
+            .expect("endpoints of live boxes");
+        endpoint.value = if endpoint.is_upper() {
+            bounds.max[axis]
+        } else {
+            bounds.min[axis]
+        };
+    }
+    let mut swaps = 0;
+    for at in 1..endpoints.len() {
+        let moving = endpoints[at];
+        let mut to = at;
+        while to > 0 && moving.goes_before(endpoints[to - 1]) {
+            let other = endpoints[to - 1];
+            endpoints[to] = other;
+            if moving.owner() != other.owner() && moving.is_upper() != other.is_upper() {
+                crossings.push((moving, other));
+            }
+            to -= 1;
+        }
+        endpoints[to] = moving;
+        swaps += (at - to) as u64;
+    }
+    for (at, endpoint) in endpoints.iter().enumerate() {
+        positions[endpoint.owner() as usize][usize::from(endpoint.is_upper())] = at as u32;
+    }
+    swaps
+}
+
 /// Incremental sweep and prune. Boxes are named by small integer ids chosen by the caller (dense
 /// ids keep the per-box tables small).
 #[derive(Debug, Clone, Default)]
 pub struct SweepAndPrune {
     boxes: Vec<Option<Aabb>>,
     axes: [Vec<Endpoint>; 3],
-    /// Where each box's lower and upper endpoints sit in each axis.
-    positions: Vec<[[u32; 2]; 3]>,
+    /// Per axis, where each box's lower and upper endpoints sit.
+    positions: [Vec<[u32; 2]>; 3],
     overlaps: Vec<Vec<u32>>,
     /// Overlaps that ended since the last [`SweepAndPrune::drain_ended`].
     ended: Vec<[u32; 2]>,
+    /// Per axis, the endpoint crossings of a batched update, (now first, now second); kept to
+    /// reuse the memory.
+    crossings: [Vec<(Endpoint, Endpoint)>; 3],
     swaps: u64,
 }
 
@@ -99,7 +145,9 @@ impl SweepAndPrune {
         let index = id as usize;
         if index >= self.boxes.len() {
             self.boxes.resize(index + 1, None);
-            self.positions.resize(index + 1, [[0; 2]; 3]);
+            for positions in &mut self.positions {
+                positions.resize(index + 1, [0; 2]);
+            }
             self.overlaps.resize_with(index + 1, Vec::new);
         }
         assert!(self.boxes[index].is_none(), "box {id} is already present");
@@ -108,7 +156,7 @@ impl SweepAndPrune {
         self.boxes[index] = Some(Aabb { min: far, max: far });
         for (axis, endpoints) in self.axes.iter_mut().enumerate() {
             let at = endpoints.len() as u32;
-            self.positions[index][axis] = [at, at + 1];
+            self.positions[axis][index] = [at, at + 1];
             endpoints.push(Endpoint {
                 value: f64::INFINITY,
                 tag: id << 1,
@@ -148,23 +196,24 @@ impl SweepAndPrune {
         );
         self.boxes[index] = Some(aabb);
         for axis in 0..3 {
-            let [lower, upper] = self.positions[index][axis];
+            let [lower, upper] = self.positions[axis][index];
             self.axes[axis][lower as usize].value = aabb.min[axis];
             self.axes[axis][upper as usize].value = aabb.max[axis];
             // Sift the leading end first, or the trailing one would stop at it too early.
             if aabb.min[axis] > old.min[axis] {
                 self.sift(axis, upper);
-                self.sift(axis, self.positions[index][axis][0]);
+                self.sift(axis, self.positions[axis][index][0]);
             } else {
                 self.sift(axis, lower);
-                self.sift(axis, self.positions[index][axis][1]);
+                self.sift(axis, self.positions[axis][index][1]);
             }
         }
     }
 
     /// Moves many boxes at once, like [`SweepAndPrune::update`] for each. When a good part of the
-    /// scene moves, one insertion-sort pass per axis over all endpoints (in memory order) beats
-    /// sifting each box's endpoints through scattered memory; for a few boxes, each is sifted alone.
+    /// scene moves, one insertion-sort pass per axis over all endpoints (in memory order, the three
+    /// axes in parallel on the current rayon pool) beats sifting each box's endpoints through
+    /// scattered memory; for a few boxes, each is sifted alone.
     ///
     /// # Panics
     /// If an id is not present or a bound is NaN.
@@ -187,36 +236,25 @@ impl SweepAndPrune {
             );
             self.boxes[id as usize] = Some(aabb);
         }
-        for axis in 0..3 {
-            let boxes = &self.boxes;
-            for endpoint in &mut self.axes[axis] {
-                let bounds = boxes[endpoint.owner() as usize]
-                    .as_ref()
-                    .expect("endpoints of live boxes");
-                endpoint.value = if endpoint.is_upper() {
-                    bounds.max[axis]
-                } else {
-                    bounds.min[axis]
-                };
-            }
-            // Insertion sort: every pair of endpoints whose order changed is swapped once.
-            for at in 1..self.axes[axis].len() {
-                let moving = self.axes[axis][at];
-                let mut to = at;
-                while to > 0 && moving.goes_before(self.axes[axis][to - 1]) {
-                    let other = self.axes[axis][to - 1];
-                    self.axes[axis][to] = other;
-                    self.crossed(moving, other);
-                    to -= 1;
-                }
-                self.axes[axis][to] = moving;
-                self.swaps += (at - to) as u64;
-            }
-            for (at, endpoint) in self.axes[axis].iter().enumerate() {
-                self.positions[endpoint.owner() as usize][axis][usize::from(endpoint.is_upper())] =
-                    at as u32;
-            }
+        // The axes are independent: sort them in parallel, recording the crossings, and apply the
+        // crossings afterwards. Every box already has its final bounds, so each crossing is
+        // judged on them and the order of application does not matter.
+        let boxes = &self.boxes;
+        self.swaps += self
+            .axes
+            .par_iter_mut()
+            .zip(self.positions.par_iter_mut())
+            .zip(self.crossings.par_iter_mut())
+            .enumerate()
+            .map(|(axis, ((endpoints, positions), crossings))| {
+                resort_axis(axis, boxes, endpoints, positions, crossings)
+            })
+            .sum::<u64>();
+        let crossings = std::mem::take(&mut self.crossings);
+        for &(first, second) in crossings.iter().flatten() {
+            self.crossed(first, second);
         }
+        self.crossings = crossings;
     }
 
     /// Moves the endpoint at `at` on `axis` to its sorted place.
@@ -239,11 +277,11 @@ impl SweepAndPrune {
         let endpoints = &mut self.axes[axis];
         let other = endpoints[other_at];
         let moving_at =
-            self.positions[moving.owner() as usize][axis][usize::from(moving.is_upper())] as usize;
+            self.positions[axis][moving.owner() as usize][usize::from(moving.is_upper())] as usize;
         endpoints.swap(moving_at, other_at);
-        self.positions[moving.owner() as usize][axis][usize::from(moving.is_upper())] =
+        self.positions[axis][moving.owner() as usize][usize::from(moving.is_upper())] =
             other_at as u32;
-        self.positions[other.owner() as usize][axis][usize::from(other.is_upper())] =
+        self.positions[axis][other.owner() as usize][usize::from(other.is_upper())] =
             moving_at as u32;
         self.swaps += 1;
         if other_at < moving_at {
