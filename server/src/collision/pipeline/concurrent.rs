@@ -33,8 +33,11 @@ pub struct ConcurrentPipeline<C> {
 
 impl<C: ExactTest + 'static> ConcurrentPipeline<C> {
     /// Moves `pipeline` onto a new thread; its parallel stages use `pool` if given, else rayon's
-    /// global pool.
-    pub fn spawn(pipeline: CollisionPipeline<C>, pool: Option<Arc<ThreadPool>>) -> Self {
+    /// global pool. Fails only if the system cannot start a thread.
+    pub fn spawn(
+        pipeline: CollisionPipeline<C>,
+        pool: Option<Arc<ThreadPool>>,
+    ) -> std::io::Result<Self> {
         let front = Arc::new(Mutex::new(Moves::new()));
         let (commands, command_receiver) = crossbeam_channel::unbounded();
         let (report_sender, reports) = crossbeam_channel::unbounded();
@@ -49,14 +52,13 @@ impl<C: ExactTest + 'static> ConcurrentPipeline<C> {
                     &report_sender,
                     pool.as_deref(),
                 )
-            })
-            .expect("spawning the pipeline thread");
-        ConcurrentPipeline {
+            })?;
+        Ok(ConcurrentPipeline {
             front,
             commands,
             reports,
             worker,
-        }
+        })
     }
 
     /// Queues a move for the next frame (a later move of the same object in the same frame wins).

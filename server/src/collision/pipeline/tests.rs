@@ -320,7 +320,7 @@ fn concurrent_runner_gives_the_same_reports_as_the_pipeline() {
             .build()
             .unwrap(),
     );
-    let concurrent = ConcurrentPipeline::spawn(twin, Some(pool));
+    let concurrent = ConcurrentPipeline::spawn(twin, Some(pool)).unwrap();
     for frame in 0..300 {
         for (id, pose) in scene.step() {
             serial.queue_move(id, pose).unwrap();
