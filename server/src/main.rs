@@ -40,6 +40,10 @@ enum Command {
 
 #[derive(Debug, Subcommand)]
 enum BenchCommand {
+    /// B1: the tumbling pair (the paper's Figure 3 with --figure).
+    Tumble(bench::tumble::TumbleArgs),
+    /// B2: random poses of one mesh against another (FCL's procedure).
+    Random(bench::random::RandomArgs),
     /// B3: orbiting spheres, separating plane against GJK (the paper's Figure 4).
     Orbit(bench::orbit::OrbitArgs),
     /// B4: objects bouncing in a cube, the whole pipeline against threads (the paper's Figure 5).
@@ -58,6 +62,8 @@ fn main() -> ExitCode {
             out,
         } => write_shape(kind, triangles, &out),
         Command::Bench { benchmark } => match benchmark {
+            BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
+            BenchCommand::Random(args) => bench::random::run_cli(&args),
             BenchCommand::Orbit(args) => bench::orbit::run_cli(&args),
             BenchCommand::Bounce(args) => bench::bounce::run_cli(&args),
         },

@@ -8,9 +8,13 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::tumble::{Algo, AlgoResult, BuildResult, BuiltCollider, build_results, run_poses};
+use super::report::{LinePlot, Series, write_json, write_svg_line_plot};
+use super::tumble::{
+    Algo, AlgoResult, BuildResult, BuiltCollider, build_results, build_table, print_disagreements,
+    results_table, run_poses,
+};
 use crate::collision::OrientationSet;
-use crate::geometry::TriMesh;
+use crate::geometry::{TriMesh, parse_mesh_spec};
 
 /// The default number of poses of B2.
 pub const DEFAULT_POSES: usize = 10_000;
@@ -26,6 +30,8 @@ pub struct RandomConfig {
     pub algos: Vec<Algo>,
     /// Orientation set of the DOP-based algorithms.
     pub orientations: OrientationSet,
+    /// Passes over the poses; each query's time is its fastest pass (see [`run_poses`]).
+    pub rounds: usize,
 }
 
 /// The JSON document of B2.
@@ -41,6 +47,8 @@ pub struct RandomReport {
     pub triangles_b: usize,
     /// DOP orientations used.
     pub k: usize,
+    /// Passes over the poses (each query's time is its fastest pass).
+    pub rounds: usize,
     /// Poses where the algorithms disagreed.
     pub mismatches: usize,
     /// One entry per algorithm (`distance` is null).
@@ -88,17 +96,102 @@ pub fn run_random(a: &TriMesh, b: &TriMesh, config: &RandomConfig) -> Result<Ran
         .map(|&algo| BuiltCollider::new(algo, a, b, &config.orientations))
         .collect();
     let poses = random_poses(config.poses, config.seed);
-    let (results, mismatches) = run_poses(&colliders, &poses, None);
+    let (results, mismatches) = run_poses(&colliders, &poses, None, config.rounds);
     Ok(RandomReport {
         benchmark: "random",
         poses: config.poses,
         triangles_a: a.triangles().len(),
         triangles_b: b.triangles().len(),
         k: config.orientations.k(),
+        rounds: config.rounds,
         mismatches,
         results,
         build: build_results(&colliders),
     })
+}
+
+/// Command-line arguments of `vas-server bench random`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RandomArgs {
+    /// The fixed mesh A: a file or shape:KIND:TRIANGLES.
+    #[arg(long, default_value = "configs/meshes/fcl_env.obj")]
+    pub mesh: String,
+    /// The moving mesh B.
+    #[arg(long, default_value = "configs/meshes/fcl_rob.obj")]
+    pub mesh_b: String,
+    /// Number of random poses.
+    #[arg(long, default_value_t = DEFAULT_POSES)]
+    pub poses: usize,
+    /// Seed of the pose generator.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Algorithms to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = Algo::DEFAULT)]
+    pub algos: Vec<Algo>,
+    /// Number of DOP orientations (6, 14, 18, 24 or 26).
+    #[arg(long, default_value_t = crate::collision::orientation::DEFAULT_K)]
+    pub k: usize,
+    /// Passes over the poses; each query's time is its fastest pass (robust to preemption).
+    #[arg(long, default_value_t = 3)]
+    pub rounds: usize,
+    /// Write the results as JSON to this file.
+    #[arg(long)]
+    pub json: Option<std::path::PathBuf>,
+    /// Draw an SVG plot of each algorithm's time per query by percentile.
+    #[arg(long)]
+    pub svg: Option<std::path::PathBuf>,
+}
+
+/// `vas-server bench random`: runs B2, prints the table, writes files.
+pub fn run_cli(args: &RandomArgs) -> Result<()> {
+    let a = parse_mesh_spec(&args.mesh)?;
+    let b = parse_mesh_spec(&args.mesh_b)?;
+    let config = RandomConfig {
+        poses: args.poses,
+        seed: args.seed,
+        algos: args.algos.clone(),
+        orientations: OrientationSet::new(args.k)?,
+        rounds: args.rounds,
+    };
+    let report = run_random(&a, &b, &config)?;
+    println!(
+        "random poses: {} x {} triangles, {} poses, k = {}, fastest of {} rounds",
+        report.triangles_a, report.triangles_b, report.poses, report.k, report.rounds
+    );
+    print!("{}", results_table(&report.results).render());
+    print!("{}", build_table(&report.build).render());
+    println!("mismatches: {}", report.mismatches);
+    print_disagreements(&report.results);
+    if let Some(path) = &args.json {
+        write_json(path, &report)?;
+    }
+    if let Some(path) = &args.svg {
+        write_svg_line_plot(path, &percentile_plot(&report.results))?;
+    }
+    Ok(())
+}
+
+/// Time per query by percentile (log time axis), one curve per algorithm.
+fn percentile_plot(results: &[AlgoResult]) -> LinePlot {
+    LinePlot {
+        title: "Random poses: time per query by percentile".into(),
+        x_label: "percentile".into(),
+        y_label: "microseconds per query".into(),
+        log_x: false,
+        log_y: true,
+        series: results
+            .iter()
+            .map(|r| Series {
+                name: r.algo.clone(),
+                points: r
+                    .percentiles_us
+                    .iter()
+                    .enumerate()
+                    .map(|(p, &t)| (p as f64, t.max(1e-3)))
+                    .collect(),
+            })
+            .collect(),
+    }
 }
 
 #[cfg(test)]
@@ -132,6 +225,7 @@ mod tests {
             seed: 1,
             algos: Algo::DEFAULT.to_vec(),
             orientations: OrientationSet::default(),
+            rounds: 1,
         };
         let report = run_random(&a, &b, &config).unwrap();
         assert_eq!(report.mismatches, 0);

@@ -6,7 +6,7 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
@@ -134,6 +134,20 @@ impl TimingSummary {
             max_us,
         }
     }
+}
+
+/// The cost of timing one call with two `Instant::now()` readings, measured here (median of many
+/// empty readings). Benchmarks subtract it from each sample so that sub-microsecond queries are
+/// not dominated by the clock.
+pub fn timer_overhead() -> Duration {
+    let mut samples: Vec<f64> = (0..2001)
+        .map(|_| {
+            let start = Instant::now();
+            std::hint::black_box(());
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    Duration::from_secs_f64(median(&mut samples))
 }
 
 /// The median of `values` (reordered in place); NaN for an empty slice.
@@ -319,6 +333,7 @@ mod tests {
         assert_eq!(summary.median_us, 2.5);
         assert_eq!(summary.max_us, 4.0);
         assert_eq!(median(&mut [5.0, 1.0, 3.0]), 3.0);
+        assert!(timer_overhead() < Duration::from_millis(1));
     }
 
     #[test]

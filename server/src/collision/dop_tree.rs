@@ -3,13 +3,26 @@
 //!
 //! Layout, chosen for the traversal's memory traffic: node offsets are `f32`, `k` contiguous per
 //! node (so the interval test is one vectorised pass); the two children of a node are adjacent;
-//! nodes are numbered depth first; leaves hold a few triangles stored by value, in leaf order.
+//! nodes are numbered depth first; leaves hold one triangle (by default) stored by value.
 //! Offsets are rounded outwards to `f32`, and every re-aligned offset gets a margin that bounds
 //! its `f32` rounding, so no overlap is ever missed; the triangle test is exact in `f64`.
 //!
-//! Build: top-down, splitting at the median of the triangle centroids along the orientation axis
-//! of largest centroid spread. Every node's offsets are the extremes of its triangles, so every
-//! plane touches the geometry (no completely redundant half-space).
+//! Build: top-down with a binned surface heuristic (see `TreeBuilder::partition`). Every
+//! node's offsets are the extremes of its triangles, so every plane touches the geometry (no
+//! completely redundant half-space, the condition of the affine re-alignment).
+//!
+//! Query, in B's pose in A's frame:
+//! 1. a few of A's root slabs nearest the direction from A to B are tested against B's bounding
+//!    sphere and B's root re-aligned along that slab only: far pairs end here, in tens of ns;
+//! 2. otherwise the support cone of each of A's k directions in B's orientation set is found
+//!    (first trying last query's vertex: temporal coherence), giving the affine map from B's
+//!    offsets to re-aligned ones, stored densely for vector multiply-adds;
+//! 3. depth-first traversal: B's nodes are re-aligned lazily, once per query (a small
+//!    direct-mapped cache), leaves exactly from their corners; children pairs are tested when
+//!    generated and the deeper overlap is visited first; pairs that A's axes barely fail to
+//!    separate are also tested along B's axes (A's node re-aligned into B's frame).
+//!
+//! The traversal is compiled twice, portable and with AVX2/FMA, chosen at run time.
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -22,10 +35,13 @@ use super::{MeshCollider, QueryStats};
 use crate::geometry::TriMesh;
 
 /// Default number of triangles per leaf (the fastest in the tumbling benchmark).
-pub const DEFAULT_LEAF_SIZE: usize = 2;
+pub const DEFAULT_LEAF_SIZE: usize = 1;
 
-/// Depth to which the parallel traversal splits the node-pair tree into rayon tasks.
-const PARALLEL_DEPTH: u32 = 10;
+/// Depth to which the parallel traversal splits the node-pair tree into rayon tasks (up to
+/// 2^depth tasks). Measured: a first-hit query of a few microseconds gets slower in parallel
+/// (task hand-over costs more than the work); the split pays for long traversals such as all
+/// pairs of two meshes in deep contact.
+const PARALLEL_DEPTH: u32 = 6;
 
 /// One tree node: a leaf (`count > 0`) owns triangles `first..first + count`; an inner node
 /// (`count == 0`) has children `first` and `first + 1`.
@@ -57,6 +73,9 @@ pub struct DopTree {
     triangle_ids: Vec<u32>,
     /// Largest absolute offset in the tree (bounds rounding errors of re-alignment).
     max_abs_offset: f32,
+    /// Centre and radius of a sphere enclosing the mesh (for the cheap first test of a query).
+    bounding_centre: Point3<f64>,
+    bounding_radius: f64,
 }
 
 impl DopTree {
@@ -166,10 +185,21 @@ fn with_affine<const ALL: bool>(
         out: &mut Vec<[u32; 2]>,
         parallel: bool,
     ) -> bool {
-        let pair = TreePair::new(a, b, b_to_a, |rotation, translation| {
-            AffineRealign::<K>::new(a, b, rotation, translation)
+        let mut hints = CONE_HINTS.get();
+        let separated = roots_separated_along_offset(a, b, b_to_a, &mut hints);
+        let pair = (!separated).then(|| {
+            TreePair::new(a, b, b_to_a, |rotation, translation| {
+                AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
+            })
         });
-        pair.run::<ALL, K>(stats, out, parallel)
+        CONE_HINTS.set(hints);
+        match pair {
+            Some(pair) => pair.run::<ALL, K>(stats, out, parallel),
+            None => {
+                stats.bv_tests += 1;
+                false
+            }
+        }
     }
     match a.k {
         6 => run::<6, ALL>(a, b, b_to_a, stats, out, parallel),
@@ -181,14 +211,80 @@ fn with_affine<const ALL: bool>(
     }
 }
 
+/// Cheap start of a query: along the few orientations of A closest to the direction from A's
+/// centre to B's, B's bounding sphere and then B's root re-aligned along that orientation only
+/// (one support cone instead of k) are tested against A's root. Pairs far apart end here.
+fn roots_separated_along_offset(
+    a: &DopTree,
+    b: &DopTree,
+    b_to_a: &Isometry3<f64>,
+    hints: &mut ConeHints,
+) -> bool {
+    let centre_b = b_to_a * b.bounding_centre;
+    let offset = centre_b - a.bounding_centre;
+    // Slot i compares A's maximum along n_i with B's minimum along n_i: promising when B lies
+    // far along n_i.
+    let mut probes = [(f64::MIN, 0usize); ROOT_PROBES];
+    for i in 0..a.k {
+        let score = a.set.normal(i).dot(&offset);
+        if score > probes[ROOT_PROBES - 1].0 {
+            probes[ROOT_PROBES - 1] = (score, i);
+            probes.sort_by(|x, y| y.0.total_cmp(&x.0));
+        }
+    }
+    let translation = &b_to_a.translation.vector;
+    let d = b.node_offsets(0);
+    for &(_, slot) in &probes {
+        let a_max = a.node_offsets(0)[slot] as f64;
+        let direction = -a.set.normal(slot);
+        if a_max < -direction.dot(&centre_b.coords) - b.bounding_radius {
+            return true;
+        }
+        let cone = b.set.support_cone_hinted(
+            &b_to_a.rotation.inverse_transform_vector(&direction),
+            &mut hints[slot],
+        );
+        let b_support = (0..3)
+            .map(|l| cone.lambda[l] * d[cone.planes[l] as usize] as f64)
+            .sum::<f64>()
+            + direction.dot(translation);
+        // The offsets are f32: the same margin as in the traversal covers their rounding.
+        let margin = rounding_margin(
+            cone.lambda.iter().sum::<f64>() * b.max_abs_offset() as f64
+                + translation.norm()
+                + a.max_abs_offset() as f64,
+        ) as f64;
+        if a_max + b_support + margin < 0.0 {
+            return true;
+        }
+    }
+    false
+}
+
+/// Number of orientations tried by [`roots_separated_along_offset`] before a full query.
+const ROOT_PROBES: usize = 3;
+
+/// Per orientation slot of A, the generic vertex of B's set that supported it at the previous
+/// query on this thread: the first candidate tried (temporal coherence of poses).
+type ConeHints = [u8; MAX_K];
+
+/// The largest supported k.
+const MAX_K: usize = 26;
+
+thread_local! {
+    static CONE_HINTS: std::cell::Cell<ConeHints> = const { std::cell::Cell::new([u8::MAX; MAX_K]) };
+    static REVERSE_CONE_HINTS: std::cell::Cell<ConeHints> =
+        const { std::cell::Cell::new([u8::MAX; MAX_K]) };
+}
+
 /// Top-down construction state.
 struct TreeBuilder<'a> {
     set: &'a OrientationSet,
     leaf_size: usize,
     k: usize,
     triangles: Vec<Triangle>,
-    /// `k` support values (f64) per triangle, in mesh order.
-    triangle_dops: Vec<f64>,
+    /// `k` support values per triangle, in mesh order, rounded up to `f32`.
+    triangle_dops: Vec<f32>,
     /// Centroid of each triangle, in mesh order.
     centroids: Vec<Point3<f64>>,
     order: Vec<u32>,
@@ -206,7 +302,7 @@ impl<'a> TreeBuilder<'a> {
         for t in &triangles {
             triangle_dops.extend((0..k).map(|i| {
                 let n = set.normal(i);
-                t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max)
+                round_up(t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max))
             }));
         }
         let centroids = triangles
@@ -232,7 +328,20 @@ impl<'a> TreeBuilder<'a> {
         let max_abs_offset = self.offsets[..self.k]
             .iter()
             .fold(0.0f32, |m, d| m.max(d.abs()));
+        let (lo, hi) = self.triangles.iter().flatten().fold(
+            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
+            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+        );
+        let bounding_centre = Point3::from((lo + hi) * 0.5);
+        let radius = self
+            .triangles
+            .iter()
+            .flatten()
+            .map(|p| (p - bounding_centre).norm())
+            .fold(0.0, f64::max);
         DopTree {
+            bounding_centre,
+            bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
             set: self.set.clone(),
             k: self.k,
             nodes: self.nodes,
@@ -263,20 +372,13 @@ impl<'a> TreeBuilder<'a> {
     fn build_node(&mut self, index: usize, start: usize, end: usize) {
         let k = self.k;
         let h = k / 2;
-        let mut dop = vec![f64::MIN; k];
+        let mut dop = vec![f32::MIN; k];
         for &t in &self.order[start..end] {
             let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
-            for (d, s) in dop.iter_mut().zip(support) {
-                *d = d.max(*s);
-            }
+            merge_max(&mut dop, support);
         }
-        for (o, d) in self.offsets[index * k..(index + 1) * k]
-            .iter_mut()
-            .zip(&dop)
-        {
-            *o = round_up(*d);
-        }
-        let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f64::max) as f32;
+        self.offsets[index * k..(index + 1) * k].copy_from_slice(&dop);
+        let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max);
         let count = end - start;
         if count <= self.leaf_size {
             self.nodes[index] = Node {
@@ -286,11 +388,7 @@ impl<'a> TreeBuilder<'a> {
             };
             return;
         }
-        let axis = self.split_axis(start, end);
-        let centroids = &self.centroids;
-        let key = |t: &u32| axis.dot(&centroids[*t as usize].coords);
-        let mid = start + count / 2;
-        self.order[start..end].select_nth_unstable_by(count / 2, |a, b| key(a).total_cmp(&key(b)));
+        let mid = self.partition(start, end);
         let children = self.push_nodes(2);
         self.nodes[index] = Node {
             first: children as u32,
@@ -301,20 +399,121 @@ impl<'a> TreeBuilder<'a> {
         self.build_node(children + 1, mid, end);
     }
 
-    /// The orientation axis along which the centroids of `order[start..end]` spread most.
-    fn split_axis(&self, start: usize, end: usize) -> Vector3<f64> {
-        let mut best = (f64::MIN, Vector3::x());
-        for axis in self.set.axes() {
-            let (lo, hi) = self.order[start..end]
-                .iter()
-                .map(|&t| axis.dot(&self.centroids[t as usize].coords))
-                .fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
-            if hi - lo > best.0 {
-                best = (hi - lo, *axis);
+    /// Splits `order[start..end]` in two non-empty halves and returns where the second begins.
+    ///
+    /// Binned surface heuristic: along each orientation axis the centroids are put in
+    /// [`SPLIT_BINS`] bins, and the split between bins minimising
+    /// `size(left) * count(left) + size(right) * count(right)` is taken, where `size` is the sum of
+    /// the child DOP's slab widths (proportional to its mean width, hence to how often a node of
+    /// the other tree overlaps it). Falls back to the median when all centroids share a bin.
+    fn partition(&mut self, start: usize, end: usize) -> usize {
+        let k = self.k;
+        let h = k / 2;
+        // (cost, axis, lowest projection, bins per unit length, first bin of the right side)
+        let mut best: Option<(f64, usize, f64, f64, usize)> = None;
+        let mut bin_dops = vec![f32::MIN; SPLIT_BINS * k];
+        let mut bin_counts = [0usize; SPLIT_BINS];
+        let mut left_dops = vec![f32::MIN; SPLIT_BINS * k];
+        // Centroid extent along every axis.
+        let spreads: Vec<(usize, f64, f64)> = self
+            .set
+            .axes()
+            .iter()
+            .enumerate()
+            .map(|(i, axis)| {
+                let (lo, hi) = self.order[start..end]
+                    .iter()
+                    .map(|&t| axis.dot(&self.centroids[t as usize].coords))
+                    .fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+                (i, lo, hi)
+            })
+            .collect();
+        // Few triangles: as many bins as triangles keeps the cost linear in their number.
+        let bins = SPLIT_BINS.min(end - start);
+        for &(axis_index, lo, hi) in &spreads {
+            let axis = self.set.axes()[axis_index];
+            if hi - lo <= 1e-12 * (hi.abs() + lo.abs() + 1.0) {
+                continue;
+            }
+            let scale = bins as f64 / (hi - lo);
+            bin_dops[..bins * k].fill(f32::MIN);
+            bin_counts.fill(0);
+            for &t in &self.order[start..end] {
+                let bin = bin_of(
+                    axis.dot(&self.centroids[t as usize].coords),
+                    lo,
+                    scale,
+                    bins,
+                );
+                bin_counts[bin] += 1;
+                let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
+                merge_max(&mut bin_dops[bin * k..(bin + 1) * k], support);
+            }
+            // Prefix DOPs from the left, then sweep from the right.
+            let mut running = vec![f32::MIN; k];
+            for bin in 0..bins {
+                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
+                left_dops[bin * k..(bin + 1) * k].copy_from_slice(&running);
+            }
+            let size = |dop: &[f32]| (0..h).map(|i| (dop[i] + dop[i + h]) as f64).sum::<f64>();
+            running.fill(f32::MIN);
+            let mut right_count = 0;
+            for bin in (1..bins).rev() {
+                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
+                right_count += bin_counts[bin];
+                let left_count = (end - start) - right_count;
+                if left_count == 0 || right_count == 0 {
+                    continue;
+                }
+                let cost = size(&left_dops[(bin - 1) * k..bin * k]) * left_count as f64
+                    + size(&running) * right_count as f64;
+                if best.is_none_or(|b| cost < b.0) {
+                    best = Some((cost, axis_index, lo, scale, bin));
+                }
             }
         }
-        best.1
+        let Some((_, axis_index, lo, scale, split_bin)) = best else {
+            let mid = start + (end - start) / 2;
+            let axis = self.set.axes()[0];
+            let centroids = &self.centroids;
+            self.order[start..end].select_nth_unstable_by(mid - start, |a, b| {
+                axis.dot(&centroids[*a as usize].coords)
+                    .total_cmp(&axis.dot(&centroids[*b as usize].coords))
+            });
+            return mid;
+        };
+        let axis = self.set.axes()[axis_index];
+        let mut boundary = start;
+        for i in start..end {
+            let t = self.order[i];
+            if bin_of(
+                axis.dot(&self.centroids[t as usize].coords),
+                lo,
+                scale,
+                bins,
+            ) < split_bin
+            {
+                self.order.swap(i, boundary);
+                boundary += 1;
+            }
+        }
+        boundary
     }
+}
+
+/// `into[i] = max(into[i], from[i])`, written so that it compiles to vector max instructions.
+fn merge_max(into: &mut [f32], from: &[f32]) {
+    for (d, &s) in into.iter_mut().zip(from) {
+        *d = if s > *d { s } else { *d };
+    }
+}
+
+/// Number of bins per axis of the split heuristic.
+const SPLIT_BINS: usize = 16;
+
+/// The bin of a centroid projection `x` on an axis whose projections start at `lo`.
+fn bin_of(x: f64, lo: f64, scale: f64, bins: usize) -> usize {
+    (((x - lo) * scale) as usize).min(bins - 1)
 }
 
 /// The smallest `f32` not below `x`.
@@ -329,32 +528,74 @@ fn round_up(x: f64) -> f32 {
 /// nodes are disjoint along axis i exactly when `a[i] + out[i] < 0`.
 pub(crate) trait Realign<const K: usize>: Sync {
     /// Writes the re-aligned offsets of node `node` of `b`.
-    fn realign(&self, b: &DopTree, node: usize, out: &mut [f32; K]);
+    /// With `FUSED`, multiply-adds are fused (only where the CPU has FMA, or they become calls).
+    fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]);
+
+    /// The re-alignment of A's nodes into B's frame (made on first use), when the method also
+    /// tests B's axes.
+    fn reverse(&self, _a: &DopTree, _b: &DopTree) -> Option<&Self> {
+        None
+    }
 }
 
 /// The paper's O(k) re-alignment: each new offset is `Σ λ d_j + n . t` over the three planes of
 /// the generic vertex that supports the rotated direction.
+///
+/// Stored densely, one column of coefficients per plane of B, so that re-aligning a node is k_B
+/// vector multiply-adds of `K` lanes (no gathers; vectorises well).
+///
+/// Leaves are handled exactly instead: their few triangle corners are moved into A's frame and
+/// projected on A's directions, which costs about as much as the affine combination and gives
+/// the tightest enclosing DOP (a leaf's DOP is flat, far from the generic structure, so the affine
+/// bound is loose there).
 pub(crate) struct AffineRealign<const K: usize> {
-    planes: [[u8; K]; 3],
-    lambda: [[f32; K]; 3],
+    /// `columns[j][i]`: coefficient of B's offset j in the re-aligned offset of slot i (on the
+    /// heap: a query moves this struct around, and copying k_B x K floats costs more than
+    /// allocating them).
+    columns: Vec<[f32; K]>,
     base: [f32; K],
+    /// Directions of the slots (`-n_i`, A's frame) by component, for projecting leaf corners.
+    directions: [[f32; K]; 3],
+    rotation: Matrix3<f64>,
+    translation: Vector3<f64>,
+    /// Bound on the f32 rounding of a projected leaf corner.
+    leaf_margin: f32,
+    /// A's nodes re-aligned into B's frame (same k only): the traversal then tests B's axes
+    /// too. The DOP test alone separates only along A's axes; two thin patches crossing at an
+    /// angle are usually separated along B's own normals, so testing both ways prunes near-contact
+    /// pairs much earlier, as the 15-axis test does for OBBs.
+    reverse: std::sync::OnceLock<Box<AffineRealign<K>>>,
 }
 
 impl<const K: usize> AffineRealign<K> {
     /// Finds, for each of A's directions, its support cone in B's orientation set.
-    fn new(a: &DopTree, b: &DopTree, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Self {
-        let mut planes = [[0u8; K]; 3];
-        let mut lambda = [[0f32; K]; 3];
+    fn new(
+        a: &DopTree,
+        b: &DopTree,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+        hints: &mut ConeHints,
+    ) -> Self {
+        let mut columns = vec![[0f32; K]; b.k];
         let mut base = [0f32; K];
         let mut lambda_sum_max = 0.0f64;
-        for i in 0..K {
+        let r = rotation;
+        for (i, hint) in hints.iter_mut().enumerate().take(K) {
             let direction = -a.set.normal(i);
-            let cone = b.set.support_cone(&(rotation.transpose() * direction));
+            // u = Rᵀ direction, written out: nalgebra's generic product is slower here.
+            let u = Vector3::new(
+                r[(0, 0)] * direction.x + r[(1, 0)] * direction.y + r[(2, 0)] * direction.z,
+                r[(0, 1)] * direction.x + r[(1, 1)] * direction.y + r[(2, 1)] * direction.z,
+                r[(0, 2)] * direction.x + r[(1, 2)] * direction.y + r[(2, 2)] * direction.z,
+            );
+            let cone = b
+                .set
+                .cone_if_contains(*hint, &u)
+                .unwrap_or_else(|| b.set.support_cone_hinted(&u, hint));
             for l in 0..3 {
-                planes[l][i] = cone.planes[l];
-                lambda[l][i] = cone.lambda[l] as f32;
+                columns[cone.planes[l] as usize][i] = cone.lambda[l] as f32;
             }
-            lambda_sum_max = lambda_sum_max.max(cone.lambda.iter().sum());
+            lambda_sum_max = lambda_sum_max.max(cone.lambda[0] + cone.lambda[1] + cone.lambda[2]);
             base[i] = direction.dot(translation) as f32;
         }
         let margin = rounding_margin(
@@ -365,10 +606,18 @@ impl<const K: usize> AffineRealign<K> {
         for x in &mut base {
             *x += margin;
         }
+        let directions: [[f32; K]; 3] =
+            std::array::from_fn(|c| std::array::from_fn(|i| -a.set.normal(i)[c] as f32));
+        // A moved corner is within |t| + |centre_B| + radius_B of A's origin.
+        let reach = translation.norm() + b.bounding_centre.coords.norm() + b.bounding_radius;
         AffineRealign {
-            planes,
-            lambda,
+            columns,
             base,
+            directions,
+            rotation: *rotation,
+            translation: *translation,
+            leaf_margin: rounding_margin(reach),
+            reverse: std::sync::OnceLock::new(),
         }
     }
 }
@@ -379,51 +628,166 @@ pub(crate) fn rounding_margin(scale: f64) -> f32 {
 }
 
 impl<const K: usize> Realign<K> for AffineRealign<K> {
-    #[inline]
-    fn realign(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
+    fn reverse(&self, a: &DopTree, b: &DopTree) -> Option<&Self> {
+        if a.k != b.k {
+            return None;
+        }
+        let reverse = self.reverse.get_or_init(|| {
+            // A's nodes in B's frame: rotation Rᵀ, translation -Rᵀ t.
+            let inverse = self.rotation.transpose();
+            let mut hints = REVERSE_CONE_HINTS.get();
+            let reverse =
+                AffineRealign::new(b, a, &inverse, &-(inverse * self.translation), &mut hints);
+            REVERSE_CONE_HINTS.set(hints);
+            Box::new(reverse)
+        });
+        Some(reverse)
+    }
+
+    #[inline(always)]
+    fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
+        let leaf = &b.nodes[node];
+        if leaf.is_leaf() {
+            *out = [f32::MIN; K];
+            for triangle in &b.triangles[leaf.first as usize..(leaf.first + leaf.count) as usize] {
+                for corner in triangle {
+                    let y = (self.rotation * corner.coords + self.translation).cast::<f32>();
+                    let [dx, dy, dz] = &self.directions;
+                    for (i, o) in out.iter_mut().enumerate() {
+                        let p = dx[i] * y.x + dy[i] * y.y + dz[i] * y.z;
+                        *o = if p > *o { p } else { *o };
+                    }
+                }
+            }
+            for x in out.iter_mut() {
+                *x += self.leaf_margin;
+            }
+            return;
+        }
+        // Four independent accumulators: one chain of k multiply-adds would be latency bound.
+        let mut acc = [self.base, [0.0; K], [0.0; K], [0.0; K]];
+        let columns = &self.columns[..];
         let d = b.node_offsets(node);
-        *out = self.base;
-        for l in 0..3 {
-            for i in 0..K {
-                out[i] += self.lambda[l][i] * d[self.planes[l][i] as usize];
+        let mut groups = columns.chunks_exact(4).zip(d.chunks_exact(4));
+        for (group, offsets) in &mut groups {
+            for lane in 0..4 {
+                multiply_add::<K, FUSED>(&mut acc[lane], &group[lane], offsets[lane]);
             }
         }
+        let done = columns.len() - columns.len() % 4;
+        for (column, &offset) in columns[done..].iter().zip(&d[done..]) {
+            multiply_add::<K, FUSED>(&mut acc[0], column, offset);
+        }
+        for i in 0..K {
+            out[i] = (acc[0][i] + acc[1][i]) + (acc[2][i] + acc[3][i]);
+        }
+    }
+}
+
+/// `acc += column * d`, lane by lane (fused where `FUSED`).
+#[inline(always)]
+fn multiply_add<const K: usize, const FUSED: bool>(acc: &mut [f32; K], column: &[f32; K], d: f32) {
+    for i in 0..K {
+        acc[i] = if FUSED {
+            column[i].mul_add(d, acc[i])
+        } else {
+            acc[i] + column[i] * d
+        };
     }
 }
 
 /// True when A's node offsets `a` and B's re-aligned opposite offsets `e` overlap on every axis.
-#[inline]
+#[inline(always)]
 fn dops_overlap<const K: usize>(a: &[f32; K], e: &[f32; K]) -> bool {
-    let mut overlap = true;
+    overlap_slack(a, e) >= 0.0
+}
+
+/// The least `a_i + e_i`: how deeply the DOPs overlap along their tightest axis (negative when
+/// they are disjoint).
+#[inline(always)]
+fn overlap_slack<const K: usize>(a: &[f32; K], e: &[f32; K]) -> f32 {
+    let mut least = f32::INFINITY;
     for i in 0..K {
-        overlap &= a[i] + e[i] >= 0.0;
+        let s = a[i] + e[i];
+        least = if s < least { s } else { least };
     }
-    overlap
+    least
+}
+
+/// Fraction of the two nodes' sizes below which an overlap along A's axes is checked along B's.
+const REVERSE_TEST_SLACK: f32 = 0.05;
+
+/// This query's view of the per-thread re-alignment cache.
+struct RealignCache<'a> {
+    stamp: u32,
+    tags: &'a mut [(u32, u32)],
+    realigned: &'a mut [f32],
+}
+
+impl RealignCache<'_> {
+    /// The re-aligned offsets of node `node` of `tree`, computed unless cached in this query.
+    #[inline(always)]
+    fn get<const K: usize, const FUSED: bool, R: Realign<K>>(
+        &mut self,
+        realigner: &R,
+        tree: &DopTree,
+        node: u32,
+        stats: &mut QueryStats,
+    ) -> &[f32; K] {
+        let slot = node as usize % CACHE_SLOTS;
+        let e: &mut [f32; K] = (&mut self.realigned[slot * K..(slot + 1) * K])
+            .try_into()
+            .unwrap();
+        if self.tags[slot] != (self.stamp, node) {
+            self.tags[slot] = (self.stamp, node);
+            realigner.realign::<FUSED>(tree, node as usize, e);
+            stats.realignments += 1;
+        }
+        e
+    }
 }
 
 /// Per-thread buffers reused across queries: the re-alignment cache (stamped per query) and the
 /// traversal stack.
-#[derive(Default)]
+///
+/// The cache is direct-mapped with [`CACHE_SLOTS`] entries (B node `n` goes to slot
+/// `n % CACHE_SLOTS`), small enough to stay in the core's L2 cache whatever the tree size; an
+/// entry is valid when its tag holds this query's stamp and the node.
 struct Scratch {
     stamp: u32,
-    stamps: Vec<u32>,
+    /// Per slot: (stamp of the query that filled it, B node it holds).
+    tags: Vec<(u32, u32)>,
     realigned: Vec<f32>,
+    /// The same for A's nodes re-aligned into B's frame.
+    reverse_tags: Vec<(u32, u32)>,
+    reverse_realigned: Vec<f32>,
     stack: Vec<(u32, u32)>,
 }
 
+/// Entries of the per-thread re-alignment cache (a power of two).
+const CACHE_SLOTS: usize = 4096;
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch {
+            stamp: 0,
+            tags: vec![(0, 0); CACHE_SLOTS],
+            realigned: vec![0.0; CACHE_SLOTS * MAX_K],
+            reverse_tags: vec![(0, 0); CACHE_SLOTS],
+            reverse_realigned: vec![0.0; CACHE_SLOTS * MAX_K],
+            stack: Vec::new(),
+        }
+    }
+}
+
 impl Scratch {
-    /// Starts a query over a B tree of `nodes` nodes with re-aligned DOPs of `k` offsets.
-    fn begin(&mut self, nodes: usize, k: usize) {
+    /// Starts a query: a new stamp invalidates every cache entry.
+    fn begin(&mut self) {
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
-            self.stamps.fill(0);
+            self.tags.fill((0, 0));
+            self.reverse_tags.fill((0, 0));
             self.stamp = 1;
-        }
-        if self.stamps.len() < nodes {
-            self.stamps.resize(nodes, 0);
-        }
-        if self.realigned.len() < nodes * k {
-            self.realigned.resize(nodes * k, 0.0);
         }
         self.stack.clear();
     }
@@ -546,7 +910,9 @@ impl<R> TreePair<'_, R> {
         found.hit
     }
 
-    /// Depth-first traversal from one node pair with this thread's re-alignment cache.
+    /// Depth-first traversal from one node pair with this thread's re-alignment cache, compiled
+    /// for AVX2 and FMA where the CPU has them (the interval tests and re-alignments are vector
+    /// code).
     fn sequential<const ALL: bool, const K: usize>(
         &self,
         start: (u32, u32),
@@ -558,52 +924,159 @@ impl<R> TreePair<'_, R> {
         R: Realign<K>,
     {
         with_scratch(|scratch| {
-            scratch.begin(self.b.nodes.len(), K);
-            let stamp = scratch.stamp;
-            let Scratch {
-                stamps,
-                realigned,
-                stack,
-                ..
-            } = scratch;
-            let mut hit = false;
-            stack.push(start);
-            while let Some((ia, ib)) = stack.pop() {
-                if stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-                    break;
-                }
-                let slot = ib as usize * K;
-                let e: &mut [f32; K] = (&mut realigned[slot..slot + K]).try_into().unwrap();
-                if stamps[ib as usize] != stamp {
-                    stamps[ib as usize] = stamp;
-                    self.realigner.realign(self.b, ib as usize, e);
-                    stats.realignments += 1;
-                }
-                stats.bv_tests += 1;
-                let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
-                if !dops_overlap(da, e) {
-                    continue;
-                }
-                stats.nodes_visited += 1;
-                let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
-                if na.is_leaf() && nb.is_leaf() {
-                    if self.leaf_pair::<ALL>(na, nb, stats, out) {
-                        hit = true;
-                        if !ALL {
-                            if let Some(stop) = stop {
-                                stop.store(true, Ordering::Relaxed);
-                            }
-                            break;
-                        }
-                    }
-                    continue;
-                }
-                let [first, second] = self.children(ia, ib);
-                stack.push(second);
-                stack.push(first);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU supports AVX2 and FMA, checked just above.
+                return unsafe { self.traverse_avx2::<ALL, K>(scratch, start, stats, out, stop) };
             }
-            hit
+            self.traverse::<ALL, K, false>(scratch, start, stats, out, stop)
         })
+    }
+
+    /// [`Self::traverse`] compiled with AVX2 and FMA enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn traverse_avx2<const ALL: bool, const K: usize>(
+        &self,
+        scratch: &mut Scratch,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        stop: Option<&AtomicBool>,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        self.traverse::<ALL, K, true>(scratch, start, stats, out, stop)
+    }
+
+    /// The traversal itself: a stack of node pairs, B's nodes re-aligned once per query.
+    #[inline(always)]
+    fn traverse<const ALL: bool, const K: usize, const FUSED: bool>(
+        &self,
+        scratch: &mut Scratch,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+        stop: Option<&AtomicBool>,
+    ) -> bool
+    where
+        R: Realign<K>,
+    {
+        scratch.begin();
+        let stamp = scratch.stamp;
+        let Scratch {
+            tags,
+            realigned,
+            reverse_tags,
+            reverse_realigned,
+            stack,
+            ..
+        } = scratch;
+        let mut cache = RealignCache {
+            stamp,
+            tags,
+            realigned,
+        };
+        let mut reverse_cache = RealignCache {
+            stamp,
+            tags: reverse_tags,
+            realigned: reverse_realigned,
+        };
+        let mut hit = false;
+        if self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, start, stats) < 0.0 {
+            return false;
+        }
+        // The stack holds node pairs already known to overlap. Children pairs are tested when
+        // generated and the one overlapping more deeply is visited first: a first hit is found
+        // sooner.
+        stack.push(start);
+        while let Some((ia, ib)) = stack.pop() {
+            if let Some(stop) = stop
+                && stop.load(Ordering::Relaxed)
+            {
+                break;
+            }
+            stats.nodes_visited += 1;
+            let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+            if na.is_leaf() && nb.is_leaf() {
+                if self.leaf_pair::<ALL>(na, nb, stats, out) {
+                    hit = true;
+                    if !ALL {
+                        if let Some(stop) = stop {
+                            stop.store(true, Ordering::Relaxed);
+                        }
+                        break;
+                    }
+                }
+                continue;
+            }
+            let [first, second] = self.children(ia, ib);
+            let first_slack = self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, first, stats);
+            let second_slack =
+                self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, second, stats);
+            // Relative depth: overlap over the size of the pair's smaller node.
+            let relative = |(ia, ib): (u32, u32), slack: f32| {
+                let size = self.a.nodes[ia as usize]
+                    .size
+                    .min(self.b.nodes[ib as usize].size);
+                slack / size.max(f32::MIN_POSITIVE)
+            };
+            let (deeper, shallower) =
+                if relative(first, first_slack) >= relative(second, second_slack) {
+                    ((first, first_slack), (second, second_slack))
+                } else {
+                    ((second, second_slack), (first, first_slack))
+                };
+            if shallower.1 >= 0.0 {
+                stack.push(shallower.0);
+            }
+            if deeper.1 >= 0.0 {
+                stack.push(deeper.0);
+            }
+        }
+        hit
+    }
+
+    /// The overlap slack of a node pair: the least `a_i + e_i` over the axes, negative exactly
+    /// when some axis separates them. B's node is re-aligned unless cached for this query; when
+    /// the method tests both ways and A's axes do not separate, A's node re-aligned into B's
+    /// frame is tested against B's axes too.
+    #[inline(always)]
+    fn slack<const K: usize, const FUSED: bool>(
+        &self,
+        cache: &mut RealignCache<'_>,
+        reverse_cache: &mut RealignCache<'_>,
+        (ia, ib): (u32, u32),
+        stats: &mut QueryStats,
+    ) -> f32
+    where
+        R: Realign<K>,
+    {
+        let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
+        let e = cache.get::<K, FUSED, R>(&self.realigner, self.b, ib, stats);
+        stats.bv_tests += 1;
+        let forward = overlap_slack(da, e);
+        // Only pairs that A's axes barely fail to separate are worth B's axes: deep overlaps
+        // are rarely separated by them (measured).
+        let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+        if forward < 0.0 || forward > REVERSE_TEST_SLACK * (na.size + nb.size) {
+            return forward;
+        }
+        let Some(reverse) = self.realigner.reverse(self.a, self.b) else {
+            return forward;
+        };
+        let db: &[f32; K] = self.b.node_offsets(ib as usize).try_into().unwrap();
+        let e = reverse_cache.get::<K, FUSED, R>(reverse, self.a, ia, stats);
+        stats.bv_tests += 1;
+        let backward = overlap_slack(db, e);
+        if backward < forward {
+            backward
+        } else {
+            forward
+        }
     }
 
     /// Splits the traversal into rayon tasks down to `depth`, then traverses sequentially.
@@ -628,7 +1101,7 @@ impl<R> TreePair<'_, R> {
             return found;
         }
         let mut e = [0f32; K];
-        self.realigner.realign(self.b, ib as usize, &mut e);
+        self.realigner.realign::<false>(self.b, ib as usize, &mut e);
         found.stats.realignments += 1;
         found.stats.bv_tests += 1;
         let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();

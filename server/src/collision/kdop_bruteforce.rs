@@ -126,7 +126,7 @@ impl<const K: usize> VertexRealign<K> {
 }
 
 impl<const K: usize> Realign<K> for VertexRealign<K> {
-    fn realign(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
+    fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]) {
         let h = K / 2;
         let d = b.node_offsets(node);
         let mut lo = [f32::MAX; K];

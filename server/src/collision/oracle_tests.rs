@@ -228,3 +228,37 @@ fn identical_touching_copies_collide() {
     assert!(brute.intersects(&brute, &id, &mut stats));
     assert!(stats.tri_tests > 0 && stats.bv_tests > 0 && stats.realignments > 0);
 }
+
+#[test]
+fn procedural_open_and_closed_shapes_agree_with_brute_force_and_parry() {
+    use crate::geometry::shapes::{ShapeKind, build};
+    let pairs = [
+        (ShapeKind::Hyperboloid, 300, ShapeKind::SheetWithHole, 200),
+        (ShapeKind::Sphere, 250, ShapeKind::Pipe, 300),
+        (ShapeKind::BoxWithHole, 300, ShapeKind::Cylinder, 120),
+    ];
+    for (seed, (kind_a, n_a, kind_b, n_b)) in pairs.into_iter().enumerate() {
+        let a = build(kind_a, n_a).normalized_to_unit_box();
+        let b = build(kind_b, n_b).normalized_to_unit_box();
+        let colliding = check_all(&a, &b, 250, 2.0, 20 + seed as u64);
+        assert!(
+            colliding > 25 && colliding < 240,
+            "{kind_a} vs {kind_b}: {colliding} colliding poses"
+        );
+    }
+}
+
+#[test]
+fn real_mesh_agrees_with_brute_force_and_parry() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs/meshes/low_poly_bunny.obj");
+    let bunny = crate::geometry::load_mesh(&path)
+        .unwrap()
+        .normalized_to_unit_box();
+    let probe = torus(0.3, 12, 8).normalized_to_unit_box();
+    let colliding = check_all(&bunny, &probe, 250, 1.8, 33);
+    assert!(
+        colliding > 25 && colliding < 240,
+        "{colliding} colliding poses"
+    );
+}

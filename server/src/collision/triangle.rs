@@ -35,6 +35,37 @@ fn orient3d(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>, d: &Point3<f64>) 
     sign(-robust::orient3d(coord(a), coord(b), coord(c), coord(d)))
 }
 
+/// Exact sides of the corners of `points` with respect to the plane of `plane`: for each corner
+/// `v`, the sign of `orient3d(plane[0], plane[1], plane[2], v)`.
+///
+/// A floating-point filter shares the plane's cross product between the three corners and
+/// decides whenever the determinant exceeds its rounding-error bound (Shewchuk's bound for this
+/// triple product, with margin); only near-zero cases go to the exact predicate.
+#[inline]
+fn plane_sides(plane: &Triangle, points: &Triangle) -> [i8; 3] {
+    let [p, q, r] = plane;
+    let (a, b) = (q - p, r - p);
+    let n = a.cross(&b);
+    // |a_y b_z| + |a_z b_y| etc.: the permanent of the cross product.
+    let m = nalgebra::Vector3::new(
+        (a.y * b.z).abs() + (a.z * b.y).abs(),
+        (a.z * b.x).abs() + (a.x * b.z).abs(),
+        (a.x * b.y).abs() + (a.y * b.x).abs(),
+    );
+    points.map(|v| {
+        let w = v - p;
+        let det = n.dot(&w);
+        let bound = 1e-15 * m.dot(&w.abs());
+        if det > bound {
+            1
+        } else if det < -bound {
+            -1
+        } else {
+            orient3d(p, q, r, &v)
+        }
+    })
+}
+
 /// Exact sign of the 2-D orientation of `(a, b, c)`: positive when counter-clockwise.
 fn orient2d(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
     let coord = |p: [f64; 2]| Coord { x: p[0], y: p[1] };
@@ -48,22 +79,12 @@ fn sign(value: f64) -> i8 {
 /// True when the closed triangles `t1` and `t2` share at least one point (see the module's
 /// touching convention).
 pub fn triangles_intersect(t1: &Triangle, t2: &Triangle) -> bool {
-    let [p1, q1, r1] = t1;
-    let [p2, q2, r2] = t2;
     // Sides of t1's corners with respect to t2's plane, and of t2's with respect to t1's.
-    let mut side1 = [
-        orient3d(p2, q2, r2, p1),
-        orient3d(p2, q2, r2, q1),
-        orient3d(p2, q2, r2, r1),
-    ];
+    let mut side1 = plane_sides(t2, t1);
     if strictly_one_side(side1) {
         return false;
     }
-    let mut side2 = [
-        orient3d(p1, q1, r1, p2),
-        orient3d(p1, q1, r1, q2),
-        orient3d(p1, q1, r1, r2),
-    ];
+    let mut side2 = plane_sides(t1, t2);
     if strictly_one_side(side2) {
         return false;
     }
