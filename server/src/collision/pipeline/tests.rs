@@ -342,7 +342,26 @@ fn concurrent_runner_gives_the_same_reports_as_the_pipeline() {
     concurrent.queue_move(first, Isometry3::identity()).unwrap();
     concurrent.request_frame(Detail::Pairs).unwrap();
     assert_eq!(concurrent.receive_report().unwrap().stats.rejected_moves, 1);
-    assert_eq!(concurrent.shutdown().len(), 24);
+    // A new object placed across another one collides with it in the next frame.
+    let host = scene.bodies.values().nth(3).unwrap();
+    let guest = concurrent
+        .add(ObjectDesc {
+            model: Arc::clone(&host.model),
+            pose: host.pose * Translation3::new(0.05, 0.03, 0.02),
+            group: GroupId(host.group),
+            is_static: false,
+        })
+        .unwrap();
+    assert_eq!(guest.index(), first.index(), "the freed slot is reused");
+    concurrent.request_frame(Detail::Pairs).unwrap();
+    let report = concurrent.receive_report().unwrap();
+    assert!(
+        report
+            .colliding
+            .iter()
+            .any(|pair| pair.a == guest || pair.b == guest)
+    );
+    assert_eq!(concurrent.shutdown().len(), 25);
 }
 
 #[test]
