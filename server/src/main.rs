@@ -61,6 +61,10 @@ enum BenchCommand {
     Tumble(bench::tumble::TumbleArgs),
     /// B2: random poses of one mesh against another (FCL's procedure).
     Random(bench::random::RandomArgs),
+    /// B3: orbiting spheres, separating plane against GJK (the paper's Figure 4).
+    Orbit(bench::orbit::OrbitArgs),
+    /// B4: objects bouncing in a cube, the whole pipeline against threads (the paper's Figure 5).
+    Bounce(bench::bounce::BounceArgs),
     /// B5: sliding contact, time per contact point and sliding frame rate.
     Slide(bench::slide::SlideBenchArgs),
     /// B6: time per clasp minimisation of the hand against parts of 1k to 50k triangles.
@@ -90,6 +94,8 @@ fn main() -> ExitCode {
         Command::Bench { benchmark } => match benchmark {
             BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
             BenchCommand::Random(args) => bench::random::run_cli(&args),
+            BenchCommand::Orbit(args) => bench::orbit::run_cli(&args),
+            BenchCommand::Bounce(args) => bench::bounce::run_cli(&args),
             BenchCommand::Slide(args) => bench::slide::run_bench(&args).map(drop),
             BenchCommand::Grasp(args) => bench::grasp::run_cli(&args),
         },

@@ -6,11 +6,15 @@
 //! frame, touch A (first hit), and which triangle pairs touch (all pairs, for sliding contact).
 //! Touching counts as intersecting (see [`triangle`]).
 
+pub mod broad_phase;
 pub mod dop_tree;
+pub mod interest;
 pub mod kdop_bruteforce;
 pub mod obb_tree;
 pub mod orientation;
 pub mod parry_mesh;
+pub mod pipeline;
+pub mod separating_plane;
 pub mod triangle;
 
 use std::ops::AddAssign;

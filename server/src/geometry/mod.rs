@@ -1,12 +1,14 @@
 //! Triangle meshes: the mesh type, loading, welding, adjacency, convex hulls and procedural shapes.
 
 pub mod adjacency;
+pub mod hull;
 pub mod io;
 pub mod mesh;
 pub mod shapes;
 pub mod weld;
 
 pub use adjacency::EdgeAdjacency;
+pub use hull::{ConvexHull, HullSource};
 pub use io::{GeometryError, load_mesh, parse_mesh_spec, write_obj};
 pub use mesh::{CleanupReport, MeshError, Point, TriMesh};
 pub use weld::weld;

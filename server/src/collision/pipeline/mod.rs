@@ -1,0 +1,658 @@
+//! The collision-detection pipeline over a scene (PAPER §2, §2.3).
+//!
+//! Objects (a shared collision model, a pose, a group, a static flag) are added and removed; each
+//! frame, the objects moved since the last frame (the front-end queue) send only their pairs down
+//! the filters: the bounding-box stage ([`SweepAndPrune`]), the [`InterestMatrix`], the
+//! separating-plane pre-check ([`SeparatingPlane`]) and the exact test ([`ExactTest`]). The result
+//! is the set of colliding pairs in the whole scene and, on request, their triangle pairs; pairs of
+//! objects that did not move keep their last answer. Each stage counts the pairs it took in and let
+//! through, and its time.
+//!
+//! A pair that collided when last tested skips the pre-check (it would most likely fail to find a
+//! plane, after many loops) and goes straight to the exact test.
+//!
+//! The back end is parallel on the current rayon pool: the pre-checks and the exact tests of a
+//! frame are spread over the threads with work stealing (coarse grain), and when fewer pairs than
+//! threads reach the exact test, each pair's own traversal is split (fine grain).
+//! [`ConcurrentPipeline`] runs the whole pipeline on a thread of its own.
+
+mod concurrent;
+mod exact;
+
+pub use concurrent::ConcurrentPipeline;
+pub use exact::ExactTest;
+
+use super::QueryStats;
+use super::broad_phase::{Aabb, SweepAndPrune};
+use super::interest::{GroupId, InterestKey, InterestMatrix};
+use super::separating_plane::{PlaneSearch, SeparatingPlane};
+use crate::geometry::ConvexHull;
+use nalgebra::{Isometry3, Vector3};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use thiserror::Error;
+
+/// Names an object of a pipeline. Ids of removed objects are never valid again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ObjectId {
+    index: u32,
+    generation: u32,
+}
+
+impl ObjectId {
+    /// The slot the object occupies; slots of removed objects are reused.
+    pub fn index(self) -> u32 {
+        self.index
+    }
+
+    #[cfg(test)]
+    pub(crate) fn from_parts(index: u32, generation: u32) -> Self {
+        ObjectId { index, generation }
+    }
+}
+
+/// What the pipeline needs of a rigid object's shape, built once and shared between the objects
+/// (and loops) that use the same mesh.
+#[derive(Debug)]
+pub struct CollisionModel<C> {
+    exact: C,
+    hull: ConvexHull,
+    local_bounds: Aabb,
+}
+
+impl<C> CollisionModel<C> {
+    /// Combines an exact-test structure and the convex hull of the same mesh.
+    pub fn new(exact: C, hull: ConvexHull) -> Self {
+        let first = hull.vertices()[0];
+        let (min, max) = hull
+            .vertices()
+            .iter()
+            .fold((first, first), |(lo, hi), v| (lo.inf(v), hi.sup(v)));
+        let local_bounds = Aabb { min, max }.expanded(hull.tolerance());
+        CollisionModel {
+            exact,
+            hull,
+            local_bounds,
+        }
+    }
+
+    /// The exact-test structure.
+    pub fn exact(&self) -> &C {
+        &self.exact
+    }
+
+    /// The convex hull used by the pre-check.
+    pub fn hull(&self) -> &ConvexHull {
+        &self.hull
+    }
+
+    /// A box enclosing the mesh in its own frame.
+    pub fn local_bounds(&self) -> &Aabb {
+        &self.local_bounds
+    }
+}
+
+/// An object to add to a pipeline.
+#[derive(Debug)]
+pub struct ObjectDesc<C> {
+    /// Its shape.
+    pub model: Arc<CollisionModel<C>>,
+    /// Its pose in the scene.
+    pub pose: Isometry3<f64>,
+    /// Its collision group, for the interest matrix.
+    pub group: GroupId,
+    /// True for objects that never move: two of them are never tested against each other.
+    pub is_static: bool,
+}
+
+/// Why the pipeline refused a call.
+#[derive(Debug, Error, PartialEq)]
+pub enum PipelineError {
+    /// The id names no object (never added, or removed).
+    #[error("object {0:?} is not in the pipeline")]
+    UnknownObject(ObjectId),
+    /// A pose with a NaN or infinite component, or a rotation that is not a unit quaternion.
+    #[error("invalid pose for {0}: {1}")]
+    InvalidPose(String, &'static str),
+    /// More objects than ids can name.
+    #[error("the pipeline is full")]
+    Full,
+    /// The pipeline thread of a [`ConcurrentPipeline`] has stopped.
+    #[error("the collision pipeline thread has stopped")]
+    Closed,
+}
+
+/// How much a frame should report about colliding pairs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Detail {
+    /// Only which pairs collide (the exact test stops at the first intersecting triangle pair).
+    Pairs,
+    /// Also every intersecting triangle pair of each colliding pair.
+    TrianglePairs,
+}
+
+/// Pairs taken in and let through by one stage in one frame, and the stage's wall time.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StageCounters {
+    /// Pairs that reached the stage.
+    pub pairs_in: u64,
+    /// Pairs the stage passed on (for the exact test: the colliding ones).
+    pub pairs_out: u64,
+    /// Wall time spent in the stage.
+    pub time: Duration,
+}
+
+/// The counters of one frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FrameStats {
+    /// Objects in the front-end queue.
+    pub moved: u64,
+    /// Pairs involving a moved object → pairs whose boxes overlap.
+    pub broad_phase: StageCounters,
+    /// → pairs of interest.
+    pub interest: StageCounters,
+    /// → pairs no separating plane was found for.
+    pub separating_plane: StageCounters,
+    /// → colliding pairs.
+    pub exact: StageCounters,
+    /// Perceptron loops run by the pre-check.
+    pub plane_loops: u64,
+    /// Exact tests whose traversal was split across threads.
+    pub split_tests: u64,
+    /// Work counters of the exact tests.
+    pub exact_work: QueryStats,
+    /// Queued moves refused because their object was gone (by [`ConcurrentPipeline`]).
+    pub rejected_moves: u64,
+    /// Wall time of the whole frame.
+    pub total: Duration,
+}
+
+/// A pair of objects whose meshes intersect.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CollidingPair {
+    /// The object with the smaller id.
+    pub a: ObjectId,
+    /// The other object.
+    pub b: ObjectId,
+    /// `[triangle of a, triangle of b]` for each intersecting triangle pair; empty unless the
+    /// frame asked for [`Detail::TrianglePairs`].
+    pub triangles: Vec<[u32; 2]>,
+}
+
+/// What a frame found: every colliding pair of the scene, sorted, and the stage counters.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct FrameReport {
+    /// All pairs colliding after this frame, sorted by `(a, b)`.
+    pub colliding: Vec<CollidingPair>,
+    /// This frame's counters.
+    pub stats: FrameStats,
+}
+
+/// Settings of the pipeline.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PipelineConfig {
+    /// The separating-plane search.
+    pub plane_search: PlaneSearch,
+    /// Whether the separating-plane stage runs at all (off: pairs go from the interest matrix
+    /// straight to the exact test; for comparisons).
+    pub separating_plane: bool,
+}
+
+impl Default for PipelineConfig {
+    fn default() -> Self {
+        PipelineConfig {
+            plane_search: PlaneSearch::default(),
+            separating_plane: true,
+        }
+    }
+}
+
+struct Object<C> {
+    model: Arc<CollisionModel<C>>,
+    pose: Isometry3<f64>,
+    key: InterestKey,
+}
+
+struct Slot<C> {
+    generation: u32,
+    object: Option<Object<C>>,
+}
+
+/// A pair of object slots, smaller index first.
+type PairKey = (u32, u32);
+
+/// What is kept for a pair of objects whose boxes overlap.
+#[derive(Debug, Clone, Default)]
+struct PairState {
+    plane: SeparatingPlane,
+    /// `Some` while the pair collides, with its triangle pairs if they were asked for.
+    contact: Option<Option<Vec<[u32; 2]>>>,
+}
+
+/// One pair going down the back end in this frame.
+struct PairWork {
+    pair: PairKey,
+    b_to_a: Isometry3<f64>,
+    plane: SeparatingPlane,
+    /// The pair collided when last tested: the pre-check would most likely fail, so it is skipped.
+    was_colliding: bool,
+    separated: bool,
+    loops: u32,
+    colliding: bool,
+    triangles: Option<Vec<[u32; 2]>>,
+    stats: QueryStats,
+}
+
+/// The pipeline over one scene, generic over the exact test `C`.
+pub struct CollisionPipeline<C> {
+    slots: Vec<Slot<C>>,
+    free: Vec<u32>,
+    broad_phase: SweepAndPrune,
+    interest: InterestMatrix,
+    pairs: FxHashMap<PairKey, PairState>,
+    queue: Vec<u32>,
+    queued: Vec<bool>,
+    config: PipelineConfig,
+}
+
+impl<C: ExactTest> CollisionPipeline<C> {
+    /// An empty scene.
+    pub fn new(config: PipelineConfig) -> Self {
+        CollisionPipeline {
+            slots: Vec::new(),
+            free: Vec::new(),
+            broad_phase: SweepAndPrune::new(),
+            interest: InterestMatrix::new(),
+            pairs: FxHashMap::default(),
+            queue: Vec::new(),
+            queued: Vec::new(),
+            config,
+        }
+    }
+
+    /// Adds an object; it enters the front-end queue, so the next frame tests its pairs.
+    pub fn add(&mut self, desc: ObjectDesc<C>) -> Result<ObjectId, PipelineError> {
+        check_pose(&desc.pose, || "a new object".to_owned())?;
+        let index = match self.free.pop() {
+            Some(index) => index,
+            None => {
+                let index = u32::try_from(self.slots.len())
+                    .ok()
+                    .filter(|&i| i < u32::MAX >> 1)
+                    .ok_or(PipelineError::Full)?;
+                self.slots.push(Slot {
+                    generation: 0,
+                    object: None,
+                });
+                self.queued.push(false);
+                index
+            }
+        };
+        let slot = &mut self.slots[index as usize];
+        let id = ObjectId {
+            index,
+            generation: slot.generation,
+        };
+        self.broad_phase.insert(
+            index,
+            Aabb::transformed(desc.model.local_bounds(), &desc.pose),
+        );
+        slot.object = Some(Object {
+            model: desc.model,
+            pose: desc.pose,
+            key: InterestKey {
+                object: id,
+                group: desc.group,
+                is_static: desc.is_static,
+            },
+        });
+        self.enqueue(index);
+        Ok(id)
+    }
+
+    /// Removes an object and every pair it was part of.
+    pub fn remove(&mut self, id: ObjectId) -> Result<(), PipelineError> {
+        self.object(id)?;
+        let slot = &mut self.slots[id.index as usize];
+        slot.object = None;
+        slot.generation = slot.generation.wrapping_add(1);
+        self.broad_phase.remove(id.index);
+        self.drop_ended_pairs();
+        if std::mem::take(&mut self.queued[id.index as usize]) {
+            self.queue.retain(|&index| index != id.index);
+        }
+        self.interest.forget_object(id);
+        self.free.push(id.index);
+        Ok(())
+    }
+
+    /// Sets an object's pose and puts it in the front-end queue; the next frame tests its pairs.
+    /// Moving it again before that frame just replaces the pose.
+    pub fn queue_move(&mut self, id: ObjectId, pose: Isometry3<f64>) -> Result<(), PipelineError> {
+        self.object(id)?;
+        check_pose(&pose, || format!("{id:?}"))?;
+        if let Some(object) = &mut self.slots[id.index as usize].object {
+            object.pose = pose;
+        }
+        self.enqueue(id.index);
+        Ok(())
+    }
+
+    /// The pose an object has in the pipeline.
+    pub fn pose(&self, id: ObjectId) -> Result<Isometry3<f64>, PipelineError> {
+        Ok(self.object(id)?.pose)
+    }
+
+    /// The interest rules in force.
+    pub fn interest(&self) -> &InterestMatrix {
+        &self.interest
+    }
+
+    /// Replaces the interest rules; every object is queued, so the next frame re-evaluates the
+    /// whole scene under the new rules.
+    pub fn set_interest(&mut self, interest: InterestMatrix) {
+        self.interest = interest;
+        for index in 0..self.slots.len() as u32 {
+            if self.slots[index as usize].object.is_some() {
+                self.enqueue(index);
+            }
+        }
+    }
+
+    /// Number of objects in the scene.
+    pub fn len(&self) -> usize {
+        self.slots.len() - self.free.len()
+    }
+
+    /// True when the scene has no object.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn object(&self, id: ObjectId) -> Result<&Object<C>, PipelineError> {
+        self.slots
+            .get(id.index as usize)
+            .filter(|slot| slot.generation == id.generation)
+            .and_then(|slot| slot.object.as_ref())
+            .ok_or(PipelineError::UnknownObject(id))
+    }
+
+    fn live(&self, index: u32) -> &Object<C> {
+        self.slots[index as usize]
+            .object
+            .as_ref()
+            .expect("pairs name live objects")
+    }
+
+    fn enqueue(&mut self, index: u32) {
+        if !self.queued[index as usize] {
+            self.queued[index as usize] = true;
+            self.queue.push(index);
+        }
+    }
+
+    fn drop_ended_pairs(&mut self) {
+        for [a, b] in self.broad_phase.drain_ended() {
+            self.pairs.remove(&ordered(a, b));
+        }
+    }
+
+    /// Runs one frame over the front-end queue and reports every colliding pair of the scene.
+    /// Parallel stages run on the current rayon pool (call it inside `ThreadPool::install` to
+    /// choose the threads).
+    pub fn run_frame(&mut self, detail: Detail) -> FrameReport {
+        let frame_start = Instant::now();
+        let mut stats = FrameStats {
+            moved: self.queue.len() as u64,
+            ..FrameStats::default()
+        };
+
+        let stage_start = Instant::now();
+        let mut candidates = self.broad_phase_stage();
+        let moved = self.queue.len() as u64;
+        let others = self.len() as u64 - moved;
+        stats.broad_phase = StageCounters {
+            pairs_in: moved * others + moved * moved.saturating_sub(1) / 2,
+            pairs_out: candidates.len() as u64,
+            time: stage_start.elapsed(),
+        };
+        for &index in &self.queue {
+            self.queued[index as usize] = false;
+        }
+        self.queue.clear();
+
+        let stage_start = Instant::now();
+        candidates.retain(|&(a, b)| {
+            let interesting = self
+                .interest
+                .is_interesting(&self.live(a).key, &self.live(b).key);
+            if !interesting {
+                self.pairs.remove(&(a, b));
+            }
+            interesting
+        });
+        stats.interest = StageCounters {
+            pairs_in: stats.broad_phase.pairs_out,
+            pairs_out: candidates.len() as u64,
+            time: stage_start.elapsed(),
+        };
+
+        let mut work: Vec<PairWork> = candidates
+            .iter()
+            .map(|&(a, b)| {
+                let state = self.pairs.get(&(a, b));
+                PairWork {
+                    pair: (a, b),
+                    b_to_a: self.live(a).pose.inv_mul(&self.live(b).pose),
+                    plane: state.map_or_else(SeparatingPlane::new, |state| state.plane),
+                    was_colliding: state.is_some_and(|state| state.contact.is_some()),
+                    separated: false,
+                    loops: 0,
+                    colliding: false,
+                    triangles: None,
+                    stats: QueryStats::default(),
+                }
+            })
+            .collect();
+
+        let stage_start = Instant::now();
+        if self.config.separating_plane {
+            let search = self.config.plane_search;
+            let slots = &self.slots;
+            let unknown = work.iter_mut().filter(|item| !item.was_colliding).collect();
+            for_each_pair(unknown, 16, |item| {
+                let [a, b] = models(slots, item.pair);
+                let check = item.plane.check(a.hull(), b.hull(), &item.b_to_a, &search);
+                item.separated = check.separated;
+                item.loops = check.loops;
+            });
+        }
+        let unseparated = work.iter().filter(|item| !item.separated).count() as u64;
+        stats.separating_plane = StageCounters {
+            pairs_in: work.len() as u64,
+            pairs_out: unseparated,
+            time: stage_start.elapsed(),
+        };
+        stats.plane_loops = work.iter().map(|item| u64::from(item.loops)).sum();
+
+        let stage_start = Instant::now();
+        let split = (unseparated as usize) < rayon::current_num_threads();
+        let slots = &self.slots;
+        let unseparated_items = work.iter_mut().filter(|item| !item.separated).collect();
+        for_each_pair(unseparated_items, 1, |item| {
+            let [a, b] = models(slots, item.pair);
+            let (a, b) = (a.exact(), b.exact());
+            item.colliding = match detail {
+                Detail::Pairs if split => a.intersects_split(b, &item.b_to_a, &mut item.stats),
+                Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
+                Detail::TrianglePairs => {
+                    let mut triangles = Vec::new();
+                    a.intersecting_pairs(b, &item.b_to_a, &mut triangles, &mut item.stats);
+                    let colliding = !triangles.is_empty();
+                    item.triangles = Some(triangles);
+                    colliding
+                }
+            };
+        });
+        stats.split_tests = if split && detail == Detail::Pairs {
+            unseparated
+        } else {
+            0
+        };
+        stats.exact = StageCounters {
+            pairs_in: unseparated,
+            pairs_out: work.iter().filter(|item| item.colliding).count() as u64,
+            time: stage_start.elapsed(),
+        };
+        for item in &work {
+            stats.exact_work += item.stats;
+        }
+
+        for item in work {
+            let state = self.pairs.entry(item.pair).or_default();
+            state.plane = item.plane;
+            state.contact = item.colliding.then_some(item.triangles);
+        }
+        if detail == Detail::TrianglePairs {
+            self.fill_missing_triangles();
+        }
+        stats.total = frame_start.elapsed();
+        FrameReport {
+            colliding: self.colliding_pairs(detail),
+            stats,
+        }
+    }
+
+    /// Moves the queued objects' boxes and returns the overlapping pairs that involve a moved
+    /// object, each once as (smaller index, larger index).
+    fn broad_phase_stage(&mut self) -> Vec<PairKey> {
+        let updates: Vec<(u32, Aabb)> = self
+            .queue
+            .iter()
+            .filter_map(|&index| {
+                let object = self.slots[index as usize].object.as_ref()?;
+                Some((
+                    index,
+                    Aabb::transformed(object.model.local_bounds(), &object.pose),
+                ))
+            })
+            .collect();
+        self.broad_phase.update_many(&updates);
+        self.drop_ended_pairs();
+        let mut candidates = Vec::new();
+        for &index in &self.queue {
+            for &other in self.broad_phase.overlaps(index) {
+                if !self.queued[other as usize] || index < other {
+                    candidates.push(ordered(index, other));
+                }
+            }
+        }
+        candidates
+    }
+
+    /// Computes triangle pairs for colliding pairs that were last tested without them.
+    fn fill_missing_triangles(&mut self) {
+        let mut missing: Vec<(PairKey, Vec<[u32; 2]>)> = self
+            .pairs
+            .iter()
+            .filter(|(_, state)| matches!(state.contact, Some(None)))
+            .map(|(&pair, _)| (pair, Vec::new()))
+            .collect();
+        let slots = &self.slots;
+        missing.par_iter_mut().for_each(|(pair, triangles)| {
+            let [a, b] = models(slots, *pair);
+            let b_to_a = pose(slots, pair.0).inv_mul(&pose(slots, pair.1));
+            a.exact()
+                .intersecting_pairs(b.exact(), &b_to_a, triangles, &mut QueryStats::default());
+        });
+        for (pair, triangles) in missing {
+            if let Some(state) = self.pairs.get_mut(&pair) {
+                state.contact = Some(Some(triangles));
+            }
+        }
+    }
+
+    fn colliding_pairs(&self, detail: Detail) -> Vec<CollidingPair> {
+        let mut colliding: Vec<CollidingPair> = self
+            .pairs
+            .iter()
+            .filter_map(|(&(a, b), state)| {
+                let triangles = state.contact.as_ref()?;
+                Some(CollidingPair {
+                    a: self.live(a).key.object,
+                    b: self.live(b).key.object,
+                    triangles: match detail {
+                        Detail::Pairs => Vec::new(),
+                        Detail::TrianglePairs => triangles.clone().unwrap_or_default(),
+                    },
+                })
+            })
+            .collect();
+        colliding.sort_unstable_by_key(|pair| (pair.a, pair.b));
+        colliding
+    }
+}
+
+fn models<C>(slots: &[Slot<C>], (a, b): PairKey) -> [&CollisionModel<C>; 2] {
+    [a, b].map(|index| {
+        &*slots[index as usize]
+            .object
+            .as_ref()
+            .expect("pairs name live objects")
+            .model
+    })
+}
+
+fn pose<C>(slots: &[Slot<C>], index: u32) -> Isometry3<f64> {
+    slots[index as usize]
+        .object
+        .as_ref()
+        .expect("pairs name live objects")
+        .pose
+}
+
+/// Runs `f` on every item, in parallel on the current rayon pool when it has more than one
+/// thread (work stealing balances uneven items), in chunks of at least `min_len` items.
+fn for_each_pair(
+    items: Vec<&mut PairWork>,
+    min_len: usize,
+    f: impl Fn(&mut PairWork) + Sync + Send,
+) {
+    if rayon::current_num_threads() == 1 {
+        items.into_iter().for_each(f);
+    } else {
+        items.into_par_iter().with_min_len(min_len).for_each(f);
+    }
+}
+
+fn ordered(a: u32, b: u32) -> PairKey {
+    if a < b { (a, b) } else { (b, a) }
+}
+
+/// Refuses poses with non-finite components or a rotation far from unit length.
+fn check_pose(pose: &Isometry3<f64>, name: impl Fn() -> String) -> Result<(), PipelineError> {
+    let translation: &Vector3<f64> = &pose.translation.vector;
+    let quaternion = pose.rotation.quaternion();
+    if !translation
+        .iter()
+        .chain(quaternion.coords.iter())
+        .all(|v| v.is_finite())
+    {
+        return Err(PipelineError::InvalidPose(
+            name(),
+            "a component is not finite",
+        ));
+    }
+    if (quaternion.norm() - 1.0).abs() > 1e-6 {
+        return Err(PipelineError::InvalidPose(
+            name(),
+            "the rotation is not a unit quaternion",
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

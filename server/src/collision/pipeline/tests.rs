@@ -1,0 +1,440 @@
+//! The pipeline against brute force: every pair of the scene tested exactly, each frame.
+
+use super::*;
+use crate::collision::{DopTree, ParryMesh};
+use crate::geometry::{Point, TriMesh};
+use nalgebra::{Translation3, UnitQuaternion};
+use parry3d::shape::Ball;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::collections::BTreeMap;
+
+/// An ellipsoid with half-axes `axes`, bent into a banana when `bend` is non-zero (so that its
+/// hull is looser than the mesh).
+fn shape(axes: Vector3<f64>, bend: f64) -> TriMesh {
+    let (points, triangles) = Ball::new(1.0).to_trimesh(12, 8);
+    let points = points
+        .iter()
+        .map(|p| {
+            let p: Point = nalgebra::convert(*p);
+            let p = Point::from(p.coords.component_mul(&axes));
+            Point::new(p.x + bend * p.y * p.y, p.y, p.z)
+        })
+        .collect();
+    TriMesh::new(points, triangles).unwrap().0
+}
+
+fn model<C: ExactTest>(mesh: &TriMesh) -> Arc<CollisionModel<C>> {
+    Arc::new(CollisionModel::new(C::build(mesh), ConvexHull::of(mesh)))
+}
+
+/// The test's own copy of each object, to check the pipeline against.
+struct Body<C> {
+    mesh: TriMesh,
+    model: Arc<CollisionModel<C>>,
+    pose: Isometry3<f64>,
+    velocity: Vector3<f64>,
+    spin: Vector3<f64>,
+    group: u16,
+    is_static: bool,
+}
+
+struct Scene<C> {
+    rng: ChaCha8Rng,
+    bodies: BTreeMap<ObjectId, Body<C>>,
+    shapes: Vec<(TriMesh, Arc<CollisionModel<C>>)>,
+    size: f64,
+    /// The rules the oracle applies: group 1 never meets group 2, and one object pair is off.
+    disallowed_object_pair: Option<(ObjectId, ObjectId)>,
+}
+
+impl<C: ExactTest> Scene<C> {
+    fn new(seed: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let shapes = (0..6)
+            .map(|i| {
+                let axes = Vector3::new(
+                    rng.random_range(0.2..0.8),
+                    rng.random_range(0.2..0.8),
+                    rng.random_range(0.2..0.8),
+                );
+                let mesh = shape(axes, if i % 2 == 0 { 0.0 } else { 1.5 });
+                let model = model(&mesh);
+                (mesh, model)
+            })
+            .collect();
+        Scene {
+            rng,
+            bodies: BTreeMap::new(),
+            shapes,
+            size: 5.0,
+            disallowed_object_pair: None,
+        }
+    }
+
+    fn random_pose(&mut self) -> Isometry3<f64> {
+        let size = self.size;
+        Isometry3::from_parts(
+            Translation3::new(
+                self.rng.random_range(0.0..size),
+                self.rng.random_range(0.0..size),
+                self.rng.random_range(0.0..size),
+            ),
+            UnitQuaternion::from_euler_angles(
+                self.rng.random_range(-3.0..3.0),
+                self.rng.random_range(-3.0..3.0),
+                self.rng.random_range(-3.0..3.0),
+            ),
+        )
+    }
+
+    fn add(&mut self, pipeline: &mut CollisionPipeline<C>) -> ObjectId {
+        let (mesh, model) = self.shapes[self.rng.random_range(0..self.shapes.len())].clone();
+        let pose = self.random_pose();
+        let is_static = self.rng.random_bool(0.2);
+        let group = self.rng.random_range(0..3);
+        let id = pipeline
+            .add(ObjectDesc {
+                model: Arc::clone(&model),
+                pose,
+                group: GroupId(group),
+                is_static,
+            })
+            .unwrap();
+        let velocity = Vector3::new(
+            self.rng.random_range(-0.05..0.05),
+            self.rng.random_range(-0.05..0.05),
+            self.rng.random_range(-0.05..0.05),
+        );
+        let spin = velocity * 2.0;
+        self.bodies.insert(
+            id,
+            Body {
+                mesh,
+                model,
+                pose,
+                velocity,
+                spin,
+                group,
+                is_static,
+            },
+        );
+        id
+    }
+
+    /// Moves about half of the dynamic bodies coherently (bouncing off the walls), and now and
+    /// then makes one jump.
+    fn step(&mut self) -> Vec<(ObjectId, Isometry3<f64>)> {
+        let mut moves = Vec::new();
+        let size = self.size;
+        let ids: Vec<ObjectId> = self.bodies.keys().copied().collect();
+        for id in ids {
+            if self.bodies[&id].is_static || self.rng.random_bool(0.5) {
+                continue;
+            }
+            let jump = self.rng.random_bool(0.01);
+            let random = self.random_pose();
+            let body = self.bodies.get_mut(&id).unwrap();
+            if jump {
+                body.pose = random;
+            } else {
+                let mut position = body.pose.translation.vector + body.velocity;
+                for k in 0..3 {
+                    if !(0.0..size).contains(&position[k]) {
+                        body.velocity[k] = -body.velocity[k];
+                        position[k] = position[k].clamp(0.0, size);
+                    }
+                }
+                body.pose = Isometry3::from_parts(
+                    Translation3::from(position),
+                    UnitQuaternion::from_scaled_axis(body.spin) * body.pose.rotation,
+                );
+            }
+            moves.push((id, body.pose));
+        }
+        moves
+    }
+
+    fn is_interesting(&self, (a, b): (ObjectId, ObjectId)) -> bool {
+        let (ba, bb) = (&self.bodies[&a], &self.bodies[&b]);
+        let groups = (ba.group.min(bb.group), ba.group.max(bb.group));
+        !(ba.is_static && bb.is_static)
+            && groups != (1, 2)
+            && self.disallowed_object_pair != Some((a, b))
+    }
+
+    /// Every interesting pair whose meshes intersect, by exact tests on all pairs whose exact
+    /// world boxes (from all transformed vertices) overlap; with triangle pairs if asked.
+    fn brute_force(&self, triangles: bool) -> Vec<CollidingPair> {
+        let boxes: BTreeMap<ObjectId, Aabb> = self
+            .bodies
+            .iter()
+            .map(|(&id, body)| {
+                let points: Vec<_> = body.mesh.vertices().iter().map(|v| body.pose * v).collect();
+                let (min, max) = points
+                    .iter()
+                    .fold((points[0], points[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
+                (id, Aabb { min, max })
+            })
+            .collect();
+        let mut colliding = Vec::new();
+        for (&a, body_a) in &self.bodies {
+            for (&b, body_b) in self.bodies.range(a..).skip(1) {
+                if !self.is_interesting((a, b)) || !boxes[&a].overlaps(&boxes[&b]) {
+                    continue;
+                }
+                let b_to_a = body_a.pose.inv_mul(&body_b.pose);
+                let (ea, eb) = (body_a.model.exact(), body_b.model.exact());
+                let mut found = Vec::new();
+                let hit = if triangles {
+                    ea.intersecting_pairs(eb, &b_to_a, &mut found, &mut QueryStats::default());
+                    !found.is_empty()
+                } else {
+                    ea.intersects(eb, &b_to_a, &mut QueryStats::default())
+                };
+                if hit {
+                    found.sort_unstable();
+                    colliding.push(CollidingPair {
+                        a,
+                        b,
+                        triangles: found,
+                    });
+                }
+            }
+        }
+        colliding
+    }
+}
+
+fn interest_rules(disallowed: (ObjectId, ObjectId)) -> InterestMatrix {
+    let mut interest = InterestMatrix::new();
+    interest.disallow_groups(GroupId(2), GroupId(1));
+    interest.disallow_objects(disallowed.1, disallowed.0);
+    interest
+}
+
+fn sorted_triangles(mut report: FrameReport) -> Vec<CollidingPair> {
+    for pair in &mut report.colliding {
+        pair.triangles.sort_unstable();
+    }
+    report.colliding
+}
+
+#[test]
+fn pairs_equal_brute_force_over_thousands_of_random_frames_with_parry() {
+    pairs_equal_brute_force::<ParryMesh>(21);
+}
+
+#[test]
+fn pairs_equal_brute_force_over_thousands_of_random_frames_with_dop_trees() {
+    pairs_equal_brute_force::<DopTree>(24);
+}
+
+/// Runs a random scene of 30 objects for 2,500 frames and compares every frame's colliding pairs
+/// (and every tenth frame's triangle pairs) with brute force, using the same exact test `C`.
+fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) {
+    let mut scene = Scene::<C>::new(seed);
+    let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
+    for _ in 0..30 {
+        scene.add(&mut pipeline);
+    }
+    let ids: Vec<ObjectId> = scene.bodies.keys().copied().collect();
+    scene.disallowed_object_pair = Some((ids[3], ids[7]));
+    pipeline.set_interest(interest_rules((ids[3], ids[7])));
+    let two_threads = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let (mut colliding_frames, mut separated_by_plane) = (0, 0);
+    for frame in 0..2500 {
+        for (id, pose) in scene.step() {
+            pipeline.queue_move(id, pose).unwrap();
+        }
+        if frame % 100 == 50 {
+            // Replace an object: its pairs and cached planes must go with it.
+            let victim = *scene
+                .bodies
+                .keys()
+                .nth(scene.rng.random_range(8..30))
+                .unwrap();
+            pipeline.remove(victim).unwrap();
+            scene.bodies.remove(&victim);
+            assert_eq!(
+                pipeline.remove(victim),
+                Err(PipelineError::UnknownObject(victim))
+            );
+            scene.add(&mut pipeline);
+        }
+        let detail = if frame % 10 == 0 {
+            Detail::TrianglePairs
+        } else {
+            Detail::Pairs
+        };
+        let report = if frame % 2 == 0 {
+            pipeline.run_frame(detail)
+        } else {
+            two_threads.install(|| pipeline.run_frame(detail))
+        };
+        let stats = report.stats;
+        assert!(stats.broad_phase.pairs_out <= stats.broad_phase.pairs_in);
+        assert_eq!(stats.interest.pairs_in, stats.broad_phase.pairs_out);
+        assert_eq!(stats.separating_plane.pairs_in, stats.interest.pairs_out);
+        assert_eq!(stats.exact.pairs_in, stats.separating_plane.pairs_out);
+        separated_by_plane += stats.separating_plane.pairs_in - stats.separating_plane.pairs_out;
+        let expected = scene.brute_force(detail == Detail::TrianglePairs);
+        let found = sorted_triangles(report);
+        assert_eq!(found, expected, "frame {frame}");
+        colliding_frames += usize::from(!expected.is_empty());
+    }
+    assert!(
+        colliding_frames > 1000,
+        "only {colliding_frames} frames had collisions"
+    );
+    assert!(
+        separated_by_plane > 10_000,
+        "the plane stage separated only {separated_by_plane} pairs"
+    );
+}
+
+#[test]
+fn concurrent_runner_gives_the_same_reports_as_the_pipeline() {
+    let mut scene = Scene::<DopTree>::new(22);
+    let mut serial = CollisionPipeline::new(PipelineConfig::default());
+    for _ in 0..25 {
+        scene.add(&mut serial);
+    }
+    // The same objects, added in the same order, get the same ids.
+    let mut twin = CollisionPipeline::new(PipelineConfig::default());
+    for body in scene.bodies.values() {
+        twin.add(ObjectDesc {
+            model: Arc::clone(&body.model),
+            pose: body.pose,
+            group: GroupId(body.group),
+            is_static: body.is_static,
+        })
+        .unwrap();
+    }
+    let pool = Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap(),
+    );
+    let concurrent = ConcurrentPipeline::spawn(twin, Some(pool)).unwrap();
+    for frame in 0..300 {
+        for (id, pose) in scene.step() {
+            serial.queue_move(id, pose).unwrap();
+            concurrent.queue_move(id, pose).unwrap();
+        }
+        let detail = if frame % 7 == 0 {
+            Detail::TrianglePairs
+        } else {
+            Detail::Pairs
+        };
+        concurrent.request_frame(detail).unwrap();
+        let expected = sorted_triangles(serial.run_frame(detail));
+        let report = concurrent.receive_report().unwrap();
+        assert_eq!(report.stats.rejected_moves, 0);
+        assert_eq!(sorted_triangles(report), expected, "frame {frame}");
+    }
+    let first = *scene.bodies.keys().next().unwrap();
+    concurrent.remove(first).unwrap();
+    concurrent.queue_move(first, Isometry3::identity()).unwrap();
+    concurrent.request_frame(Detail::Pairs).unwrap();
+    assert_eq!(concurrent.receive_report().unwrap().stats.rejected_moves, 1);
+    // A new object placed across another one collides with it in the next frame.
+    let host = scene.bodies.values().nth(3).unwrap();
+    let guest = concurrent
+        .add(ObjectDesc {
+            model: Arc::clone(&host.model),
+            pose: host.pose * Translation3::new(0.05, 0.03, 0.02),
+            group: GroupId(host.group),
+            is_static: false,
+        })
+        .unwrap();
+    assert_eq!(guest.index(), first.index(), "the freed slot is reused");
+    concurrent.request_frame(Detail::Pairs).unwrap();
+    let report = concurrent.receive_report().unwrap();
+    assert!(
+        report
+            .colliding
+            .iter()
+            .any(|pair| pair.a == guest || pair.b == guest)
+    );
+    assert_eq!(concurrent.shutdown().len(), 25);
+}
+
+#[test]
+fn bad_poses_and_stale_ids_are_refused() {
+    let mut scene = Scene::<ParryMesh>::new(23);
+    let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
+    let id = scene.add(&mut pipeline);
+    let mut nan = Isometry3::identity();
+    nan.translation.vector.x = f64::NAN;
+    assert!(matches!(
+        pipeline.queue_move(id, nan),
+        Err(PipelineError::InvalidPose(..))
+    ));
+    let model = Arc::clone(&scene.shapes[0].1);
+    let desc = ObjectDesc {
+        model,
+        pose: nan,
+        group: GroupId(0),
+        is_static: false,
+    };
+    assert!(matches!(
+        pipeline.add(desc),
+        Err(PipelineError::InvalidPose(..))
+    ));
+    pipeline.remove(id).unwrap();
+    let reused = scene.add(&mut pipeline);
+    assert_eq!(reused.index(), id.index());
+    assert_eq!(
+        pipeline.queue_move(id, Isometry3::identity()),
+        Err(PipelineError::UnknownObject(id))
+    );
+    assert!(pipeline.queue_move(reused, Isometry3::identity()).is_ok());
+}
+
+#[test]
+fn answers_do_not_depend_on_the_separating_plane_stage() {
+    let mut scene = Scene::<DopTree>::new(25);
+    let mut with_plane = CollisionPipeline::new(PipelineConfig::default());
+    for _ in 0..25 {
+        scene.add(&mut with_plane);
+    }
+    let mut without_plane = CollisionPipeline::new(PipelineConfig {
+        separating_plane: false,
+        ..PipelineConfig::default()
+    });
+    for body in scene.bodies.values() {
+        without_plane
+            .add(ObjectDesc {
+                model: Arc::clone(&body.model),
+                pose: body.pose,
+                group: GroupId(body.group),
+                is_static: body.is_static,
+            })
+            .unwrap();
+    }
+    let (mut plane_tests, mut direct_tests) = (0, 0);
+    for frame in 0..300 {
+        for (id, pose) in scene.step() {
+            with_plane.queue_move(id, pose).unwrap();
+            without_plane.queue_move(id, pose).unwrap();
+        }
+        let expected = with_plane.run_frame(Detail::Pairs);
+        let report = without_plane.run_frame(Detail::Pairs);
+        assert_eq!(report.colliding, expected.colliding, "frame {frame}");
+        assert_eq!(
+            report.stats.separating_plane.pairs_out,
+            report.stats.separating_plane.pairs_in
+        );
+        plane_tests += expected.stats.exact.pairs_in;
+        direct_tests += report.stats.exact.pairs_in;
+    }
+    assert!(
+        plane_tests * 2 < direct_tests,
+        "{plane_tests} exact tests with the plane stage, {direct_tests} without"
+    );
+}
