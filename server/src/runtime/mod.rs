@@ -11,6 +11,7 @@
 //! (rejected, clamped) are logged and returned in every `vas/control` response (`stats`).
 
 mod control;
+pub mod interaction;
 mod io;
 mod ports;
 pub mod simulation;

@@ -1,0 +1,539 @@
+//! The hand-over from grasping to sliding: one hand and the scene's parts, stepped frame by frame.
+//!
+//! Each frame the grasping hand is stepped against every part at its visible pose. A grasp event
+//! starts a [`SlideMachine`] for the grasped part at its current visible pose, with the other
+//! parts as static obstacles. While the part is held its ghost is where the hand holds it (the
+//! hand's pose times the grasp's offset, which may penetrate), and one sliding frame brings the
+//! visible part as close to it as the obstacles allow; the visible pose only ever takes poses the
+//! machine found free. A release drops the machine and leaves the part at its last visible pose
+//! (not at the ghost's pose the release event carries).
+//!
+//! This is plain state, no threads and no ports: the runtime's loops drive it.
+
+use std::sync::Arc;
+
+use nalgebra::Isometry3;
+
+use crate::collision::DopTree;
+use crate::grasping::{
+    GraspEvent, GraspingHand, HandFrame, HandInput, Obstacle as HandObstacle, PartGeometry, PartId,
+};
+use crate::scene::Part;
+use crate::sliding::world::{Obstacle as SlideObstacle, PairwiseWorld, SlideBody};
+use crate::sliding::{RestReason, SlideMachine, SlideParams};
+
+/// A part as the interaction needs it: the hand's and the sliding module's collision geometry,
+/// and its visible pose.
+struct InteractionPart {
+    name: String,
+    movable: bool,
+    hand_geometry: PartGeometry,
+    slide_body: Arc<SlideBody<DopTree>>,
+    pose: Isometry3<f64>,
+}
+
+/// The held part's sliding simulation: its machine and its collision copy against the other
+/// parts, as they were when it was grasped.
+struct HeldSlide {
+    part: PartId,
+    machine: SlideMachine,
+    world: PairwiseWorld<DopTree>,
+}
+
+/// The held part after a frame: where the hand holds it and where it is seen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldPart {
+    /// The part.
+    pub part: PartId,
+    /// The ghost: the pose the hand holds the part at (may penetrate other parts).
+    pub ghost: Isometry3<f64>,
+    /// The visible pose: always free.
+    pub visible: Isometry3<f64>,
+    /// Why the sliding frame ended.
+    pub rest: RestReason,
+}
+
+/// The outcome of one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InteractionFrame {
+    /// The hand's frame: visible hand, grasp, grasp and release events.
+    pub hand: HandFrame,
+    /// The held part, if a movable part is held.
+    pub held: Option<HeldPart>,
+}
+
+/// One grasping hand among the scene's parts, with sliding for the part it holds.
+pub struct Interaction {
+    hand: GraspingHand,
+    parts: Vec<InteractionPart>,
+    slide_params: SlideParams,
+    held: Option<HeldSlide>,
+}
+
+impl Interaction {
+    /// The hand among `parts` (a part's id is its index), which start at their configured poses;
+    /// `slide_params` (validated) drive the sliding of grasped parts.
+    pub fn new(hand: GraspingHand, parts: &[Part], slide_params: SlideParams) -> Interaction {
+        let parts = parts
+            .iter()
+            .map(|part| InteractionPart {
+                name: part.name.clone(),
+                movable: part.movable,
+                hand_geometry: PartGeometry::new(part.mesh.as_ref().clone()),
+                slide_body: Arc::new(SlideBody::new(part.mesh.clone())),
+                pose: part.pose,
+            })
+            .collect();
+        Interaction {
+            hand,
+            parts,
+            slide_params,
+            held: None,
+        }
+    }
+
+    /// The grasping hand.
+    pub fn hand(&self) -> &GraspingHand {
+        &self.hand
+    }
+
+    /// The visible pose of every part, by id.
+    pub fn part_poses(&self) -> impl ExactSizeIterator<Item = Isometry3<f64>> + '_ {
+        self.parts.iter().map(|part| part.pose)
+    }
+
+    /// The visible pose of one part, `None` for an unknown id.
+    pub fn part_pose(&self, part: PartId) -> Option<Isometry3<f64>> {
+        self.parts.get(part as usize).map(|part| part.pose)
+    }
+
+    /// The sliding machine of the held part, if a movable part is held.
+    pub fn slide_machine(&self) -> Option<&SlideMachine> {
+        self.held.as_ref().map(|held| &held.machine)
+    }
+
+    /// Processes one input sample: steps the hand, hands grasped parts over to sliding and back,
+    /// and slides the held part one frame towards where the hand holds it.
+    pub fn step(&mut self, input: &HandInput) -> InteractionFrame {
+        let obstacles: Vec<HandObstacle> = self
+            .parts
+            .iter()
+            .enumerate()
+            .map(|(id, part)| HandObstacle {
+                part: id as PartId,
+                geometry: &part.hand_geometry,
+                pose: part.pose,
+            })
+            .collect();
+        let frame = self.hand.step(input, &obstacles);
+        for event in &frame.events {
+            match *event {
+                GraspEvent::Release { part, .. } => {
+                    // The part stays at its last visible pose, which the machine found free.
+                    if self.held.as_ref().is_some_and(|held| held.part == part) {
+                        self.held = None;
+                    }
+                }
+                GraspEvent::Grasp { part, .. } => self.start_sliding(part),
+            }
+        }
+        let held = match (&mut self.held, frame.held) {
+            (Some(slide), Some((part, ghost))) if slide.part == part => {
+                slide.machine.set_ghost(&ghost);
+                let rest = slide.machine.run_frame(&mut slide.world);
+                let visible = slide.machine.visible_pose();
+                self.parts[part as usize].pose = visible;
+                Some(HeldPart {
+                    part,
+                    ghost,
+                    visible,
+                    rest,
+                })
+            }
+            _ => None,
+        };
+        InteractionFrame { hand: frame, held }
+    }
+
+    /// Starts sliding `part` from its visible pose against every other part; static parts are
+    /// never moved.
+    fn start_sliding(&mut self, part: PartId) {
+        let Some(grasped) = self.parts.get(part as usize).filter(|p| p.movable) else {
+            self.held = None;
+            return;
+        };
+        let obstacles = self
+            .parts
+            .iter()
+            .enumerate()
+            .filter(|&(id, _)| id != part as usize)
+            .map(|(_, other)| {
+                SlideObstacle::new(
+                    other.slide_body.clone(),
+                    other.pose,
+                    self.slide_params
+                        .allowance_between(&grasped.name, &other.name),
+                )
+            })
+            .collect();
+        let (pivot, radius) = grasped.slide_body.pivot_and_radius();
+        self.held = Some(HeldSlide {
+            part,
+            machine: SlideMachine::new(
+                &grasped.pose,
+                pivot.coords,
+                radius,
+                self.slide_params.clone(),
+            ),
+            world: PairwiseWorld::new(grasped.slide_body.clone(), obstacles),
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use nalgebra::{Translation3, Vector3};
+    use parry3d::query::intersection_test;
+    use parry3d::shape::TriMesh as ParryTriMesh;
+
+    use crate::geometry::{TriMesh, shapes};
+    use crate::grasping::model::tests::right_hand;
+    use crate::grasping::script::{Keyframe, ScriptedGrasp, open_hand, sample};
+    use crate::grasping::{FLEX_COUNT, GraspParams, GraspType, HandPose};
+    use crate::sliding::Metaphor;
+    use crate::sliding::motion::pose_distance;
+
+    /// Input samples per second (a tracker and glove at 1 kHz).
+    const RATE: f64 = 1000.0;
+
+    /// Millimetres per metre: the oracle's unit. parry's GJK counts distances below 1.2e-6 of
+    /// its unit as touching, which in metres would flag the clearance sliding keeps.
+    const ORACLE_SCALE: f64 = 1000.0;
+
+    /// The handle's id, and the table's in the scenes with one.
+    const HANDLE: PartId = 0;
+    const TABLE: PartId = 1;
+
+    /// Top of the table, 5.5 mm below the scripted handle's lowest point.
+    const TABLE_TOP: f64 = -0.08;
+
+    /// The table's edge towards the hand, beyond the hand's reach in x.
+    const TABLE_EDGE: f64 = 0.08;
+
+    fn part(name: &str, mesh: TriMesh, pose: Isometry3<f64>, movable: bool) -> Part {
+        Part {
+            name: name.into(),
+            mesh: Arc::new(mesh),
+            mesh_source: format!("shape:{name}"),
+            pose,
+            movable,
+            group: "default".into(),
+        }
+    }
+
+    /// parry's copy of each part, in millimetres: an oracle independent of the DOP-trees.
+    struct Oracle {
+        meshes: Vec<ParryTriMesh>,
+    }
+
+    impl Oracle {
+        fn new(parts: &[Part]) -> Oracle {
+            let meshes = parts
+                .iter()
+                .map(|p| {
+                    let vertices = p
+                        .mesh
+                        .vertices()
+                        .iter()
+                        .map(|v| (v * ORACLE_SCALE).cast::<f32>())
+                        .collect();
+                    ParryTriMesh::new(vertices, p.mesh.triangles().to_vec())
+                        .expect("a valid mesh makes a valid parry mesh")
+                })
+                .collect();
+            Oracle { meshes }
+        }
+
+        /// Whether parts `a` and `b` intersect at the given poses.
+        fn intersects(
+            &self,
+            a: PartId,
+            pose_a: &Isometry3<f64>,
+            b: PartId,
+            pose_b: &Isometry3<f64>,
+        ) -> bool {
+            let scaled = |p: &Isometry3<f64>| {
+                let mut p = p.cast::<f32>();
+                p.translation.vector *= ORACLE_SCALE as f32;
+                p
+            };
+            intersection_test(
+                &scaled(pose_a),
+                &self.meshes[a as usize],
+                &scaled(pose_b),
+                &self.meshes[b as usize],
+            )
+            .expect("parry supports mesh pairs")
+        }
+    }
+
+    /// A scripted interaction: the parts, the interaction and every frame it gave, with the
+    /// handle's visible pose after each.
+    struct Run {
+        parts: Vec<Part>,
+        interaction: Interaction,
+        frames: Vec<InteractionFrame>,
+        handle_poses: Vec<Isometry3<f64>>,
+    }
+
+    impl Run {
+        /// The right hand parked at `start` among `parts`, sliding by spiral spring (so that the
+        /// carried handle turns with the hand).
+        fn new(parts: Vec<Part>, start: Isometry3<f64>) -> Run {
+            let hand = GraspingHand::new(
+                Arc::new(right_hand()),
+                GraspParams::default(),
+                HandPose {
+                    root: start,
+                    flex: [0.0; FLEX_COUNT],
+                },
+            )
+            .expect("the right hand's segment meshes build");
+            let params = SlideParams {
+                metaphor: Metaphor::SpiralSpring,
+                ..SlideParams::default()
+            };
+            let interaction = Interaction::new(hand, &parts, params);
+            Run {
+                parts,
+                interaction,
+                frames: Vec::new(),
+                handle_poses: Vec::new(),
+            }
+        }
+
+        fn play(&mut self, keys: &[Keyframe]) {
+            for key in sample(keys, RATE) {
+                let frame = self.interaction.step(&key.input());
+                self.handle_poses
+                    .push(self.interaction.part_pose(HANDLE).expect("the handle"));
+                self.frames.push(frame);
+            }
+        }
+
+        /// The handle's grasp and release events, with their frame numbers.
+        fn handle_events(&self) -> impl Iterator<Item = (usize, GraspEvent)> + '_ {
+            self.frames.iter().enumerate().flat_map(|(i, frame)| {
+                frame
+                    .hand
+                    .events
+                    .iter()
+                    .filter_map(move |&event| match event {
+                        GraspEvent::Grasp { part, .. } | GraspEvent::Release { part, .. }
+                            if part == HANDLE =>
+                        {
+                            Some((i, event))
+                        }
+                        _ => None,
+                    })
+            })
+        }
+
+        /// The handle's grasps: frame and grasp type.
+        fn grasps(&self) -> Vec<(usize, GraspType)> {
+            self.handle_events()
+                .filter_map(|(i, event)| match event {
+                    GraspEvent::Grasp { grasp, .. } => Some((i, grasp)),
+                    GraspEvent::Release { .. } => None,
+                })
+                .collect()
+        }
+
+        /// The handle's releases: frame and the pose the event carries (the ghost's).
+        fn releases(&self) -> Vec<(usize, Isometry3<f64>)> {
+            self.handle_events()
+                .filter_map(|(i, event)| match event {
+                    GraspEvent::Release { pose, .. } => Some((i, pose)),
+                    GraspEvent::Grasp { .. } => None,
+                })
+                .collect()
+        }
+    }
+
+    /// The scripted handle, 24 cm long instead of 12 (the hand closes on the same cross-section),
+    /// so that one end reaches past the hand over a table that the hand itself never touches.
+    fn handle_and_table() -> Vec<Part> {
+        let script = ScriptedGrasp::PowerOnHandle;
+        let handle = shapes::cylinder(0.016, 0.24, 2_000);
+        let table = shapes::cuboid(Vector3::new(0.2, 0.3, 0.05), 400);
+        let table_pose = Isometry3::from(Translation3::new(
+            TABLE_EDGE + 0.1,
+            0.075,
+            TABLE_TOP - 0.025,
+        ));
+        vec![
+            part("handle", handle, script.part_pose(), true),
+            part("table", table, table_pose, false),
+        ]
+    }
+
+    /// The scripted power grasp up to the closed fist, then the hand pressing 3 cm down.
+    fn grasp_and_press_down() -> Vec<Keyframe> {
+        let mut keys = ScriptedGrasp::PowerOnHandle.keyframes();
+        let grasped_by = ScriptedGrasp::PowerOnHandle.milestones().grasped_by;
+        keys.retain(|k| k.time <= grasped_by);
+        let last = *keys.last().expect("keyframes");
+        let mut pressed = last;
+        pressed.tracker = Translation3::new(0.0, 0.0, -0.03) * last.tracker;
+        for (dt, key) in [(0.3, pressed), (0.35, pressed)] {
+            keys.push(Keyframe {
+                time: last.time + dt,
+                ..key
+            });
+        }
+        keys
+    }
+
+    /// The lowest point of the handle at `pose` over the table (which starts at x = 0.08).
+    fn lowest(parts: &[Part], pose: &Isometry3<f64>) -> f64 {
+        parts[HANDLE as usize]
+            .mesh
+            .vertices()
+            .iter()
+            .map(|v| pose * v)
+            .filter(|v| v.x >= TABLE_EDGE)
+            .map(|v| v.z)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Checks every frame of a run among the handle and the table: the visible handle never
+    /// intersects the table (by parry) nor goes below its top. Returns how deep the ghost went.
+    fn assert_visible_handle_never_enters_the_table(run: &Run) -> f64 {
+        let oracle = Oracle::new(&run.parts);
+        let table_pose = run.parts[TABLE as usize].pose;
+        let mut ghost_depth = 0.0_f64;
+        for (i, pose) in run.handle_poses.iter().enumerate() {
+            assert!(
+                !oracle.intersects(HANDLE, pose, TABLE, &table_pose),
+                "frame {i}: the visible handle intersects the table"
+            );
+            assert!(
+                lowest(&run.parts, pose) > TABLE_TOP,
+                "frame {i}: the visible handle is below the table top"
+            );
+            if let Some(held) = run.frames[i].held {
+                ghost_depth = ghost_depth.max(TABLE_TOP - lowest(&run.parts, &held.ghost));
+            }
+        }
+        ghost_depth
+    }
+
+    #[test]
+    fn a_grasped_handle_follows_the_hand_where_nothing_is_in_the_way() {
+        let script = ScriptedGrasp::PowerOnHandle;
+        let milestones = script.milestones();
+        let start = script.part_pose();
+        let parts = vec![part("handle", script.part_mesh(2_000), start, true)];
+        let mut keys = script.keyframes();
+        keys.retain(|k| k.time <= milestones.carried);
+        let mut run = Run::new(parts, keys[0].tracker);
+        run.play(&keys);
+
+        let (grasps, releases) = (run.grasps(), run.releases());
+        assert_eq!(grasps.len(), 1, "one grasp: {grasps:?}");
+        let (grasped_at, grasp) = grasps[0];
+        assert_eq!(grasp, GraspType::Power);
+        assert!(grasped_at as f64 <= milestones.grasped_by * RATE);
+        assert!(releases.is_empty(), "released while carried: {releases:?}");
+
+        let machine = run.interaction.slide_machine().expect("the handle is held");
+        let (_, radius) = SlideBody::<DopTree>::new(run.parts[0].mesh.clone()).pivot_and_radius();
+        for (i, frame) in run.frames.iter().enumerate().skip(grasped_at) {
+            let held = frame.held.expect("held from the grasp on");
+            assert_eq!(held.rest, RestReason::Reached, "frame {i}");
+            assert_eq!(held.visible, run.handle_poses[i]);
+            let lag = pose_distance(&held.visible, &held.ghost, radius);
+            assert!(
+                lag <= 2.0 * machine.tolerance(),
+                "frame {i}: visible {lag:.2e} m from the ghost"
+            );
+        }
+        // It was carried away and turned with the hand.
+        let end = run.handle_poses.last().expect("frames");
+        assert!((end.translation.vector - start.translation.vector).norm() > 0.08);
+        assert!(end.rotation.angle_to(&start.rotation) > 0.3);
+    }
+
+    #[test]
+    fn a_handle_pressed_into_a_table_slides_on_it_and_never_enters_it() {
+        let parts = handle_and_table();
+        let keys = grasp_and_press_down();
+        let mut run = Run::new(parts, keys[0].tracker);
+        run.play(&keys);
+
+        let (grasps, releases) = (run.grasps(), run.releases());
+        assert_eq!(grasps.len(), 1, "one grasp: {grasps:?}");
+        assert!(releases.is_empty(), "released while pressed: {releases:?}");
+        let ghost_depth = assert_visible_handle_never_enters_the_table(&run);
+        assert!(
+            ghost_depth > 0.015,
+            "the ghost went only {ghost_depth} m into the table"
+        );
+        // The handle rests on the table, not where it was grasped.
+        let end = run.handle_poses.last().expect("frames");
+        let gap = lowest(&run.parts, end) - TABLE_TOP;
+        assert!(gap < 0.001, "the handle stays {gap} m above the table");
+        let held = run.frames.last().and_then(|f| f.held).expect("held");
+        assert!(
+            run.interaction
+                .slide_machine()
+                .expect("held")
+                .contacts()
+                .next()
+                .is_some()
+        );
+        assert!(held.visible != held.ghost);
+    }
+
+    #[test]
+    fn opening_the_hand_leaves_the_handle_at_its_last_valid_pose() {
+        let parts = handle_and_table();
+        let mut keys = grasp_and_press_down();
+        let pressed = *keys.last().expect("keyframes");
+        for (dt, flex) in [(0.2, open_hand()), (0.3, open_hand())] {
+            keys.push(Keyframe {
+                time: pressed.time + dt,
+                flex,
+                ..pressed
+            });
+        }
+        let mut run = Run::new(parts, keys[0].tracker);
+        run.play(&keys);
+
+        let (grasps, releases) = (run.grasps(), run.releases());
+        assert_eq!(grasps[0].1, GraspType::Power);
+        let (released_at, ghost) = *releases.first().expect("the open hand releases the handle");
+        assert!(released_at as f64 > pressed.time * RATE);
+        assert!(run.frames[released_at].held.is_none());
+        // The handle stays where sliding last left it, above the table, not at the ghost's pose
+        // under its top, until the hand takes hold of it again (the closed hand sank into where
+        // the handle stays, so the opening fingers may still touch it).
+        let last_valid = run.handle_poses[released_at - 1];
+        assert!(lowest(&run.parts, &ghost) < TABLE_TOP - 0.015);
+        let regrasped_at = grasps
+            .iter()
+            .map(|&(i, _)| i)
+            .find(|&i| i > released_at)
+            .unwrap_or(run.frames.len());
+        for (i, pose) in run.handle_poses[..regrasped_at]
+            .iter()
+            .enumerate()
+            .skip(released_at)
+        {
+            assert_eq!(*pose, last_valid, "frame {i}");
+        }
+        assert_visible_handle_never_enters_the_table(&run);
+    }
+}
