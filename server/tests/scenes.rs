@@ -491,3 +491,108 @@ fn the_shape_command_writes_a_loadable_obj() {
     assert!(status.success());
     assert_eq!(load_mesh(&out).unwrap().triangles().len(), 50_000);
 }
+
+#[test]
+fn the_interest_matrix_follows_the_group_and_part_rules_of_the_config() {
+    use vas_server::collision::DopTree;
+    use vas_server::collision::MeshCollider;
+    use vas_server::collision::interest::InterestKey;
+    use vas_server::collision::pipeline::{
+        CollisionModel, CollisionPipeline, ObjectDesc, PipelineConfig,
+    };
+    use vas_server::geometry::hull::ConvexHull;
+
+    let dir = scratch_dir("interest_matrix");
+    let sphere = "shape = { kind = \"sphere\", radius = 0.1, triangles = 100 }";
+    let path = write(
+        &dir,
+        "scene.toml",
+        &format!(
+            r#"
+name = "interest"
+[groups]
+not_of_interest = [["tools", "parts"]]
+parts_not_of_interest = [["nut", "bolt"]]
+[[parts]]
+name = "table"
+{sphere}
+group = "fixtures"
+[[parts]]
+name = "bolt"
+{sphere}
+movable = true
+group = "parts"
+[[parts]]
+name = "nut"
+{sphere}
+movable = true
+group = "parts"
+[[parts]]
+name = "wrench"
+{sphere}
+movable = true
+group = "tools"
+[[parts]]
+name = "stand"
+{sphere}
+group = "fixtures"
+"#
+        ),
+    );
+    let scene = Scene::load(&path).unwrap();
+    let mut pipeline = CollisionPipeline::<DopTree>::new(PipelineConfig::default());
+    let objects: Vec<_> = scene
+        .parts
+        .iter()
+        .enumerate()
+        .map(|(i, part)| {
+            let model = CollisionModel::new(DopTree::build(&part.mesh), ConvexHull::of(&part.mesh));
+            pipeline
+                .add(ObjectDesc {
+                    model: Arc::new(model),
+                    pose: part.pose,
+                    group: scene.group_id(i),
+                    is_static: !part.movable,
+                })
+                .unwrap()
+        })
+        .collect();
+    let matrix = scene.interest_matrix(&objects);
+    let key = |i: usize| InterestKey {
+        object: objects[i],
+        group: scene.group_id(i),
+        is_static: !scene.parts[i].movable,
+    };
+    let mut interesting = Vec::new();
+    for a in 0..scene.parts.len() {
+        for b in a + 1..scene.parts.len() {
+            assert_eq!(
+                matrix.is_interesting(&key(a), &key(b)),
+                scene.pair_of_interest(a, b),
+                "parts {a} and {b}"
+            );
+            if scene.pair_of_interest(a, b) {
+                interesting.push([a, b]);
+            }
+        }
+    }
+    // table/stand: both static; bolt/nut: by part; bolt, nut / wrench: by group.
+    assert_eq!(
+        interesting,
+        [[0, 1], [0, 2], [0, 3], [1, 4], [2, 4], [3, 4]]
+    );
+}
+
+#[test]
+fn unknown_parts_in_the_interest_matrix_are_refused() {
+    refused(
+        "unknown_interest_part",
+        &format!("name = \"s\"\n[groups]\nparts_not_of_interest = [[\"peg\", \"nail\"]]\n{PEG}"),
+        &["groups.parts_not_of_interest[0]", "\"nail\""],
+    );
+    refused(
+        "same_interest_part",
+        &format!("name = \"s\"\n[groups]\nparts_not_of_interest = [[\"peg\", \"peg\"]]\n{PEG}"),
+        &["groups.parts_not_of_interest[0]", "twice"],
+    );
+}

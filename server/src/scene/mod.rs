@@ -15,8 +15,9 @@
 //! [rates]                              # optional, hertz
 //! publish_hz = 60
 //!
-//! [groups]                             # optional: group pairs never tested against each other
-//! not_of_interest = [["fixtures", "fixtures"]]
+//! [groups]                             # optional: pairs never tested against each other
+//! not_of_interest = [["fixtures", "fixtures"]]   # by group
+//! parts_not_of_interest = [["block", "bunny"]]   # by part (touching by design)
 //!
 //! [[parts]]
 //! name = "block"
@@ -45,6 +46,8 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::Deserialize;
 use thiserror::Error;
 
+use crate::collision::interest::{GroupId, InterestMatrix};
+use crate::collision::pipeline::ObjectId;
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{GeometryError, Point, TriMesh, load_mesh};
 use params::Problem;
@@ -142,9 +145,23 @@ pub struct Groups {
     pub names: Vec<String>,
     /// Pairs of groups that are not of interest, each sorted, as the config lists them.
     pub not_of_interest: Vec<[String; 2]>,
+    /// Pairs of parts (indices into [`Scene::parts`], smaller first) that are not of interest:
+    /// parts that touch by design, such as a screw and its thread.
+    pub parts_not_of_interest: Vec<[usize; 2]>,
 }
 
 impl Groups {
+    /// The collision group id of a group name: its index in [`Groups::names`].
+    pub fn id_of(&self, name: &str) -> GroupId {
+        let index = self.names.iter().position(|g| g == name);
+        // Loading collects every part's group into `names`; an unknown name gets an id of its own.
+        GroupId(
+            index
+                .and_then(|i| u16::try_from(i).ok())
+                .unwrap_or(u16::MAX),
+        )
+    }
+
     /// True unless the config lists the pair of groups (in either order) as not of interest.
     pub fn of_interest(&self, a: &str, b: &str) -> bool {
         let pair = sorted_pair(a, b);
@@ -194,6 +211,8 @@ struct SceneFile {
 struct GroupsFile {
     #[serde(default)]
     not_of_interest: Vec<[String; 2]>,
+    #[serde(default)]
+    parts_not_of_interest: Vec<[String; 2]>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -240,7 +259,33 @@ impl Scene {
     /// movable, and their groups of interest to each other.
     pub fn pair_of_interest(&self, a: usize, b: usize) -> bool {
         let (p, q) = (&self.parts[a], &self.parts[b]);
-        a != b && (p.movable || q.movable) && self.groups.of_interest(&p.group, &q.group)
+        a != b
+            && (p.movable || q.movable)
+            && self.groups.of_interest(&p.group, &q.group)
+            && !self
+                .groups
+                .parts_not_of_interest
+                .contains(&[a.min(b), a.max(b)])
+    }
+
+    /// The collision group of part `part`: its group's index in [`Groups::names`].
+    pub fn group_id(&self, part: usize) -> GroupId {
+        self.groups.id_of(&self.parts[part].group)
+    }
+
+    /// The collision interest matrix of the scene's group and part rules, for a collision pipeline
+    /// in which `objects[i]` is part `i` (static pairs need no rule: the pipeline skips them).
+    pub fn interest_matrix(&self, objects: &[ObjectId]) -> InterestMatrix {
+        let mut matrix = InterestMatrix::new();
+        for [a, b] in &self.groups.not_of_interest {
+            matrix.disallow_groups(self.groups.id_of(a), self.groups.id_of(b));
+        }
+        for &[a, b] in &self.groups.parts_not_of_interest {
+            if let (Some(&a), Some(&b)) = (objects.get(a), objects.get(b)) {
+                matrix.disallow_objects(a, b);
+            }
+        }
+        matrix
     }
 
     /// A human-readable summary: parts, triangles, groups, parameters and rates.
@@ -403,6 +448,21 @@ impl Loader<'_> {
             }
             not_of_interest.push(sorted_pair(a, b));
         }
+        let mut parts_not_of_interest = Vec::with_capacity(file.groups.parts_not_of_interest.len());
+        for (index, [a, b]) in file.groups.parts_not_of_interest.iter().enumerate() {
+            let key = format!("groups.parts_not_of_interest[{index}]");
+            let find = |name: &String| parts.iter().position(|p| &p.name == name);
+            match (find(a), find(b)) {
+                (Some(i), Some(j)) if i != j => parts_not_of_interest.push([i.min(j), i.max(j)]),
+                (Some(_), Some(_)) => {
+                    return Err(self.invalid(key, format!("names part {a:?} twice")));
+                }
+                _ => {
+                    let unknown = if find(a).is_none() { a } else { b };
+                    return Err(self.invalid(key, format!("there is no part named {unknown:?}")));
+                }
+            }
+        }
 
         let hand = match file.hand {
             Some(hand) => {
@@ -428,6 +488,7 @@ impl Loader<'_> {
             groups: Groups {
                 names,
                 not_of_interest,
+                parts_not_of_interest,
             },
         })
     }
