@@ -10,7 +10,6 @@
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
 
-use crate::UnknownCode;
 use crate::pose::WirePose;
 use crate::text::WireText;
 
@@ -21,69 +20,33 @@ pub const MAX_PATH_BYTES: usize = 512;
 /// Capacity of the human-readable status message in bytes.
 pub const MAX_STATUS_MESSAGE_BYTES: usize = 256;
 
-/// What a [`ControlRequest`] asks for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum ControlRequestKind {
-    /// Scene name, source file and part count.
-    SceneInfo = 1,
-    /// One part's description; [`ControlRequest::argument`] is the part id.
-    PartInfo = 2,
-    /// Replace the scene by the file in [`ControlRequest::path`].
-    LoadScene = 3,
-    /// Put every part back to its initial pose and forget the hand state.
-    Reset = 4,
-    /// Select the sliding metaphor; [`ControlRequest::argument`] is a [`SlidingMetaphor`] code.
-    SetMetaphor = 5,
-}
-
-impl TryFrom<u32> for ControlRequestKind {
-    type Error = UnknownCode;
-
-    fn try_from(code: u32) -> Result<Self, Self::Error> {
-        Ok(match code {
-            1 => Self::SceneInfo,
-            2 => Self::PartInfo,
-            3 => Self::LoadScene,
-            4 => Self::Reset,
-            5 => Self::SetMetaphor,
-            _ => {
-                return Err(UnknownCode {
-                    type_name: "ControlRequestKind",
-                    code,
-                });
-            }
-        })
+wire_code_enum! {
+    /// What a [`ControlRequest`] asks for.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum ControlRequestKind {
+        /// Scene name, source file and part count.
+        SceneInfo = 1,
+        /// One part's description; [`ControlRequest::argument`] is the part id.
+        PartInfo = 2,
+        /// Replace the scene by the file in [`ControlRequest::path`].
+        LoadScene = 3,
+        /// Put every part back to its initial pose and forget the hand state.
+        Reset = 4,
+        /// Select the sliding metaphor; [`ControlRequest::argument`] is a [`SlidingMetaphor`] code.
+        SetMetaphor = 5,
     }
 }
 
-/// How a grasped part follows the ghost that the hand holds (the paper's three metaphors).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum SlidingMetaphor {
-    /// The position is pulled towards the ghost; the orientation comes from the simulation.
-    RubberBand = 1,
-    /// Position and orientation are both pulled towards the ghost.
-    RubberBandSpiralSpring = 2,
-    /// The part repeats the ghost's motion increment.
-    IncrementalMotion = 3,
-}
-
-impl TryFrom<u32> for SlidingMetaphor {
-    type Error = UnknownCode;
-
-    fn try_from(code: u32) -> Result<Self, Self::Error> {
-        Ok(match code {
-            1 => Self::RubberBand,
-            2 => Self::RubberBandSpiralSpring,
-            3 => Self::IncrementalMotion,
-            _ => {
-                return Err(UnknownCode {
-                    type_name: "SlidingMetaphor",
-                    code,
-                });
-            }
-        })
+wire_code_enum! {
+    /// How a grasped part follows the ghost that the hand holds (the paper's three metaphors).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum SlidingMetaphor {
+        /// The position is pulled towards the ghost; the orientation comes from the simulation.
+        RubberBand = 1,
+        /// Position and orientation are both pulled towards the ghost.
+        RubberBandSpiralSpring = 2,
+        /// The part repeats the ghost's motion increment.
+        IncrementalMotion = 3,
     }
 }
 
@@ -138,39 +101,20 @@ impl ControlRequest {
     }
 }
 
-/// Outcome of a control request.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum ControlStatus {
-    /// Done; the response fields for the request kind are filled.
-    Ok = 0,
-    /// The request kind or an argument code is unknown.
-    InvalidRequest = 1,
-    /// `PartInfo` named a part id the scene does not have.
-    NoSuchPart = 2,
-    /// `LoadScene` failed; the scene is unchanged and the message says why.
-    SceneLoadFailed = 3,
-    /// The server understands the request but cannot carry it out in this version.
-    Unsupported = 4,
-}
-
-impl TryFrom<u32> for ControlStatus {
-    type Error = UnknownCode;
-
-    fn try_from(code: u32) -> Result<Self, Self::Error> {
-        Ok(match code {
-            0 => Self::Ok,
-            1 => Self::InvalidRequest,
-            2 => Self::NoSuchPart,
-            3 => Self::SceneLoadFailed,
-            4 => Self::Unsupported,
-            _ => {
-                return Err(UnknownCode {
-                    type_name: "ControlStatus",
-                    code,
-                });
-            }
-        })
+wire_code_enum! {
+    /// Outcome of a control request.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum ControlStatus {
+        /// Done; the response fields for the request kind are filled.
+        Ok = 0,
+        /// The request kind or an argument code is unknown.
+        InvalidRequest = 1,
+        /// `PartInfo` named a part id the scene does not have.
+        NoSuchPart = 2,
+        /// `LoadScene` failed; the scene is unchanged and the message says why.
+        SceneLoadFailed = 3,
+        /// The server understands the request but cannot carry it out in this version.
+        Unsupported = 4,
     }
 }
 

@@ -17,6 +17,34 @@
 //! `type_name` ends in `::v1`. A change of layout must bump that version, and the layout tests
 //! in `tests/layout.rs` fail until it does.
 
+/// Defines a `#[repr(u32)]` enumeration that travels on the wire as its `u32` code, together with
+/// the `TryFrom<u32>` that decodes it, so that each variant's code is written exactly once.
+macro_rules! wire_code_enum {
+    (
+        $(#[$meta:meta])*
+        pub enum $name:ident {
+            $( $(#[$variant_meta:meta])* $variant:ident = $code:literal, )+
+        }
+    ) => {
+        $(#[$meta])*
+        #[repr(u32)]
+        pub enum $name {
+            $( $(#[$variant_meta])* $variant = $code, )+
+        }
+
+        impl TryFrom<u32> for $name {
+            type Error = $crate::UnknownCode;
+
+            fn try_from(code: u32) -> Result<Self, Self::Error> {
+                match code {
+                    $( $code => Ok(Self::$variant), )+
+                    _ => Err($crate::UnknownCode { type_name: stringify!($name), code }),
+                }
+            }
+        }
+    };
+}
+
 mod clock;
 mod control;
 mod input;

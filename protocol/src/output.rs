@@ -7,7 +7,6 @@
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
 
-use crate::UnknownCode;
 use crate::input::FLEX_COUNT;
 use crate::pose::WirePose;
 
@@ -158,92 +157,50 @@ impl HandSegment {
     }
 }
 
-/// The grasp the hand holds, by the paper's analysis and the classes it names.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-#[repr(u32)]
-pub enum GraspType {
-    /// Nothing is touched.
-    None = 0,
-    /// Touching without holding (one segment, or fingers without the thumb).
-    Push = 1,
-    /// Fingers against the thumb, no palm: a precision grasp not classified further.
-    Precision = 2,
-    /// Precision: thumb tip against one finger tip.
-    TipPinch = 3,
-    /// Precision: thumb against index and middle finger (tripod).
-    ThreeJawChuck = 4,
-    /// Precision: thumb against the side of the index finger (lateral).
-    Key = 5,
-    /// Held between two adjacent fingers.
-    Cigarette = 6,
-    /// Three fingers pinching without the palm.
-    ThreePointPinch = 7,
-    /// Fingers wrapped against the palm.
-    Power = 8,
-    /// Resting on the open hand (cradling).
-    Gravity = 9,
-}
-
-impl TryFrom<u32> for GraspType {
-    type Error = UnknownCode;
-
-    fn try_from(code: u32) -> Result<Self, Self::Error> {
-        Ok(match code {
-            0 => Self::None,
-            1 => Self::Push,
-            2 => Self::Precision,
-            3 => Self::TipPinch,
-            4 => Self::ThreeJawChuck,
-            5 => Self::Key,
-            6 => Self::Cigarette,
-            7 => Self::ThreePointPinch,
-            8 => Self::Power,
-            9 => Self::Gravity,
-            _ => {
-                return Err(UnknownCode {
-                    type_name: "GraspType",
-                    code,
-                });
-            }
-        })
+wire_code_enum! {
+    /// The grasp the hand holds, by the paper's analysis and the classes it names.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "snake_case")]
+    pub enum GraspType {
+        /// Nothing is touched.
+        None = 0,
+        /// Touching without holding (one segment, or fingers without the thumb).
+        Push = 1,
+        /// Fingers against the thumb, no palm: a precision grasp not classified further.
+        Precision = 2,
+        /// Precision: thumb tip against one finger tip.
+        TipPinch = 3,
+        /// Precision: thumb against index and middle finger (tripod).
+        ThreeJawChuck = 4,
+        /// Precision: thumb against the side of the index finger (lateral).
+        Key = 5,
+        /// Held between two adjacent fingers.
+        Cigarette = 6,
+        /// Three fingers pinching without the palm.
+        ThreePointPinch = 7,
+        /// Fingers wrapped against the palm.
+        Power = 8,
+        /// Resting on the open hand (cradling).
+        Gravity = 9,
     }
 }
 
 /// [`SimEvent::other`] value naming the hand rather than a part.
 pub const HAND_PART_ID: u32 = u32::MAX;
 
-/// What a [`SimEvent`] reports.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-#[repr(u32)]
-pub enum EventKind {
-    /// The hand grasped `part` with `grasp_type`.
-    Grasp = 1,
-    /// The hand released `part`.
-    Release = 2,
-    /// `part` and `other` started touching.
-    ContactBegin = 3,
-    /// `part` and `other` stopped touching.
-    ContactEnd = 4,
-}
-
-impl TryFrom<u32> for EventKind {
-    type Error = UnknownCode;
-
-    fn try_from(code: u32) -> Result<Self, Self::Error> {
-        Ok(match code {
-            1 => Self::Grasp,
-            2 => Self::Release,
-            3 => Self::ContactBegin,
-            4 => Self::ContactEnd,
-            _ => {
-                return Err(UnknownCode {
-                    type_name: "EventKind",
-                    code,
-                });
-            }
-        })
+wire_code_enum! {
+    /// What a [`SimEvent`] reports.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "snake_case")]
+    pub enum EventKind {
+        /// The hand grasped `part` with `grasp_type`.
+        Grasp = 1,
+        /// The hand released `part`.
+        Release = 2,
+        /// `part` and `other` started touching.
+        ContactBegin = 3,
+        /// `part` and `other` stopped touching.
+        ContactEnd = 4,
     }
 }
 
