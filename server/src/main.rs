@@ -30,6 +30,10 @@ enum Command {
         /// iceoryx2 prefix of every resource, so that servers on different prefixes never meet.
         #[arg(long)]
         prefix: Option<String>,
+        /// One frame per input sample, each after the previous one was verified, and no loop
+        /// stepping on its own: replays give the same output every time.
+        #[arg(long)]
+        lockstep: bool,
     },
     /// Write a procedural test object (unit size, centred at the origin) as an OBJ file.
     Shape {
@@ -78,9 +82,14 @@ fn main() -> ExitCode {
         .with_ansi(std::io::stderr().is_terminal())
         .init();
     let result = match Cli::parse().command {
-        Command::Run { scene, prefix } => runtime::run(&runtime::RunOptions {
+        Command::Run {
+            scene,
+            prefix,
+            lockstep,
+        } => runtime::run(&runtime::RunOptions {
             scene: scene.unwrap_or_else(default_scene_path),
             prefix,
+            lockstep,
         })
         .map_err(Into::into),
         Command::Shape {

@@ -402,7 +402,7 @@ fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
         .expect("the fixture loads")
         .samples
         .len();
-    let mut server = Server::start(test);
+    let mut server = Server::start_with(test, &["--lockstep"]);
     server.connect();
     let mut replay = server.client_tool(
         &["replay", "--lockstep", fixture.to_str().expect("utf-8")],

@@ -1,34 +1,76 @@
-//! Answers to `vas/control` requests, as a pure function of the simulation state.
+//! Answers to `vas/control` requests: what they read and change of the served session, and the
+//! change they send down the loops.
 
 use std::path::Path;
+use std::sync::Arc;
 
 use vas_protocol::{
     ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, PART_MOVABLE,
     PartDescription, SlidingMetaphor, WirePose, WireText,
 };
 
-use super::simulation::Simulation;
+use super::frames::{Change, Restart};
+use super::inputs::Inputs;
 use crate::scene::{Part, Scene};
 use crate::sliding::Metaphor;
 
-/// Carries out `request` on the simulation and builds the answer.
+/// What the I/O thread serves: the scene, the input state and the count of restarts.
+pub struct Session {
+    /// The scene being served.
+    pub scene: Arc<Scene>,
+    /// Input validation, counters and the latest targets.
+    pub inputs: Inputs,
+    /// Restarts so far (the first load is 1).
+    pub epoch: u64,
+}
+
+impl Session {
+    /// A session on `scene` and what starts the loops on it.
+    pub fn start(scene: Scene) -> Result<(Session, Change), super::frames::HandSetupError> {
+        let scene = Arc::new(scene);
+        let restart = Restart::new(Arc::clone(&scene), 1)?;
+        let session = Session {
+            scene,
+            inputs: Inputs::default(),
+            epoch: 1,
+        };
+        Ok((session, restart.into_change()))
+    }
+
+    /// Starts over on `scene`: the targets are forgotten, the counters go on.
+    fn restart(&mut self, scene: Arc<Scene>) -> Result<Change, Refusal> {
+        let restart = Restart::new(Arc::clone(&scene), self.epoch + 1)
+            .map_err(|error| (ControlStatus::SceneLoadFailed, error.to_string()))?;
+        self.epoch += 1;
+        self.scene = scene;
+        self.inputs.forget_targets();
+        Ok(restart.into_change())
+    }
+}
+
+/// Carries out `request` and builds the answer, with the change for the loops, if any.
 ///
 /// Every answer carries the scene summary and the input counters as they are after the request;
-/// a refused request leaves the simulation unchanged and explains itself in `message`.
-/// `LoadScene` reads the file on the calling thread: the server answers nothing else meanwhile.
-pub fn answer(simulation: &mut Simulation, request: &ControlRequest) -> ControlResponse {
+/// a refused request changes nothing and explains itself in `message`. `LoadScene` reads the
+/// file, and a restart builds the hand, on the calling thread: the server answers nothing else
+/// meanwhile.
+pub fn answer(
+    session: &mut Session,
+    request: &ControlRequest,
+) -> (ControlResponse, Option<Change>) {
     let outcome = match ControlRequestKind::try_from(request.kind) {
         Err(unknown) => Err((ControlStatus::InvalidRequest, unknown.to_string())),
-        Ok(ControlRequestKind::SceneInfo) => Ok(PartDescription::default()),
-        Ok(ControlRequestKind::PartInfo) => describe_part(simulation.scene(), request.argument),
-        Ok(ControlRequestKind::LoadScene) => load_scene(simulation, request),
-        Ok(ControlRequestKind::Reset) => {
-            simulation.reset();
-            Ok(PartDescription::default())
+        Ok(ControlRequestKind::SceneInfo) => Ok((PartDescription::default(), None)),
+        Ok(ControlRequestKind::PartInfo) => {
+            describe_part(&session.scene, request.argument).map(|part| (part, None))
         }
-        Ok(ControlRequestKind::SetMetaphor) => set_metaphor(simulation, request.argument),
+        Ok(ControlRequestKind::LoadScene) => load_scene(session, request),
+        Ok(ControlRequestKind::Reset) => session
+            .restart(Arc::clone(&session.scene))
+            .map(|change| (PartDescription::default(), Some(change))),
+        Ok(ControlRequestKind::SetMetaphor) => set_metaphor(request.argument),
     };
-    let scene = simulation.scene();
+    let scene = &session.scene;
     let (scene_name, name_cut) = WireText::truncated(&scene.name);
     let (scene_source, source_cut) = WireText::truncated(&scene.source.display().to_string());
     let mut response = ControlResponse {
@@ -39,17 +81,20 @@ pub fn answer(simulation: &mut Simulation, request: &ControlRequest) -> ControlR
         scene_name,
         scene_source,
         part: PartDescription::default(),
-        stats: simulation.stats(),
+        stats: session.inputs.stats(),
         message: WireText::EMPTY,
     };
     match outcome {
-        Ok(part) => response.part = part,
+        Ok((part, change)) => {
+            response.part = part;
+            (response, change)
+        }
         Err((status, message)) => {
             response.status = status as u32;
             response.message = WireText::truncated(&message).0;
+            (response, None)
         }
     }
-    response
 }
 
 type Refusal = (ControlStatus, String);
@@ -79,9 +124,9 @@ fn describe_part(scene: &Scene, id: u32) -> Result<PartDescription, Refusal> {
 }
 
 fn load_scene(
-    simulation: &mut Simulation,
+    session: &mut Session,
     request: &ControlRequest,
-) -> Result<PartDescription, Refusal> {
+) -> Result<(PartDescription, Option<Change>), Refusal> {
     let path = request.path.as_str().map_err(|error| {
         (
             ControlStatus::InvalidRequest,
@@ -96,11 +141,11 @@ fn load_scene(
         path,
         "scene loaded on request"
     );
-    simulation.replace_scene(scene);
-    Ok(PartDescription::default())
+    let change = session.restart(Arc::new(scene))?;
+    Ok((PartDescription::default(), Some(change)))
 }
 
-fn set_metaphor(simulation: &mut Simulation, code: u32) -> Result<PartDescription, Refusal> {
+fn set_metaphor(code: u32) -> Result<(PartDescription, Option<Change>), Refusal> {
     let metaphor = match SlidingMetaphor::try_from(code) {
         Ok(SlidingMetaphor::RubberBand) => Metaphor::RubberBand,
         Ok(SlidingMetaphor::RubberBandSpiralSpring) => Metaphor::SpiralSpring,
@@ -108,8 +153,7 @@ fn set_metaphor(simulation: &mut Simulation, code: u32) -> Result<PartDescriptio
         Err(unknown) => return Err((ControlStatus::InvalidRequest, unknown.to_string())),
     };
     tracing::info!(%metaphor, "sliding metaphor set on request");
-    simulation.set_sliding_metaphor(metaphor);
-    Ok(PartDescription::default())
+    Ok((PartDescription::default(), Some(Change::Metaphor(metaphor))))
 }
 
 #[cfg(test)]
@@ -126,17 +170,25 @@ mod tests {
             .join(file)
     }
 
-    fn simulation() -> Simulation {
-        Simulation::new(Scene::load(&config("default.toml")).expect("the demo scene loads"))
+    fn session() -> Session {
+        let scene = Scene::load(&config("default.toml")).expect("the demo scene loads");
+        Session::start(scene).expect("its hand builds").0
     }
 
     fn status(response: &ControlResponse) -> ControlStatus {
         ControlStatus::try_from(response.status).expect("known status")
     }
 
+    fn restart_epoch(change: Option<Change>) -> u64 {
+        match change {
+            Some(Change::Restart(restart)) => restart.epoch,
+            other => panic!("expected a restart, got {other:?}"),
+        }
+    }
+
     #[test]
     fn scene_info_summarises_the_scene_and_the_counters() {
-        let mut simulation = simulation();
+        let mut session = session();
         let mut nan = TrackerSample {
             seq: 1,
             timestamp_ns: 1,
@@ -145,10 +197,11 @@ mod tests {
             sensor_id: 0,
         };
         nan.hand.position[0] = f64::NAN;
-        assert!(simulation.apply_tracker(&nan).is_err());
+        assert!(session.inputs.apply_tracker(&nan).is_err());
 
-        let response = answer(&mut simulation, &ControlRequest::scene_info());
-        let scene = simulation.scene();
+        let (response, change) = answer(&mut session, &ControlRequest::scene_info());
+        assert!(change.is_none());
+        let scene = &session.scene;
         assert_eq!(status(&response), ControlStatus::Ok);
         assert_eq!(response.kind, ControlRequestKind::SceneInfo as u32);
         assert_eq!(response.part_count as usize, scene.parts.len());
@@ -163,11 +216,11 @@ mod tests {
 
     #[test]
     fn part_info_describes_each_part_and_refuses_unknown_ids() {
-        let mut simulation = simulation();
-        let count = simulation.scene().parts.len();
+        let mut session = session();
+        let count = session.scene.parts.len();
         for id in 0..count {
-            let response = answer(&mut simulation, &ControlRequest::part_info(id as u32));
-            let part = &simulation.scene().parts[id];
+            let (response, _) = answer(&mut session, &ControlRequest::part_info(id as u32));
+            let part = &session.scene.parts[id];
             assert_eq!(status(&response), ControlStatus::Ok);
             assert_eq!(response.part.id as usize, id);
             assert_eq!(response.part.name.as_str(), Ok(part.name.as_str()));
@@ -182,7 +235,8 @@ mod tests {
                 WirePose::from_isometry(&part.pose)
             );
         }
-        let response = answer(&mut simulation, &ControlRequest::part_info(count as u32));
+        let (response, change) = answer(&mut session, &ControlRequest::part_info(count as u32));
+        assert!(change.is_none());
         assert_eq!(status(&response), ControlStatus::NoSuchPart);
         assert!(
             response
@@ -194,30 +248,29 @@ mod tests {
     }
 
     #[test]
-    fn unknown_requests_and_codes_are_invalid() {
-        let mut simulation = simulation();
+    fn unknown_requests_and_codes_are_invalid_and_change_nothing() {
+        let mut session = session();
         let mut request = ControlRequest::scene_info();
         request.kind = 99;
-        assert_eq!(
-            status(&answer(&mut simulation, &request)),
-            ControlStatus::InvalidRequest
-        );
+        let (response, change) = answer(&mut session, &request);
+        assert_eq!(status(&response), ControlStatus::InvalidRequest);
+        assert!(change.is_none());
         let mut request = ControlRequest::set_metaphor(SlidingMetaphor::RubberBand);
         request.argument = 0;
-        assert_eq!(
-            status(&answer(&mut simulation, &request)),
-            ControlStatus::InvalidRequest
-        );
+        let (response, change) = answer(&mut session, &request);
+        assert_eq!(status(&response), ControlStatus::InvalidRequest);
+        assert!(change.is_none());
     }
 
     #[test]
-    fn a_scene_that_fails_to_load_leaves_the_scene_unchanged() {
-        let mut simulation = simulation();
-        let before = simulation.scene().name.clone();
+    fn a_scene_that_fails_to_load_leaves_the_session_unchanged() {
+        let mut session = session();
+        let before = session.scene.name.clone();
         let missing = config("no_such_scene.toml").display().to_string();
         let path = WireText::<MAX_PATH_BYTES>::new(&missing).expect("fits");
-        let response = answer(&mut simulation, &ControlRequest::load_scene(path));
+        let (response, change) = answer(&mut session, &ControlRequest::load_scene(path));
         assert_eq!(status(&response), ControlStatus::SceneLoadFailed);
+        assert!(change.is_none());
         assert!(
             response
                 .message
@@ -227,36 +280,38 @@ mod tests {
             "{:?}",
             response.message
         );
-        assert_eq!(simulation.scene().name, before);
+        assert_eq!(session.scene.name, before);
+        assert_eq!(session.epoch, 1);
     }
 
     #[test]
-    fn a_loaded_scene_replaces_the_current_one() {
-        let mut simulation = simulation();
+    fn a_loaded_scene_replaces_the_current_one_and_restarts_the_loops() {
+        let mut session = session();
         let file = config("peg_in_hole.toml");
         let expected = Scene::load(&file).expect("loads");
         let path = WireText::<MAX_PATH_BYTES>::new(&file.display().to_string()).expect("fits");
-        let response = answer(&mut simulation, &ControlRequest::load_scene(path));
+        let (response, change) = answer(&mut session, &ControlRequest::load_scene(path));
         assert_eq!(status(&response), ControlStatus::Ok);
         assert_eq!(response.scene_name.as_str(), Ok(expected.name.as_str()));
         assert_eq!(response.part_count as usize, expected.parts.len());
+        assert_eq!(restart_epoch(change), 2);
+        assert_eq!(session.epoch, 2);
     }
 
     #[test]
-    fn the_sliding_metaphor_and_reset_are_applied() {
-        let mut simulation = simulation();
+    fn reset_restarts_the_same_scene_and_the_metaphor_is_passed_on() {
+        let mut session = session();
         let request = ControlRequest::set_metaphor(SlidingMetaphor::IncrementalMotion);
-        assert_eq!(
-            status(&answer(&mut simulation, &request)),
-            ControlStatus::Ok
-        );
-        assert_eq!(
-            simulation.scene().params.sliding.metaphor,
-            Metaphor::Incremental
-        );
-        assert_eq!(
-            status(&answer(&mut simulation, &ControlRequest::reset())),
-            ControlStatus::Ok
-        );
+        let (response, change) = answer(&mut session, &request);
+        assert_eq!(status(&response), ControlStatus::Ok);
+        assert!(matches!(
+            change,
+            Some(Change::Metaphor(Metaphor::Incremental))
+        ));
+        let name = session.scene.name.clone();
+        let (response, change) = answer(&mut session, &ControlRequest::reset());
+        assert_eq!(status(&response), ControlStatus::Ok);
+        assert_eq!(restart_epoch(change), 2);
+        assert_eq!(session.scene.name, name);
     }
 }

@@ -1,12 +1,22 @@
 //! The hand-over from grasping to sliding: one hand and the scene's parts, stepped frame by frame.
 //!
-//! Each frame the grasping hand is stepped against every part at its visible pose. A grasp event
-//! starts a [`SlideMachine`] for the grasped part at its current visible pose, with the other
-//! parts as static obstacles. While the part is held its ghost is where the hand holds it (the
-//! hand's pose times the grasp's offset, which may penetrate), and one sliding frame brings the
-//! visible part as close to it as the obstacles allow; the visible pose only ever takes poses the
-//! machine found free. A release drops the machine and leaves the part at its last visible pose
-//! (not at the ghost's pose the release event carries).
+//! The work of one input sample is split in two stages, so that the runtime can run them on the
+//! grasping and the sliding loop's threads, and so that [`Interaction`] can run them in sequence
+//! (offline, in tests and for the recording generator) with the same outcome:
+//!
+//! * [`GraspStage`] steps the grasping hand against every part at its visible pose.
+//! * [`SlideStage`] takes the hand's frame: a grasp event starts a [`SlideMachine`] for the grasped
+//!   part at its current visible pose, with the other parts as static obstacles. While the part is
+//!   held its ghost is where the hand holds it (the hand's pose times the grasp's offset, which may
+//!   penetrate), and one sliding frame brings the visible part as close to it as the obstacles
+//!   allow; the visible pose only ever takes poses the machine found free. A release drops the
+//!   machine and leaves the part at its last visible pose (not at the ghost's pose the release
+//!   event carries).
+//!
+//! While a held part lags behind its ghost, the visible hand keeps its grip on the visible part:
+//! its root is moved by the same offset that takes the ghost to the visible part, so the hand is
+//! never drawn sunk into a part it holds (the grasping hand's own state follows the tracker, as
+//! the clasp needs).
 //!
 //! This is plain state, no threads and no ports: the runtime's loops drive it.
 
@@ -19,17 +29,65 @@ use crate::grasping::{
     GraspEvent, GraspingHand, HandFrame, HandInput, Obstacle as HandObstacle, PartGeometry, PartId,
 };
 use crate::scene::Part;
+use crate::sliding::force::{ForceModel, Wrench};
 use crate::sliding::world::{Obstacle as SlideObstacle, PairwiseWorld, SlideBody};
-use crate::sliding::{RestReason, SlideMachine, SlideParams};
+use crate::sliding::{Metaphor, RestReason, SlideMachine, SlideParams};
 
-/// A part as the interaction needs it: the hand's and the sliding module's collision geometry,
-/// and its visible pose.
-struct InteractionPart {
+/// The grasping half of a frame: the hand among the parts' collision copies.
+pub struct GraspStage {
+    hand: GraspingHand,
+    parts: Vec<PartGeometry>,
+    poses: Vec<Isometry3<f64>>,
+}
+
+impl GraspStage {
+    /// The hand among `parts` (a part's id is its index), which start at their configured poses.
+    pub fn new(hand: GraspingHand, parts: &[Part]) -> GraspStage {
+        GraspStage {
+            hand,
+            parts: parts
+                .iter()
+                .map(|part| PartGeometry::new(part.mesh.as_ref().clone()))
+                .collect(),
+            poses: parts.iter().map(|part| part.pose).collect(),
+        }
+    }
+
+    /// The grasping hand.
+    pub fn hand(&self) -> &GraspingHand {
+        &self.hand
+    }
+
+    /// Takes the visible part poses the hand is stepped against from now on (the sliding
+    /// stage's, once verified); a list of the wrong length is ignored.
+    pub fn set_part_poses(&mut self, poses: &[Isometry3<f64>]) {
+        if poses.len() == self.poses.len() {
+            self.poses.copy_from_slice(poses);
+        }
+    }
+
+    /// Steps the hand towards `input` against every part at its visible pose.
+    pub fn step(&mut self, input: &HandInput) -> HandFrame {
+        let obstacles: Vec<HandObstacle> = self
+            .parts
+            .iter()
+            .zip(&self.poses)
+            .enumerate()
+            .map(|(id, (geometry, pose))| HandObstacle {
+                part: id as PartId,
+                geometry,
+                pose: *pose,
+            })
+            .collect();
+        self.hand.step(input, &obstacles)
+    }
+}
+
+/// A part as the sliding stage needs it.
+struct SlidePart {
     name: String,
     movable: bool,
-    hand_geometry: PartGeometry,
-    slide_body: Arc<SlideBody<DopTree>>,
-    pose: Isometry3<f64>,
+    body: Arc<SlideBody<DopTree>>,
 }
 
 /// The held part's sliding simulation: its machine and its collision copy against the other
@@ -38,10 +96,16 @@ struct HeldSlide {
     part: PartId,
     machine: SlideMachine,
     world: PairwiseWorld<DopTree>,
+    force: ForceModel,
+    /// The latest hand frame's root and ghost, to go on sliding towards between input samples.
+    root: Isometry3<f64>,
+    ghost: Isometry3<f64>,
+    /// Why the latest sliding frame ended.
+    rest: RestReason,
 }
 
 /// The held part after a frame: where the hand holds it and where it is seen.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct HeldPart {
     /// The part.
     pub part: PartId,
@@ -51,60 +115,55 @@ pub struct HeldPart {
     pub visible: Isometry3<f64>,
     /// Why the sliding frame ended.
     pub rest: RestReason,
+    /// The visible hand root: the tracked root moved by the offset from ghost to visible part.
+    pub hand_root: Isometry3<f64>,
+    /// The force and torque pulling the hand towards the visible part.
+    pub wrench: Wrench,
+    /// The obstacles the part touches, by part id, sorted.
+    pub touching: Vec<PartId>,
 }
 
-/// The outcome of one frame.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InteractionFrame {
-    /// The hand's frame: visible hand, grasp, grasp and release events.
-    pub hand: HandFrame,
-    /// The held part, if a movable part is held.
-    pub held: Option<HeldPart>,
+impl HeldPart {
+    /// True when the sliding frame ran out of cycles before the part came to rest: another
+    /// frame towards the same ghost moves it on.
+    pub fn has_sliding_left(&self) -> bool {
+        self.rest == RestReason::CycleLimit
+    }
 }
 
-/// One grasping hand among the scene's parts, with sliding for the part it holds.
-pub struct Interaction {
-    hand: GraspingHand,
-    parts: Vec<InteractionPart>,
-    slide_params: SlideParams,
+/// The sliding half of a frame: the visible part poses and the held part's machine.
+pub struct SlideStage {
+    parts: Vec<SlidePart>,
+    poses: Vec<Isometry3<f64>>,
+    params: SlideParams,
+    /// Seconds between sliding frames, for the force model's damping.
+    period: f64,
     held: Option<HeldSlide>,
 }
 
-impl Interaction {
-    /// The hand among `parts` (a part's id is its index), which start at their configured poses;
-    /// `slide_params` (validated) drive the sliding of grasped parts.
-    pub fn new(hand: GraspingHand, parts: &[Part], slide_params: SlideParams) -> Interaction {
-        let parts = parts
-            .iter()
-            .map(|part| InteractionPart {
-                name: part.name.clone(),
-                movable: part.movable,
-                hand_geometry: PartGeometry::new(part.mesh.as_ref().clone()),
-                slide_body: Arc::new(SlideBody::new(part.mesh.clone())),
-                pose: part.pose,
-            })
-            .collect();
-        Interaction {
-            hand,
-            parts,
-            slide_params,
+impl SlideStage {
+    /// The `parts` at their configured poses; `params` (validated) drive the sliding of grasped
+    /// parts, whose frames are `period` seconds apart.
+    pub fn new(parts: &[Part], params: SlideParams, period: f64) -> SlideStage {
+        SlideStage {
+            parts: parts
+                .iter()
+                .map(|part| SlidePart {
+                    name: part.name.clone(),
+                    movable: part.movable,
+                    body: Arc::new(SlideBody::new(part.mesh.clone())),
+                })
+                .collect(),
+            poses: parts.iter().map(|part| part.pose).collect(),
+            params,
+            period,
             held: None,
         }
     }
 
-    /// The grasping hand.
-    pub fn hand(&self) -> &GraspingHand {
-        &self.hand
-    }
-
     /// The visible pose of every part, by id.
-    pub fn part_poses(&self) -> impl ExactSizeIterator<Item = Isometry3<f64>> + '_ {
-        self.parts.iter().map(|part| part.pose)
-    }
-
-    /// The visible pose of one part, `None` for an unknown id.
-    pub fn part_pose(&self, part: PartId) -> Option<Isometry3<f64>> {
-        self.parts.get(part as usize).map(|part| part.pose)
+    pub fn part_poses(&self) -> &[Isometry3<f64>] {
+        &self.poses
     }
 
     /// The sliding machine of the held part, if a movable part is held.
@@ -112,20 +171,33 @@ impl Interaction {
         self.held.as_ref().map(|held| &held.machine)
     }
 
-    /// Processes one input sample: steps the hand, hands grasped parts over to sliding and back,
-    /// and slides the held part one frame towards where the hand holds it.
-    pub fn step(&mut self, input: &HandInput) -> InteractionFrame {
-        let obstacles: Vec<HandObstacle> = self
-            .parts
-            .iter()
-            .enumerate()
-            .map(|(id, part)| HandObstacle {
-                part: id as PartId,
-                geometry: &part.hand_geometry,
-                pose: part.pose,
-            })
-            .collect();
-        let frame = self.hand.step(input, &obstacles);
+    /// Selects how grasped parts follow the hand, from the next frame on (the held part too).
+    pub fn set_metaphor(&mut self, metaphor: Metaphor) {
+        self.params.metaphor = metaphor;
+        if let Some(held) = &mut self.held {
+            held.machine.set_metaphor(metaphor);
+        }
+    }
+
+    /// Puts `part` back at `pose`, a pose known to be free (the collision loop refused the one
+    /// sliding gave it); a held part restarts sliding from there.
+    pub fn restore(&mut self, part: PartId, pose: Isometry3<f64>) {
+        let Some(slot) = self.poses.get_mut(part as usize) else {
+            return;
+        };
+        *slot = pose;
+        if let Some(held) = self.held.take_if(|held| held.part == part) {
+            self.start_sliding(part);
+            if let Some(restarted) = &mut self.held {
+                restarted.root = held.root;
+                restarted.ghost = held.ghost;
+            }
+        }
+    }
+
+    /// Takes the hand's frame: hands grasped parts over to sliding and back, and slides the held
+    /// part one frame towards where the hand holds it.
+    pub fn apply(&mut self, frame: &HandFrame) -> Option<HeldPart> {
         for event in &frame.events {
             match *event {
                 GraspEvent::Release { part, .. } => {
@@ -137,22 +209,59 @@ impl Interaction {
                 GraspEvent::Grasp { part, .. } => self.start_sliding(part),
             }
         }
-        let held = match (&mut self.held, frame.held) {
+        match (&mut self.held, frame.held) {
             (Some(slide), Some((part, ghost))) if slide.part == part => {
+                slide.root = frame.pose.root;
+                slide.ghost = ghost;
                 slide.machine.set_ghost(&ghost);
-                let rest = slide.machine.run_frame(&mut slide.world);
-                let visible = slide.machine.visible_pose();
-                self.parts[part as usize].pose = visible;
-                Some(HeldPart {
-                    part,
-                    ghost,
-                    visible,
-                    rest,
-                })
+                self.slide_frame()
             }
-            _ => None,
-        };
-        InteractionFrame { hand: frame, held }
+            _ => {
+                self.held = None;
+                None
+            }
+        }
+    }
+
+    /// One more sliding frame towards the latest ghost, when the last one ran out of cycles
+    /// before reaching it; `None` when nothing is held or the part came to rest (reached,
+    /// blocked or stalled: only a new ghost can move it then).
+    pub fn keep_sliding(&mut self) -> Option<HeldPart> {
+        let held = self.held.as_ref()?;
+        if held.rest == RestReason::CycleLimit {
+            self.slide_frame()
+        } else {
+            None
+        }
+    }
+
+    fn slide_frame(&mut self) -> Option<HeldPart> {
+        let slide = self.held.as_mut()?;
+        let rest = slide.machine.run_frame(&mut slide.world);
+        slide.rest = rest;
+        let visible = slide.machine.visible_pose();
+        self.poses[slide.part as usize] = visible;
+        let wrench = slide.force.update(
+            slide.machine.visible_pivot_pose(),
+            slide.machine.ghost_pivot_pose(),
+            self.period,
+        );
+        let mut touching: Vec<PartId> = slide
+            .machine
+            .contacts()
+            .map(|contact| obstacle_part(slide.part, contact.obstacle))
+            .collect();
+        touching.sort_unstable();
+        touching.dedup();
+        Some(HeldPart {
+            part: slide.part,
+            ghost: slide.ghost,
+            visible,
+            rest,
+            hand_root: visible * slide.ghost.inverse() * slide.root,
+            wrench,
+            touching,
+        })
     }
 
     /// Starts sliding `part` from its visible pose against every other part; static parts are
@@ -162,31 +271,103 @@ impl Interaction {
             self.held = None;
             return;
         };
+        let pose = self.poses[part as usize];
         let obstacles = self
             .parts
             .iter()
+            .zip(&self.poses)
             .enumerate()
             .filter(|&(id, _)| id != part as usize)
-            .map(|(_, other)| {
+            .map(|(_, (other, other_pose))| {
                 SlideObstacle::new(
-                    other.slide_body.clone(),
-                    other.pose,
-                    self.slide_params
-                        .allowance_between(&grasped.name, &other.name),
+                    other.body.clone(),
+                    *other_pose,
+                    self.params.allowance_between(&grasped.name, &other.name),
                 )
             })
             .collect();
-        let (pivot, radius) = grasped.slide_body.pivot_and_radius();
+        let (pivot, radius) = grasped.body.pivot_and_radius();
         self.held = Some(HeldSlide {
             part,
-            machine: SlideMachine::new(
-                &grasped.pose,
-                pivot.coords,
-                radius,
-                self.slide_params.clone(),
-            ),
-            world: PairwiseWorld::new(grasped.slide_body.clone(), obstacles),
+            machine: SlideMachine::new(&pose, pivot.coords, radius, self.params.clone()),
+            world: PairwiseWorld::new(grasped.body.clone(), obstacles),
+            force: ForceModel::new(self.params.force),
+            root: Isometry3::identity(),
+            ghost: pose,
+            rest: RestReason::Grasped,
         });
+    }
+}
+
+/// The part id of obstacle `index` of the world built for `held`: every part but the held one,
+/// in id order.
+fn obstacle_part(held: PartId, index: usize) -> PartId {
+    let index = index as PartId;
+    if index < held { index } else { index + 1 }
+}
+
+/// The outcome of one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InteractionFrame {
+    /// The hand's frame: visible hand, grasp, grasp and release events. While a held part lags
+    /// behind its ghost, the visible root is [`HeldPart::hand_root`].
+    pub hand: HandFrame,
+    /// The held part, if a movable part is held.
+    pub held: Option<HeldPart>,
+}
+
+/// One grasping hand among the scene's parts, with sliding for the part it holds: the two stages
+/// run in sequence, one frame per input sample, as the server's loops run them in lockstep.
+pub struct Interaction {
+    grasp: GraspStage,
+    slide: SlideStage,
+}
+
+impl Interaction {
+    /// The hand among `parts` (a part's id is its index), which start at their configured poses;
+    /// `slide_params` (validated) drive the sliding of grasped parts, `period` seconds apart.
+    pub fn new(
+        hand: GraspingHand,
+        parts: &[Part],
+        slide_params: SlideParams,
+        period: f64,
+    ) -> Interaction {
+        Interaction {
+            grasp: GraspStage::new(hand, parts),
+            slide: SlideStage::new(parts, slide_params, period),
+        }
+    }
+
+    /// The grasping hand.
+    pub fn hand(&self) -> &GraspingHand {
+        self.grasp.hand()
+    }
+
+    /// The visible pose of every part, by id.
+    pub fn part_poses(&self) -> impl ExactSizeIterator<Item = Isometry3<f64>> + '_ {
+        self.slide.part_poses().iter().copied()
+    }
+
+    /// The visible pose of one part, `None` for an unknown id.
+    pub fn part_pose(&self, part: PartId) -> Option<Isometry3<f64>> {
+        self.slide.part_poses().get(part as usize).copied()
+    }
+
+    /// The sliding machine of the held part, if a movable part is held.
+    pub fn slide_machine(&self) -> Option<&SlideMachine> {
+        self.slide.slide_machine()
+    }
+
+    /// Processes one input sample: steps the hand, hands grasped parts over to sliding and back,
+    /// and slides the held part one frame towards where the hand holds it.
+    pub fn step(&mut self, input: &HandInput) -> InteractionFrame {
+        self.grasp.set_part_poses(self.slide.part_poses());
+        let mut hand = self.grasp.step(input);
+        let held = self.slide.apply(&hand);
+        if let Some(held) = &held {
+            hand.pose.root = held.hand_root;
+        }
+        InteractionFrame { hand, held }
     }
 }
 
@@ -305,7 +486,7 @@ mod tests {
                 metaphor: Metaphor::SpiralSpring,
                 ..SlideParams::default()
             };
-            let interaction = Interaction::new(hand, &parts, params);
+            let interaction = Interaction::new(hand, &parts, params, 1.0 / RATE);
             Run {
                 parts,
                 interaction,
@@ -423,7 +604,7 @@ mod tests {
                 lowest(&run.parts, pose) > TABLE_TOP,
                 "frame {i}: the visible handle is below the table top"
             );
-            if let Some(held) = run.frames[i].held {
+            if let Some(held) = &run.frames[i].held {
                 ghost_depth = ghost_depth.max(TABLE_TOP - lowest(&run.parts, &held.ghost));
             }
         }
@@ -451,7 +632,7 @@ mod tests {
         let machine = run.interaction.slide_machine().expect("the handle is held");
         let (_, radius) = SlideBody::<DopTree>::new(run.parts[0].mesh.clone()).pivot_and_radius();
         for (i, frame) in run.frames.iter().enumerate().skip(grasped_at) {
-            let held = frame.held.expect("held from the grasp on");
+            let held = frame.held.as_ref().expect("held from the grasp on");
             assert_eq!(held.rest, RestReason::Reached, "frame {i}");
             assert_eq!(held.visible, run.handle_poses[i]);
             let lag = pose_distance(&held.visible, &held.ghost, radius);
@@ -485,7 +666,11 @@ mod tests {
         let end = run.handle_poses.last().expect("frames");
         let gap = lowest(&run.parts, end) - TABLE_TOP;
         assert!(gap < 0.001, "the handle stays {gap} m above the table");
-        let held = run.frames.last().and_then(|f| f.held).expect("held");
+        let held = run
+            .frames
+            .last()
+            .and_then(|f| f.held.clone())
+            .expect("held");
         assert!(
             run.interaction
                 .slide_machine()

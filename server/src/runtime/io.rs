@@ -1,74 +1,122 @@
 //! The interaction manager: the I/O thread that owns every port.
+//!
+//! It validates input into the [`Session`]'s input state and hands each accepted sample's target
+//! to the grasping loop; it publishes what the collision loop verified (hand, parts, events,
+//! force), and answers control requests, sending their changes down the loops between frames.
+//! Parts are also published at the scene's publish rate, so that a renderer sees the scene while
+//! no input arrives.
+//!
+//! In lockstep the next sample's frame is handed over only when the previous one came back
+//! verified: each sample gets exactly one frame, whatever the timing.
 
+use std::collections::VecDeque;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use crossbeam_channel::Receiver;
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
-use vas_protocol::{InputRejection, InputStats, wall_clock_ns};
+use vas_protocol::{
+    ForceFrame, HandFrame, InputRejection, InputStats, PartState, PartsFrameHeader, SimEvent,
+    WirePose, wall_clock_ns,
+};
 
+use super::control::{self, Session};
+use super::frames::{Change, InputFrame, LoopWork, VerifiedFrame};
+use super::loops::Loops;
 use super::ports::{Ports, Wakeups};
-use super::simulation::Simulation;
-use super::{RuntimeError, control};
+use super::rendezvous::{Handoff, Work};
+use super::{RuntimeError, publish_period};
 
 /// How often the input counters are logged, when they changed.
 const STATS_LOG_PERIOD: Duration = Duration::from_secs(5);
 
-/// Owns the ports and the simulation; validates input, publishes frames, answers control.
+/// Owns the ports and the session; validates input, publishes frames, answers control.
 pub(super) struct InteractionManager {
     wakeups: Wakeups,
     io: Io,
 }
 
-/// What the loop changes: the ports it reads and writes, the simulation, the log state.
+/// What the loop changes: ports, session, the way to the loops, the published state.
 struct Io {
     ports: Ports,
-    simulation: Simulation,
+    session: Session,
+    inputs: Arc<Handoff<InputFrame, Change>>,
+    verified: Receiver<VerifiedFrame>,
+    lockstep: Lockstep,
+    /// The latest published part states, for the periodic parts frames.
+    parts: Vec<PartState>,
+    hand_frames: u64,
+    parts_frames: u64,
     logged_stats: InputStats,
     stats_logged_at: Instant,
 }
 
+/// Work waiting for the frame in flight, in lockstep.
+struct Lockstep {
+    enabled: bool,
+    in_flight: bool,
+    waiting: VecDeque<LoopWork<InputFrame>>,
+}
+
 impl InteractionManager {
-    /// Opens the ports for the simulation's scene.
+    /// Opens the ports for the session's scene; `change` starts the loops on it.
     pub(super) fn new(
         node: &Node<ipc::Service>,
-        simulation: Simulation,
+        session: Session,
+        inputs: Arc<Handoff<InputFrame, Change>>,
+        verified: Receiver<VerifiedFrame>,
+        lockstep: bool,
     ) -> Result<Self, RuntimeError> {
-        let (ports, wakeups) = Ports::open(node, simulation.scene().parts.len())?;
-        Ok(Self {
-            wakeups,
-            io: Io {
-                ports,
-                simulation,
-                logged_stats: InputStats::default(),
-                stats_logged_at: Instant::now(),
+        let (ports, wakeups) = Ports::open(node, session.scene.parts.len())?;
+        let mut io = Io {
+            ports,
+            parts: Vec::new(),
+            session,
+            inputs,
+            verified,
+            lockstep: Lockstep {
+                enabled: lockstep,
+                in_flight: false,
+                waiting: VecDeque::new(),
             },
-        })
+            hand_frames: 0,
+            parts_frames: 0,
+            logged_stats: InputStats::default(),
+            stats_logged_at: Instant::now(),
+        };
+        io.reset_parts();
+        Ok(Self { wakeups, io })
     }
 
-    /// Serves until a termination signal: wakes on input and control notifications, and at the
-    /// scene's publish rate to publish the parts (a scene loaded on request brings its rate).
-    pub(super) fn serve(mut self) -> Result<(), RuntimeError> {
+    /// Serves until a termination signal (or a loop's failure): wakes on input, control and
+    /// verified frames, and at the scene's publish rate.
+    pub(super) fn serve(mut self, start: Change, loops: &Loops) -> Result<(), RuntimeError> {
         let waitset = WaitSetBuilder::new()
             .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
             .create::<ipc::Service>()
             .map_err(|error| RuntimeError::ipc("create the WaitSet", error))?;
         let attach = |error| RuntimeError::ipc("attach to the WaitSet", error);
-        let _tracker = waitset
-            .attach_notification(&self.wakeups.tracker)
-            .map_err(attach)?;
-        let _glove = waitset
-            .attach_notification(&self.wakeups.glove)
-            .map_err(attach)?;
-        let _control = waitset
-            .attach_notification(&self.wakeups.control)
+        let _guards = [
+            &self.wakeups.tracker,
+            &self.wakeups.glove,
+            &self.wakeups.control,
+            &self.wakeups.verified,
+        ]
+        .map(|listener| waitset.attach_notification(listener));
+        let _guards = _guards
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()
             .map_err(attach)?;
         let io = &mut self.io;
-        let mut publish_hz = io.simulation.scene().rates.publish_hz;
-        let publish_period = super::publish_period(publish_hz)?;
-        let mut publish_tick = waitset.attach_interval(publish_period).map_err(attach)?;
+        let mut publish_hz = io.session.scene.rates.publish_hz;
+        let mut publish_tick = waitset
+            .attach_interval(publish_period(publish_hz)?)
+            .map_err(attach)?;
 
-        io.publish_parts();
-        tracing::info!(period = ?publish_period, "serving");
+        io.submit(Work::Control(start));
+        io.publish_parts(None);
+        tracing::info!(lockstep = io.lockstep.enabled, "serving");
         loop {
             let mut publish_due = false;
             let outcome = waitset
@@ -86,10 +134,11 @@ impl InteractionManager {
             io.process_tracker_samples();
             io.process_glove_samples();
             io.answer_control_requests();
-            let scene_hz = io.simulation.scene().rates.publish_hz;
+            io.publish_verified_frames();
+            let scene_hz = io.session.scene.rates.publish_hz;
             if scene_hz != publish_hz {
                 publish_hz = scene_hz;
-                match super::publish_period(scene_hz) {
+                match publish_period(scene_hz) {
                     Ok(period) => {
                         publish_tick = waitset.attach_interval(period).map_err(attach)?;
                         tracing::info!(?period, "publishing at the loaded scene's rate");
@@ -98,17 +147,42 @@ impl InteractionManager {
                 }
             }
             if publish_due {
-                io.publish_parts();
+                if loops.any_ended() {
+                    return Err(RuntimeError::LoopEnded);
+                }
+                io.publish_parts(None);
                 io.log_failure(io.ports.update_connections());
                 io.log_stats_if_due();
             }
         }
-        tracing::info!(stats = ?io.simulation.stats(), "termination requested; shutting down");
+        tracing::info!(stats = ?io.session.inputs.stats(), "termination requested; shutting down");
         Ok(())
     }
 }
 
 impl Io {
+    /// Hands work to the grasping loop; in lockstep, frames wait for the one in flight.
+    fn submit(&mut self, work: LoopWork<InputFrame>) {
+        if !self.lockstep.enabled {
+            self.inputs.send(work);
+            return;
+        }
+        self.lockstep.waiting.push_back(work);
+        self.send_waiting();
+    }
+
+    /// In lockstep: sends waiting work up to and including the next frame, unless one is in
+    /// flight.
+    fn send_waiting(&mut self) {
+        while !self.lockstep.in_flight {
+            let Some(work) = self.lockstep.waiting.pop_front() else {
+                return;
+            };
+            self.lockstep.in_flight = matches!(work, Work::Frame(_));
+            self.inputs.send(work);
+        }
+    }
+
     fn process_tracker_samples(&mut self) {
         loop {
             let sample = match self.ports.tracker.receive() {
@@ -119,8 +193,11 @@ impl Io {
                         .log_failure(Err(RuntimeError::ipc("receive tracker samples", error)));
                 }
             };
-            match self.simulation.apply_tracker(&sample) {
-                Ok(()) => self.publish_hand(),
+            match self.session.inputs.apply_tracker(&sample) {
+                Ok(()) => {
+                    let frame = self.session.inputs.frame();
+                    self.submit(Work::Frame(frame));
+                }
                 Err(rejection) => self.log_rejection("tracker", sample.seq, &rejection),
             }
         }
@@ -136,7 +213,7 @@ impl Io {
                         .log_failure(Err(RuntimeError::ipc("receive glove samples", error)));
                 }
             };
-            match self.simulation.apply_glove(&sample) {
+            match self.session.inputs.apply_glove(&sample) {
                 Ok(clamped) => {
                     if clamped != 0 {
                         tracing::debug!(
@@ -145,7 +222,8 @@ impl Io {
                             "glove values clamped"
                         );
                     }
-                    self.publish_hand();
+                    let frame = self.session.inputs.frame();
+                    self.submit(Work::Frame(frame));
                 }
                 Err(rejection) => self.log_rejection("glove", sample.seq, &rejection),
             }
@@ -163,12 +241,20 @@ impl Io {
                     break;
                 }
             };
-            let response = control::answer(&mut self.simulation, request.payload());
+            let (response, change) = control::answer(&mut self.session, request.payload());
             tracing::debug!(
                 kind = response.kind,
                 status = response.status,
                 "control request answered"
             );
+            if let Some(change) = change {
+                let restarted = matches!(change, Change::Restart(_));
+                self.submit(Work::Control(change));
+                if restarted {
+                    self.reset_parts();
+                    self.publish_parts(None);
+                }
+            }
             if let Err(error) = request.send_copy(response) {
                 self.log_failure(Err(RuntimeError::ipc("send a control response", error)));
             }
@@ -179,20 +265,104 @@ impl Io {
         }
     }
 
-    fn publish_hand(&mut self) {
-        let frame = self.simulation.hand_frame(wall_clock_ns());
-        self.log_failure(self.ports.publish_hand(frame));
+    /// The session's scene's parts at their configured poses, as published until the loops
+    /// verify a frame of it.
+    fn reset_parts(&mut self) {
+        self.parts = (0u32..)
+            .zip(&self.session.scene.parts)
+            .map(|(id, part)| part_state(id, &part.pose, 0))
+            .collect();
     }
 
-    fn publish_parts(&mut self) {
-        let (header, states) = self.simulation.parts_frame(wall_clock_ns());
-        self.log_failure(self.ports.publish_parts(header, &states));
+    /// Publishes every frame the collision loop verified since the last call.
+    fn publish_verified_frames(&mut self) {
+        while let Ok(frame) = self.verified.try_recv() {
+            // A frame of the scene before a restart still answers its sample, but its parts
+            // are not the scene's any more.
+            self.publish(&frame);
+            if self.lockstep.enabled {
+                self.lockstep.in_flight = false;
+                self.send_waiting();
+            }
+        }
+    }
+
+    fn publish(&mut self, frame: &VerifiedFrame) {
+        let now = wall_clock_ns();
+        self.hand_frames += 1;
+        let stamps = frame.stamps;
+        let events: Vec<SimEvent> = frame
+            .events
+            .iter()
+            .map(|event| SimEvent {
+                frame: self.hand_frames,
+                tracker: stamps.tracker,
+                glove: stamps.glove,
+                timestamp_ns: now,
+                kind: event.kind as u32,
+                grasp_type: event.grasp as u32,
+                part: event.part,
+                other: event.other,
+            })
+            .collect();
+        self.log_failure(self.ports.publish_events(&events));
+        if let Some(wrench) = frame.force {
+            self.log_failure(self.ports.publish_force(ForceFrame {
+                frame: self.hand_frames,
+                tracker: stamps.tracker,
+                glove: stamps.glove,
+                timestamp_ns: now,
+                force: wrench.force.into(),
+                torque: wrench.torque.into(),
+            }));
+        }
+        if frame.epoch == self.session.epoch && frame.parts.len() == self.parts.len() {
+            let changed = (0u32..)
+                .zip(&frame.parts)
+                .map(|(id, part)| part_state(id, &part.pose, part.flags))
+                .zip(&mut self.parts)
+                .fold(false, |changed, (state, published)| {
+                    let differs = state != *published;
+                    *published = state;
+                    changed | differs
+                });
+            if changed || self.lockstep.enabled {
+                self.publish_parts(Some(frame));
+            }
+        }
+        // The hand frame goes last: a client that waits for the answer to its sample has the
+        // parts and events of the same frame by then.
+        let hand = HandFrame {
+            frame: self.hand_frames,
+            tracker: stamps.tracker,
+            glove: stamps.glove,
+            timestamp_ns: wall_clock_ns(),
+            root: WirePose::from_isometry(&frame.hand_root),
+            flex: frame.flex,
+            touching: frame.touching,
+            grasp_type: frame.grasp as u32,
+        };
+        self.log_failure(self.ports.publish_hand(hand));
+    }
+
+    /// Publishes the latest part states, stamped with `frame`'s inputs (or the latest inputs).
+    fn publish_parts(&mut self, frame: Option<&VerifiedFrame>) {
+        self.parts_frames += 1;
+        let stamps = frame.map_or_else(|| self.session.inputs.frame().stamps, |f| f.stamps);
+        let header = PartsFrameHeader {
+            frame: self.parts_frames,
+            tracker: stamps.tracker,
+            glove: stamps.glove,
+            timestamp_ns: wall_clock_ns(),
+            part_count: u32::try_from(self.parts.len()).unwrap_or(u32::MAX),
+        };
+        self.log_failure(self.ports.publish_parts(header, &self.parts));
     }
 
     /// The first rejected sample is a warning; later ones are counted and show in the periodic
     /// summary (a broken sender must not flood the log).
     fn log_rejection(&self, stream: &str, seq: u64, rejection: &InputRejection) {
-        if self.simulation.stats().rejected() == 1 {
+        if self.session.inputs.stats().rejected() == 1 {
             tracing::warn!(stream, seq, %rejection, "input rejected; further rejections are counted");
         } else {
             tracing::debug!(stream, seq, %rejection, "input rejected");
@@ -200,7 +370,7 @@ impl Io {
     }
 
     fn log_stats_if_due(&mut self) {
-        let stats = self.simulation.stats();
+        let stats = self.session.inputs.stats();
         if stats != self.logged_stats && self.stats_logged_at.elapsed() >= STATS_LOG_PERIOD {
             tracing::info!(
                 tracker_accepted = stats.tracker_accepted,
@@ -209,6 +379,7 @@ impl Io {
                 glove_accepted = stats.glove_accepted,
                 glove_rejected = stats.glove_rejected_non_finite,
                 glove_values_clamped = stats.glove_values_clamped,
+                frames_merged = self.inputs.merged(),
                 "input counters"
             );
             self.logged_stats = stats;
@@ -222,5 +393,15 @@ impl Io {
         if let Err(error) = outcome {
             tracing::error!("{error}");
         }
+    }
+}
+
+fn part_state(id: u32, pose: &nalgebra::Isometry3<f64>, flags: u32) -> PartState {
+    let pose = WirePose::from_isometry(pose);
+    PartState {
+        id,
+        flags,
+        position: pose.position,
+        rotation: pose.rotation,
     }
 }

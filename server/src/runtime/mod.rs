@@ -1,20 +1,26 @@
-//! The runtime: the iceoryx2 ports, the loop that drives the simulation, clean start and stop.
+//! The runtime: the iceoryx2 ports, the three loops and their rendezvous, clean start and stop.
 //!
-//! This is the only module that knows about threads and IPC. Today one thread, the interaction
-//! manager ([`io`]), owns every port: it validates input into the plain [`Simulation`] state,
-//! publishes frames, and answers control requests. The grasping, sliding and collision loops
-//! will run on their own threads beside it and meet it at rendezvous; the ports stay on this
-//! thread (iceoryx2 ports are not `Send`).
+//! This is the only module that knows about threads and IPC. The interaction manager ([`io`])
+//! owns every port on the main thread: it validates input, hands targets to the grasping loop,
+//! publishes what the collision loop verified and answers control requests. The grasping,
+//! sliding and collision loops ([`loops`]) each run on their own thread and meet only at the
+//! hand-offs of [`rendezvous`].
 //!
-//! Output services: `vas/output/parts` is published at the scene's `rates.publish_hz`;
-//! `vas/output/hand` once per accepted input sample, answering it. The input counters
-//! (rejected, clamped) are logged and returned in every `vas/control` response (`stats`).
+//! Output services: every verified frame publishes `vas/output/hand` (answering the input sample
+//! it carries the stamp of), `vas/output/parts` when a part changed (and at the scene's
+//! `rates.publish_hz` regardless), `vas/output/events` and, while a part is held,
+//! `vas/output/force`. The input counters (rejected, clamped) are logged and returned in every
+//! `vas/control` response (`stats`).
 
 mod control;
+pub mod frames;
+mod inputs;
 pub mod interaction;
 mod io;
+pub mod loops;
 mod ports;
-pub mod simulation;
+pub mod rendezvous;
+pub mod verify;
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -23,7 +29,9 @@ use iceoryx2::prelude::*;
 use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
 
 use crate::scene::{Scene, SceneError};
-pub use simulation::Simulation;
+use control::Session;
+use frames::HandSetupError;
+use loops::{Links, Loops};
 
 /// What `vas-server run` serves, and where.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -33,6 +41,9 @@ pub struct RunOptions {
     /// iceoryx2 prefix of every resource, so that servers (and tests) on different prefixes
     /// never meet; `None` uses the iceoryx2 configuration's.
     pub prefix: Option<String>,
+    /// One frame per input sample, each handed over when the previous one was verified, and no
+    /// loop steps on its own: a replay gives the same output every time.
+    pub lockstep: bool,
 }
 
 /// Why the server could not start or had to stop.
@@ -41,6 +52,15 @@ pub enum RuntimeError {
     /// The scene could not be loaded.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// The scene's hand could not be set up.
+    #[error(transparent)]
+    Hand(#[from] HandSetupError),
+    /// A loop thread could not be started.
+    #[error("cannot start the loop threads: {0}")]
+    Thread(#[from] std::io::Error),
+    /// A loop thread ended unexpectedly (it panicked; the log says where).
+    #[error("a simulation loop ended unexpectedly")]
+    LoopEnded,
     /// The prefix is not usable by iceoryx2.
     #[error(transparent)]
     Prefix(#[from] PrefixError),
@@ -115,10 +135,30 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         publish_hz = scene.rates.publish_hz,
         "scene loaded"
     );
+    let (session, start) = Session::start(scene)?;
     if termination_requested(&node) {
         return Ok(());
     }
-    io::InteractionManager::new(&node, Simulation::new(scene))?.serve()
+    let links = Links::default();
+    let (verified_in, verified_out) = crossbeam_channel::unbounded();
+    let manager = io::InteractionManager::new(
+        &node,
+        session,
+        std::sync::Arc::clone(&links.inputs),
+        verified_out,
+        options.lockstep,
+    )?;
+    let waker_config = config.clone();
+    let loops = Loops::spawn(
+        &links,
+        options.lockstep,
+        verified_in,
+        Box::new(move || ports::verified_waker(&waker_config)),
+    )?;
+    let served = manager.serve(start, &loops);
+    links.inputs.close();
+    loops.join();
+    served
 }
 
 /// The interval between parts frames at `hz`, or an error for a rate no loop can run at.

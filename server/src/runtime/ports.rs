@@ -1,4 +1,5 @@
-//! The server's iceoryx2 ports, all owned by the I/O thread (iceoryx2 ports are not `Send`).
+//! The server's iceoryx2 ports, all owned by the I/O thread (iceoryx2 ports are not `Send`), and
+//! the collision loop's waker of the I/O thread, made on its own thread and node.
 
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
@@ -9,8 +10,8 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use vas_protocol::services::{self, output};
 use vas_protocol::{
-    ControlRequest, ControlResponse, GloveSample, HandFrame, PartState, PartsFrameHeader,
-    TrackerSample,
+    ControlRequest, ControlResponse, ForceFrame, GloveSample, HandFrame, PartState,
+    PartsFrameHeader, SimEvent, TrackerSample,
 };
 
 use super::RuntimeError;
@@ -24,12 +25,18 @@ pub(super) struct Wakeups {
     pub(super) glove: Listener<ipc::Service>,
     /// Control requests were sent.
     pub(super) control: Listener<ipc::Service>,
+    /// The collision loop verified frames.
+    pub(super) verified: Listener<ipc::Service>,
 }
+
+/// The server-internal event service through which the collision loop wakes the I/O thread
+/// (under the server's prefix, so no other server meets it).
+pub(super) const VERIFIED: &str = "vas/internal/verified";
 
 impl Wakeups {
     /// Clears pending notifications, so that the WaitSet sleeps until the next one.
     pub(super) fn drain(&self) -> Result<(), RuntimeError> {
-        for listener in [&self.tracker, &self.glove, &self.control] {
+        for listener in [&self.tracker, &self.glove, &self.control, &self.verified] {
             listener
                 .try_wait(|_| {})
                 .map_err(|error| RuntimeError::ipc("drain a listener", error))?;
@@ -49,6 +56,10 @@ pub(super) struct Ports {
     parts_notifier: Notifier<ipc::Service>,
     hand: Publisher<ipc::Service, HandFrame, ()>,
     hand_notifier: Notifier<ipc::Service>,
+    events: Publisher<ipc::Service, SimEvent, ()>,
+    events_notifier: Notifier<ipc::Service>,
+    force: Publisher<ipc::Service, ForceFrame, ()>,
+    force_notifier: Notifier<ipc::Service>,
     /// Control requests from the clients.
     pub(super) control: Server<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     control_notifier: Notifier<ipc::Service>,
@@ -73,7 +84,7 @@ impl Ports {
         node: &Node<ipc::Service>,
         part_count: usize,
     ) -> Result<(Self, Wakeups), RuntimeError> {
-        use services::{CONTROL, GLOVE, HAND, PARTS, TRACKER};
+        use services::{CONTROL, EVENTS, FORCE, GLOVE, HAND, PARTS, TRACKER};
         let wakeup = |name| services::open_wakeup(node, name);
         let listener = |name| port(name, wakeup(name)?.listener_builder().create());
         let notifier = |name| port(name, wakeup(name)?.notifier_builder().create());
@@ -81,6 +92,7 @@ impl Ports {
             tracker: listener(TRACKER)?,
             glove: listener(GLOVE)?,
             control: listener(CONTROL)?,
+            verified: listener(VERIFIED)?,
         };
         let parts = services::open_parts(node)?
             .publisher_builder()
@@ -103,6 +115,16 @@ impl Ports {
                 services::open_hand(node)?.publisher_builder().create(),
             )?,
             hand_notifier: notifier(HAND)?,
+            events: port(
+                EVENTS,
+                services::open_events(node)?.publisher_builder().create(),
+            )?,
+            events_notifier: notifier(EVENTS)?,
+            force: port(
+                FORCE,
+                services::open_force(node)?.publisher_builder().create(),
+            )?,
+            force_notifier: notifier(FORCE)?,
             control: port(
                 CONTROL,
                 services::open_control(node)?.server_builder().create(),
@@ -144,6 +166,33 @@ impl Ports {
         Ok(())
     }
 
+    /// Publishes events and wakes their readers once.
+    pub(super) fn publish_events(&self, events: &[SimEvent]) -> Result<(), RuntimeError> {
+        if events.is_empty() {
+            return Ok(());
+        }
+        for event in events {
+            self.events
+                .send_copy(*event)
+                .map_err(|error| RuntimeError::ipc("send an event", error))?;
+        }
+        self.events_notifier
+            .notify()
+            .map_err(|error| RuntimeError::ipc("notify event readers", error))?;
+        Ok(())
+    }
+
+    /// Publishes a force frame and wakes its readers.
+    pub(super) fn publish_force(&self, frame: ForceFrame) -> Result<(), RuntimeError> {
+        self.force
+            .send_copy(frame)
+            .map_err(|error| RuntimeError::ipc("send a force frame", error))?;
+        self.force_notifier
+            .notify()
+            .map_err(|error| RuntimeError::ipc("notify force readers", error))?;
+        Ok(())
+    }
+
     /// Wakes the control clients after responses were sent.
     pub(super) fn notify_control_clients(&self) -> Result<(), RuntimeError> {
         self.control_notifier
@@ -159,8 +208,45 @@ impl Ports {
         self.hand
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new hand readers", error))?;
+        self.force
+            .update_connections()
+            .map_err(|error| RuntimeError::ipc("connect new force readers", error))?;
         self.parts
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new parts readers", error))
+    }
+}
+
+/// Makes, on the calling thread, a waker of the I/O thread on a node of its own with `config`:
+/// the collision loop calls it after handing over a verified frame. A waker that cannot be made
+/// is logged and does nothing; the I/O thread then still publishes at its publish rate.
+pub(super) fn verified_waker(config: &iceoryx2::config::Config) -> Box<dyn FnMut()> {
+    let notifier = NodeBuilder::new()
+        .config(config)
+        .create::<ipc::Service>()
+        .map_err(|error| format!("{error:?}"))
+        .and_then(|node| {
+            let notifier = services::open_wakeup(&node, VERIFIED)
+                .map_err(|error| error.to_string())?
+                .notifier_builder()
+                .create()
+                .map_err(|error| format!("{error:?}"))?;
+            Ok((node, notifier))
+        });
+    match notifier {
+        Ok((node, notifier)) => Box::new(move || {
+            // The node lives as long as its port.
+            let _node = &node;
+            if let Err(error) = notifier.notify() {
+                tracing::error!(?error, "cannot wake the I/O thread");
+            }
+        }),
+        Err(reason) => {
+            tracing::error!(
+                reason,
+                "cannot make the collision loop's waker; frames are published at the publish rate"
+            );
+            Box::new(|| {})
+        }
     }
 }

@@ -1,0 +1,250 @@
+//! What the loops hand each other: one frame's data at each stage, and the control changes that
+//! travel between frames.
+
+use std::sync::Arc;
+
+use nalgebra::Isometry3;
+use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGraspType, InputStamp};
+
+use super::interaction::HeldPart;
+use super::rendezvous::{Coalesce, Work};
+use super::verify::HandBodies;
+use crate::grasping::{
+    GraspEvent, GraspParams, GraspType, GraspingHand, HandFrame, HandInput, HandModel, HandPose,
+    PartId,
+};
+use crate::scene::Scene;
+use crate::sliding::{Metaphor, Wrench};
+
+/// The input samples a frame answers: the latest tracker and glove sample when it was made.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stamps {
+    /// The latest accepted tracker sample.
+    pub tracker: InputStamp,
+    /// The latest accepted glove sample.
+    pub glove: InputStamp,
+}
+
+/// The I/O thread's hand target, for the grasping loop.
+#[derive(Debug, Clone, Copy)]
+pub struct InputFrame {
+    /// The samples it comes from.
+    pub stamps: Stamps,
+    /// Cart, tracked hand root and clamped flex values.
+    pub input: HandInput,
+}
+
+impl Coalesce for InputFrame {
+    /// A target holds no events: the newer one simply replaces the older.
+    fn absorb_older(&mut self, _older: Self) {}
+}
+
+/// The grasping loop's frame, for the sliding loop.
+#[derive(Debug, Clone)]
+pub struct GraspedFrame {
+    /// The samples it answers.
+    pub stamps: Stamps,
+    /// The target it was stepped towards.
+    pub input: HandInput,
+    /// The grasping hand's frame; `None` in a scene without a hand model, where the hand is
+    /// published where the tracker puts it.
+    pub hand: Option<HandFrame>,
+}
+
+impl Coalesce for GraspedFrame {
+    fn absorb_older(&mut self, older: Self) {
+        if let (Some(hand), Some(older)) = (&mut self.hand, older.hand) {
+            let mut events = older.events;
+            events.append(&mut hand.events);
+            hand.events = events;
+        }
+    }
+}
+
+/// The visible hand as a frame proposes it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProposedHand {
+    /// The root in the world.
+    pub root: Isometry3<f64>,
+    /// Joint angles, radians.
+    pub flex: [f32; FLEX_COUNT],
+    /// Per hand segment (in [`vas_protocol::HandSegment`] order), the parts it touches.
+    pub touching: Vec<Vec<PartId>>,
+    /// The grasp the hand has or would have.
+    pub grasp: WireGraspType,
+}
+
+/// The sliding loop's frame, for the collision loop to verify.
+#[derive(Debug, Clone)]
+pub struct CandidateFrame {
+    /// The samples it answers.
+    pub stamps: Stamps,
+    /// The configuration a [`Change::Restart`] started, so that frames of an older one are known.
+    pub epoch: u64,
+    /// The hand.
+    pub hand: ProposedHand,
+    /// Every part's proposed pose, by id.
+    pub part_poses: Vec<Isometry3<f64>>,
+    /// The held part, if any.
+    pub held: Option<HeldPart>,
+    /// Grasps and releases since the previous frame.
+    pub events: Vec<GraspEvent>,
+}
+
+impl Coalesce for CandidateFrame {
+    fn absorb_older(&mut self, older: Self) {
+        let mut events = older.events;
+        events.append(&mut self.events);
+        self.events = events;
+    }
+}
+
+/// A discrete event of a verified frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Event {
+    /// What happened.
+    pub kind: EventKind,
+    /// The grasp, for grasp events.
+    pub grasp: WireGraspType,
+    /// The part.
+    pub part: PartId,
+    /// The other part of a contact, or [`vas_protocol::HAND_PART_ID`].
+    pub other: u32,
+}
+
+/// One part in a verified frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VerifiedPart {
+    /// Its pose: free.
+    pub pose: Isometry3<f64>,
+    /// [`vas_protocol::PART_GRASPED`], `PART_TOUCHING`, `PART_SLIDING` bits.
+    pub flags: u32,
+}
+
+/// A frame the collision loop verified, for the I/O thread to publish.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VerifiedFrame {
+    /// The samples it answers.
+    pub stamps: Stamps,
+    /// The restart it belongs to.
+    pub epoch: u64,
+    /// The hand: root, flex values, touching bits, grasp.
+    pub hand_root: Isometry3<f64>,
+    /// Joint angles, radians.
+    pub flex: [f32; FLEX_COUNT],
+    /// Bits of the segments touching a part.
+    pub touching: u32,
+    /// The grasp.
+    pub grasp: WireGraspType,
+    /// Every part, by id.
+    pub parts: Vec<VerifiedPart>,
+    /// Grasps, releases, contact begins and ends of this frame.
+    pub events: Vec<Event>,
+    /// The wrench for a force-feedback device while a part is held; zero on the frame that
+    /// releases it, `None` otherwise.
+    pub force: Option<Wrench>,
+}
+
+/// A change of the simulation, sent down the loops between frames.
+pub enum Change {
+    /// Start over on a scene (a new one, or the same one for a reset): every loop rebuilds its
+    /// state from it and takes the parts of the hand it needs.
+    Restart(Box<Restart>),
+    /// Held and later grasped parts follow the hand by this metaphor.
+    Metaphor(Metaphor),
+}
+
+/// What a restart carries.
+pub struct Restart {
+    /// The scene.
+    pub scene: Arc<Scene>,
+    /// The grasping hand, built and validated by the I/O thread; the grasping loop takes it.
+    pub hand: Option<GraspingHand>,
+    /// The same hand's kinematics and segment meshes, for the collision loop.
+    pub hand_bodies: Option<HandBodies>,
+    /// Numbers the restarts, so that feedback from before one is ignored after it.
+    pub epoch: u64,
+}
+
+/// Why a scene's hand could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum HandSetupError {
+    /// The hand model file is invalid.
+    #[error(transparent)]
+    Model(#[from] crate::grasping::HandConfigError),
+    /// A segment's collision mesh could not be built.
+    #[error("the hand model's segment meshes cannot be built: {0}")]
+    Segments(String),
+}
+
+impl Restart {
+    /// Everything the loops need to start over on `scene`: the hand model it names (if any)
+    /// loaded, validated and built, parked flat at the origin.
+    pub fn new(scene: Arc<Scene>, epoch: u64) -> Result<Restart, HandSetupError> {
+        let (hand, hand_bodies) = match &scene.hand {
+            None => (None, None),
+            Some(path) => {
+                let model = Arc::new(HandModel::load(path)?);
+                let params = GraspParams {
+                    clasp: scene.params.clasp,
+                    ..GraspParams::default()
+                };
+                let parked = HandPose {
+                    root: Isometry3::identity(),
+                    flex: [0.0; FLEX_COUNT],
+                };
+                let hand = GraspingHand::new(Arc::clone(&model), params, parked)
+                    .map_err(|error| HandSetupError::Segments(error.to_string()))?;
+                let meshes = (0..model.segments().len())
+                    .map(|segment| hand.geometry().mesh(segment).clone())
+                    .collect();
+                (Some(hand), Some(HandBodies { model, meshes }))
+            }
+        };
+        Ok(Restart {
+            scene,
+            hand,
+            hand_bodies,
+            epoch,
+        })
+    }
+
+    /// The change that carries this restart down the loops.
+    pub fn into_change(self) -> Change {
+        Change::Restart(Box::new(self))
+    }
+}
+
+impl std::fmt::Debug for Change {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Change::Restart(restart) => f
+                .debug_struct("Restart")
+                .field("scene", &restart.scene.name)
+                .field("hand", &restart.hand.is_some())
+                .field("epoch", &restart.epoch)
+                .finish(),
+            Change::Metaphor(metaphor) => f.debug_tuple("Metaphor").field(metaphor).finish(),
+        }
+    }
+}
+
+/// An item for a loop.
+pub type LoopWork<F> = Work<F, Change>;
+
+/// The wire code of an analysed grasp.
+pub fn wire_grasp(grasp: Option<GraspType>) -> WireGraspType {
+    use crate::grasping::PrecisionKind;
+    match grasp {
+        None => WireGraspType::None,
+        Some(GraspType::Push) => WireGraspType::Push,
+        Some(GraspType::Precision(PrecisionKind::TipPinch)) => WireGraspType::TipPinch,
+        Some(GraspType::Precision(PrecisionKind::ThreeJawChuck)) => WireGraspType::ThreeJawChuck,
+        Some(GraspType::Precision(PrecisionKind::Key)) => WireGraspType::Key,
+        Some(GraspType::Precision(PrecisionKind::Other)) => WireGraspType::Precision,
+        Some(GraspType::ThreePointPinch) => WireGraspType::ThreePointPinch,
+        Some(GraspType::Cigarette) => WireGraspType::Cigarette,
+        Some(GraspType::Power) => WireGraspType::Power,
+        Some(GraspType::Gravity) => WireGraspType::Gravity,
+    }
+}

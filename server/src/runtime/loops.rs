@@ -1,0 +1,442 @@
+//! The grasping, sliding and collision detection loops: each on its own thread, meeting the
+//! others only at the hand-offs of [`super::rendezvous`] (the paper's Figure 7).
+//!
+//! ```text
+//! I/O ─InputFrame─> grasping ─GraspedFrame─> sliding ─CandidateFrame─> collision ─VerifiedFrame─> I/O
+//!                      ▲                        ▲                          │
+//!                      └── verified part poses ─┴── refused part poses ────┘
+//! ```
+//!
+//! Free-running, a loop processes the newest frame it was handed and, between inputs, goes on at
+//! its own rate while it has work left: the grasping hand towards a target it has not reached,
+//! the held part towards a ghost its last sliding frame ran out of cycles for. In lockstep a loop
+//! does exactly one step per frame it is handed and nothing else, so that the outcome depends on
+//! the inputs only.
+
+use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::{Receiver, Sender};
+use nalgebra::Isometry3;
+
+use super::frames::{
+    CandidateFrame, Change, GraspedFrame, InputFrame, ProposedHand, Stamps, VerifiedFrame,
+    wire_grasp,
+};
+use super::interaction::{GraspStage, HeldPart, SlideStage};
+use super::rendezvous::{Handoff, Received, Work};
+use super::verify::Verifier;
+use crate::grasping::{HandInput, PartId};
+use crate::scene::Scene;
+
+/// The verified part poses of the latest frame, for the grasping loop, tagged with the restart
+/// they belong to.
+#[derive(Default)]
+pub struct PoseFeedback {
+    latest: Mutex<(u64, Vec<Isometry3<f64>>)>,
+}
+
+impl PoseFeedback {
+    fn publish(&self, epoch: u64, poses: Vec<Isometry3<f64>>) {
+        *self.latest.lock().unwrap_or_else(PoisonError::into_inner) = (epoch, poses);
+    }
+
+    /// The poses, if they belong to restart `epoch`.
+    fn read(&self, epoch: u64) -> Option<Vec<Isometry3<f64>>> {
+        let latest = self.latest.lock().unwrap_or_else(PoisonError::into_inner);
+        (latest.0 == epoch).then(|| latest.1.clone())
+    }
+}
+
+/// A part the collision loop put back, for the sliding loop.
+#[derive(Debug, Clone, Copy)]
+pub struct Refusal {
+    epoch: u64,
+    part: PartId,
+    pose: Isometry3<f64>,
+}
+
+/// The hand-offs and feedback that connect the loops.
+pub struct Links {
+    /// I/O → grasping.
+    pub inputs: Arc<Handoff<InputFrame, Change>>,
+    grasped: Arc<Handoff<GraspedFrame, Change>>,
+    candidates: Arc<Handoff<CandidateFrame, Change>>,
+    feedback: Arc<PoseFeedback>,
+    refusals: (Sender<Refusal>, Receiver<Refusal>),
+}
+
+impl Default for Links {
+    fn default() -> Self {
+        Links {
+            inputs: Arc::default(),
+            grasped: Arc::default(),
+            candidates: Arc::default(),
+            feedback: Arc::default(),
+            refusals: crossbeam_channel::unbounded(),
+        }
+    }
+}
+
+/// The three loop threads.
+pub struct Loops {
+    threads: Vec<JoinHandle<()>>,
+}
+
+impl Loops {
+    /// Starts the loops; verified frames go to `verified`, and the collision loop's thread makes
+    /// its waker with `wake` (iceoryx2 ports stay on the thread that made them) and calls it after
+    /// each frame, so that the I/O thread notices.
+    pub fn spawn(
+        links: &Links,
+        lockstep: bool,
+        verified: Sender<VerifiedFrame>,
+        wake: MakeWaker,
+    ) -> std::io::Result<Loops> {
+        let grasping = GraspingLoop {
+            inbox: Arc::clone(&links.inputs),
+            outbox: Arc::clone(&links.grasped),
+            feedback: Arc::clone(&links.feedback),
+            lockstep,
+            stage: None,
+            epoch: 0,
+            period: Duration::ZERO,
+            last: None,
+            stepped_at: Instant::now(),
+        };
+        let sliding = SlidingLoop {
+            inbox: Arc::clone(&links.grasped),
+            outbox: Arc::clone(&links.candidates),
+            refusals: links.refusals.1.clone(),
+            lockstep,
+            stage: None,
+            epoch: 0,
+            period: Duration::ZERO,
+            last: None,
+            slid_at: Instant::now(),
+        };
+        let collision = CollisionLoop {
+            inbox: Arc::clone(&links.candidates),
+            verified,
+            wake,
+            feedback: Arc::clone(&links.feedback),
+            refusals: links.refusals.0.clone(),
+            verifier: None,
+            epoch: 0,
+        };
+        let spawn = |name: &str, body: Box<dyn FnOnce() + Send>| {
+            std::thread::Builder::new().name(name.into()).spawn(body)
+        };
+        Ok(Loops {
+            threads: vec![
+                spawn("grasping", Box::new(move || grasping.run()))?,
+                spawn("sliding", Box::new(move || sliding.run()))?,
+                spawn("collision", Box::new(move || collision.run()))?,
+            ],
+        })
+    }
+
+    /// True when a loop has ended (it panicked: loops end only after the inputs close).
+    pub fn any_ended(&self) -> bool {
+        self.threads.iter().any(JoinHandle::is_finished)
+    }
+
+    /// Waits for every loop to end (close the inputs first).
+    pub fn join(self) {
+        for thread in self.threads {
+            let name = thread.thread().name().unwrap_or("loop").to_owned();
+            if thread.join().is_err() {
+                tracing::error!(thread = name, "a loop ended by panicking");
+            }
+        }
+    }
+}
+
+/// The period of a loop rate (validated by the scene: positive and finite).
+fn period(hz: f64) -> Duration {
+    Duration::try_from_secs_f64(1.0 / hz).unwrap_or(Duration::from_millis(10))
+}
+
+struct GraspingLoop {
+    inbox: Arc<Handoff<InputFrame, Change>>,
+    outbox: Arc<Handoff<GraspedFrame, Change>>,
+    feedback: Arc<PoseFeedback>,
+    lockstep: bool,
+    /// The hand among the parts; `None` in a scene without a hand model.
+    stage: Option<GraspStage>,
+    epoch: u64,
+    period: Duration,
+    /// The latest target and whether the hand has not reached it yet.
+    last: Option<(InputFrame, bool)>,
+    stepped_at: Instant,
+}
+
+impl GraspingLoop {
+    fn run(mut self) {
+        loop {
+            let deadline = match self.last {
+                Some((_, true)) if !self.lockstep => Some(self.stepped_at + self.period),
+                _ => None,
+            };
+            match self.inbox.receive(deadline) {
+                Received::Work(Work::Frame(input)) => self.step(input),
+                Received::Work(Work::Control(change)) => {
+                    self.apply(change);
+                }
+                Received::Timeout => {
+                    if let Some((input, _)) = self.last {
+                        self.step(input);
+                    }
+                }
+                Received::Closed => break,
+            }
+        }
+        self.outbox.close();
+    }
+
+    fn apply(&mut self, mut change: Change) {
+        if let Change::Restart(restart) = &mut change {
+            self.stage = restart
+                .hand
+                .take()
+                .map(|hand| GraspStage::new(hand, &restart.scene.parts));
+            self.epoch = restart.epoch;
+            self.period = period(restart.scene.rates.grasping_hz);
+            self.last = None;
+        }
+        self.outbox.send(Work::Control(change));
+    }
+
+    fn step(&mut self, input: InputFrame) {
+        self.stepped_at = Instant::now();
+        let hand = self.stage.as_mut().map(|stage| {
+            if let Some(poses) = self.feedback.read(self.epoch) {
+                stage.set_part_poses(&poses);
+            }
+            stage.step(&input.input)
+        });
+        let unreached = hand
+            .as_ref()
+            .is_some_and(|frame| !reached(&frame.pose, &input.input));
+        self.last = Some((input, unreached));
+        self.outbox.send(Work::Frame(GraspedFrame {
+            stamps: input.stamps,
+            input: input.input,
+            hand,
+        }));
+    }
+}
+
+/// True when the visible hand is at the target (to a micrometre and a microradian).
+fn reached(pose: &crate::grasping::HandPose, input: &HandInput) -> bool {
+    let target = input.cart * input.tracker;
+    (pose.root.translation.vector - target.translation.vector).norm() < 1e-6
+        && pose.root.rotation.angle_to(&target.rotation) < 1e-6
+        && pose
+            .flex
+            .iter()
+            .zip(&input.flex)
+            .all(|(a, b)| (a - f64::from(*b)).abs() < 1e-6)
+}
+
+struct SlidingLoop {
+    inbox: Arc<Handoff<GraspedFrame, Change>>,
+    outbox: Arc<Handoff<CandidateFrame, Change>>,
+    refusals: Receiver<Refusal>,
+    lockstep: bool,
+    stage: Option<SlideStage>,
+    epoch: u64,
+    period: Duration,
+    /// The latest frame's stamps and hand, and whether the held part has sliding left to do.
+    last: Option<(Stamps, ProposedHand, bool)>,
+    slid_at: Instant,
+}
+
+impl SlidingLoop {
+    fn run(mut self) {
+        loop {
+            let deadline = match self.last {
+                Some((_, _, true)) if !self.lockstep => Some(self.slid_at + self.period),
+                _ => None,
+            };
+            match self.inbox.receive(deadline) {
+                Received::Work(Work::Frame(frame)) => self.slide(frame),
+                Received::Work(Work::Control(change)) => self.apply(change),
+                Received::Timeout => self.keep_sliding(),
+                Received::Closed => break,
+            }
+        }
+        self.outbox.close();
+    }
+
+    fn apply(&mut self, change: Change) {
+        match &change {
+            Change::Restart(restart) => {
+                let scene: &Scene = &restart.scene;
+                self.period = period(scene.rates.sliding_hz);
+                self.stage = Some(SlideStage::new(
+                    &scene.parts,
+                    scene.params.sliding.clone(),
+                    self.period.as_secs_f64(),
+                ));
+                self.epoch = restart.epoch;
+                self.last = None;
+            }
+            Change::Metaphor(metaphor) => {
+                if let Some(stage) = &mut self.stage {
+                    stage.set_metaphor(*metaphor);
+                }
+            }
+        }
+        self.outbox.send(Work::Control(change));
+    }
+
+    /// Puts refused parts back where the collision loop verified them.
+    fn take_refusals(&mut self) {
+        while let Ok(refusal) = self.refusals.try_recv() {
+            if let Some(stage) = self.stage.as_mut().filter(|_| refusal.epoch == self.epoch) {
+                stage.restore(refusal.part, refusal.pose);
+            }
+        }
+    }
+
+    fn slide(&mut self, frame: GraspedFrame) {
+        self.take_refusals();
+        let Some(stage) = &mut self.stage else {
+            return;
+        };
+        self.slid_at = Instant::now();
+        let (mut hand, held, events) = match &frame.hand {
+            Some(hand_frame) => {
+                let held = stage.apply(hand_frame);
+                let touching = hand_frame.touching.to_vec();
+                let hand = ProposedHand {
+                    root: hand_frame.pose.root,
+                    flex: hand_frame.pose.flex.map(|v| v as f32),
+                    touching,
+                    grasp: wire_grasp(hand_frame.grasp),
+                };
+                (hand, held, hand_frame.events.clone())
+            }
+            None => (
+                ProposedHand {
+                    root: frame.input.cart * frame.input.tracker,
+                    flex: frame.input.flex,
+                    touching: Vec::new(),
+                    grasp: wire_grasp(None),
+                },
+                None,
+                Vec::new(),
+            ),
+        };
+        self.last = Some((
+            frame.stamps,
+            hand.clone(),
+            held.as_ref().is_some_and(HeldPart::has_sliding_left),
+        ));
+        if let Some(held) = &held {
+            hand.root = held.hand_root;
+        }
+        let candidate = CandidateFrame {
+            stamps: frame.stamps,
+            epoch: self.epoch,
+            hand,
+            part_poses: stage.part_poses().to_vec(),
+            held,
+            events,
+        };
+        self.outbox.send(Work::Frame(candidate));
+    }
+
+    /// Another sliding frame towards the latest ghost, between inputs.
+    fn keep_sliding(&mut self) {
+        self.take_refusals();
+        let (Some(stage), Some((stamps, hand, _))) = (&mut self.stage, &self.last) else {
+            return;
+        };
+        self.slid_at = Instant::now();
+        let held = stage.keep_sliding();
+        let mut hand = hand.clone();
+        if let Some(held) = &held {
+            hand.root = held.hand_root;
+        }
+        let stamps = *stamps;
+        let more = held.as_ref().is_some_and(HeldPart::has_sliding_left);
+        if let Some(last) = &mut self.last {
+            last.2 = more;
+        }
+        self.outbox.send(Work::Frame(CandidateFrame {
+            stamps,
+            epoch: self.epoch,
+            hand,
+            part_poses: stage.part_poses().to_vec(),
+            held,
+            events: Vec::new(),
+        }));
+    }
+}
+
+/// Makes, on the collision loop's thread, what wakes the I/O thread.
+pub type MakeWaker = Box<dyn FnOnce() -> Box<dyn FnMut()> + Send>;
+
+struct CollisionLoop {
+    inbox: Arc<Handoff<CandidateFrame, Change>>,
+    verified: Sender<VerifiedFrame>,
+    wake: MakeWaker,
+    feedback: Arc<PoseFeedback>,
+    refusals: Sender<Refusal>,
+    verifier: Option<Verifier>,
+    epoch: u64,
+}
+
+impl CollisionLoop {
+    fn run(mut self) {
+        let make_waker = std::mem::replace(&mut self.wake, Box::new(|| Box::new(|| {})));
+        let mut wake = make_waker();
+        loop {
+            match self.inbox.receive(None) {
+                Received::Work(Work::Frame(candidate)) => {
+                    if self.verify(candidate) {
+                        wake();
+                    }
+                }
+                Received::Work(Work::Control(Change::Restart(restart))) => {
+                    let bodies = restart.hand_bodies.clone();
+                    self.verifier = Some(Verifier::new(&restart.scene, bodies));
+                    self.epoch = restart.epoch;
+                }
+                Received::Work(Work::Control(Change::Metaphor(_))) => {}
+                Received::Timeout => {}
+                Received::Closed => break,
+            }
+        }
+    }
+
+    /// Verifies a frame and hands it to the I/O thread; false for a frame of an older restart,
+    /// which is dropped.
+    fn verify(&mut self, candidate: CandidateFrame) -> bool {
+        let Some(verifier) = self
+            .verifier
+            .as_mut()
+            .filter(|_| candidate.epoch == self.epoch)
+        else {
+            return false;
+        };
+        let (frame, refused) = verifier.verify(candidate);
+        for (part, pose) in refused {
+            tracing::warn!(
+                part,
+                "a proposed part pose collides; the part stays where it was"
+            );
+            // The sliding loop only ends after this one, so the receiver is alive.
+            let _ = self.refusals.send(Refusal {
+                epoch: self.epoch,
+                part,
+                pose,
+            });
+        }
+        self.feedback.publish(self.epoch, verifier.part_poses());
+        self.verified.send(frame).is_ok()
+    }
+}

@@ -1,0 +1,388 @@
+//! The collision loop's verification: no frame leaves the server with a part or a hand segment at
+//! a colliding pose.
+//!
+//! The scene's parts and the hand's 16 segments are objects of one [`CollisionPipeline`]; each
+//! candidate frame moves those that moved, and the pipeline's stages (moved-object queue, box
+//! sweep, interest matrix, separating planes, DOP-trees) find what collides. A moved object in a
+//! colliding pair is put back at its last verified pose (the whole hand at once), and the frame
+//! is checked again, until nothing moved collides. Pairs that collided before anything moved (a
+//! scene that starts with parts touching) are left alone: no move of this frame caused them.
+//!
+//! The hand and the part it holds are not checked against each other: the grasp is that contact,
+//! and the clasp already keeps fingers out of the part. Contacts between parts and between the hand
+//! and parts are turned into begin and end events here, where the frame is final.
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+
+use nalgebra::Isometry3;
+use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOUCHING};
+
+use super::frames::{CandidateFrame, Event, VerifiedFrame, VerifiedPart, wire_grasp};
+use crate::collision::interest::GroupId;
+use crate::collision::pipeline::{
+    CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
+};
+use crate::collision::{DopTree, MeshCollider};
+use crate::geometry::{ConvexHull, TriMesh};
+use crate::grasping::{FlexVector, GraspEvent, HandModel, PartId};
+use crate::scene::Scene;
+
+/// The collision group of the hand's segments: one of their own, never tested among themselves
+/// (neighbouring segments touch at their joints by design).
+const HAND_GROUP: GroupId = GroupId(u16::MAX - 1);
+
+/// How often a frame is checked again after putting objects back before every moved object is
+/// put back (a put-back object is free where it was, so the second pass settles all but chains
+/// of objects pushed into each other).
+const MAX_PASSES: usize = 3;
+
+/// The hand's kinematics and segment meshes, for the verifier.
+#[derive(Clone)]
+pub struct HandBodies {
+    /// The kinematic model.
+    pub model: Arc<HandModel>,
+    /// Each segment's collision mesh, in the segment's frame, in segment order.
+    pub meshes: Vec<TriMesh>,
+}
+
+struct VerifiedHand {
+    model: Arc<HandModel>,
+    segments: Vec<ObjectId>,
+}
+
+/// Verifies candidate frames against the scene and keeps the last verified state.
+pub struct Verifier {
+    pipeline: CollisionPipeline<DopTree>,
+    parts: Vec<ObjectId>,
+    hand: Option<VerifiedHand>,
+    verified: Vec<VerifiedPart>,
+    hand_root: Isometry3<f64>,
+    flex: [f32; vas_protocol::FLEX_COUNT],
+    touching: u32,
+    contacts: BTreeSet<(PartId, u32)>,
+    held: Option<PartId>,
+    /// The pairs colliding after the last pipeline frame.
+    colliding: BTreeSet<(ObjectId, ObjectId)>,
+    refused_moves: u64,
+}
+
+impl Verifier {
+    /// The scene's parts at their configured poses and, with a hand model, its segments with the
+    /// flat hand at the identity root.
+    pub fn new(scene: &Scene, hand: Option<HandBodies>) -> Verifier {
+        let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
+        let model = |mesh: &TriMesh| {
+            Arc::new(CollisionModel::new(
+                DopTree::build(mesh),
+                ConvexHull::of(mesh),
+            ))
+        };
+        let parts: Vec<ObjectId> = scene
+            .parts
+            .iter()
+            .enumerate()
+            .map(|(id, part)| {
+                pipeline
+                    .add(ObjectDesc {
+                        model: model(&part.mesh),
+                        pose: part.pose,
+                        group: scene.group_id(id),
+                        is_static: !part.movable,
+                    })
+                    .expect("a validated scene's poses are valid and its parts fit")
+            })
+            .collect();
+        let mut interest = scene.interest_matrix(&parts);
+        interest.disallow_groups(HAND_GROUP, HAND_GROUP);
+        let hand = hand.map(|bodies| {
+            let poses = bodies.model.segment_poses(&[0.0; vas_protocol::FLEX_COUNT]);
+            let segments = bodies
+                .meshes
+                .iter()
+                .zip(poses)
+                .map(|(mesh, pose)| {
+                    pipeline
+                        .add(ObjectDesc {
+                            model: model(mesh),
+                            pose,
+                            group: HAND_GROUP,
+                            is_static: false,
+                        })
+                        .expect("segment poses of a flat hand are valid")
+                })
+                .collect();
+            VerifiedHand {
+                model: bodies.model,
+                segments,
+            }
+        });
+        pipeline.set_interest(interest);
+        // Settle the pairs that collide as configured, so that they are not blamed on a move.
+        let colliding = pairs(&pipeline.run_frame(Detail::Pairs).colliding);
+        if !colliding.is_empty() {
+            tracing::warn!(
+                pairs = colliding.len(),
+                "parts collide as the scene places them; those pairs are not checked until they part"
+            );
+        }
+        Verifier {
+            pipeline,
+            parts,
+            hand,
+            verified: scene
+                .parts
+                .iter()
+                .map(|part| VerifiedPart {
+                    pose: part.pose,
+                    flags: 0,
+                })
+                .collect(),
+            hand_root: Isometry3::identity(),
+            flex: [0.0; vas_protocol::FLEX_COUNT],
+            touching: 0,
+            contacts: BTreeSet::new(),
+            held: None,
+            colliding,
+            refused_moves: 0,
+        }
+    }
+
+    /// Moves put back because they collided, since the start.
+    pub fn refused_moves(&self) -> u64 {
+        self.refused_moves
+    }
+
+    /// The verified pose of every part, by id.
+    pub fn part_poses(&self) -> Vec<Isometry3<f64>> {
+        self.verified.iter().map(|part| part.pose).collect()
+    }
+
+    /// Checks `candidate` and returns the frame to publish, with the parts whose proposed pose
+    /// was refused (and the pose they keep).
+    pub fn verify(
+        &mut self,
+        candidate: CandidateFrame,
+    ) -> (VerifiedFrame, Vec<(PartId, Isometry3<f64>)>) {
+        let colliding_before = self.colliding.clone();
+        let mut moved_parts: Vec<PartId> = Vec::new();
+        for (id, pose) in candidate.part_poses.iter().enumerate() {
+            let changed = self
+                .verified
+                .get(id)
+                .is_some_and(|verified| verified.pose != *pose);
+            if changed && self.move_object(self.parts[id], pose) {
+                moved_parts.push(id as PartId);
+            }
+        }
+        let hand_moved = candidate.hand.root != self.hand_root || candidate.hand.flex != self.flex;
+        let mut hand_checked =
+            hand_moved && self.move_hand(&candidate.hand.root, &candidate.hand.flex);
+        let held = candidate.held.as_ref().map(|held| held.part);
+        let mut refused: Vec<(PartId, Isometry3<f64>)> = Vec::new();
+        for pass in 0.. {
+            let offending = self.offending(&colliding_before, held);
+            if offending.is_empty() {
+                break;
+            }
+            let last_pass = pass + 1 >= MAX_PASSES;
+            let mut put_back_hand = false;
+            moved_parts.retain(|&part| {
+                let blamed = last_pass || offending.contains(&self.parts[part as usize]);
+                if blamed {
+                    refused.push((part, self.verified[part as usize].pose));
+                }
+                !blamed
+            });
+            if hand_checked
+                && (last_pass
+                    || self.hand.as_ref().is_some_and(|hand| {
+                        hand.segments
+                            .iter()
+                            .any(|segment| offending.contains(segment))
+                    }))
+            {
+                put_back_hand = true;
+                hand_checked = false;
+            }
+            for &(part, pose) in &refused {
+                self.move_object(self.parts[part as usize], &pose);
+            }
+            if put_back_hand {
+                let (root, flex) = (self.hand_root, self.flex);
+                self.move_hand(&root, &flex);
+            }
+            self.refused_moves += u64::from(put_back_hand) + refused.len() as u64;
+            if last_pass {
+                self.colliding = pairs(&self.pipeline.run_frame(Detail::Pairs).colliding);
+                break;
+            }
+        }
+        let hand_accepted = hand_checked || (hand_moved && self.hand.is_none());
+        self.accept(&candidate, &refused, hand_accepted);
+        let frame = self.frame(candidate, hand_accepted);
+        (frame, refused)
+    }
+
+    /// Queues a move; false for a pose the pipeline refuses (not finite), which stays unmoved.
+    fn move_object(&mut self, object: ObjectId, pose: &Isometry3<f64>) -> bool {
+        self.pipeline.queue_move(object, *pose).is_ok()
+    }
+
+    /// Queues the hand's segments at `root` with `flex`; false without a hand model.
+    fn move_hand(&mut self, root: &Isometry3<f64>, flex: &[f32; vas_protocol::FLEX_COUNT]) -> bool {
+        let Some(hand) = &self.hand else {
+            return false;
+        };
+        let flex: FlexVector = flex.map(f64::from);
+        let local = hand.model.segment_poses(&flex);
+        let segments = hand.segments.clone();
+        segments
+            .iter()
+            .zip(local)
+            .all(|(&segment, local)| self.move_object(segment, &(root * local)))
+    }
+
+    /// Runs the pipeline and returns the objects in pairs that collide now but did not before,
+    /// except the hand's segments against the held part.
+    fn offending(
+        &mut self,
+        colliding_before: &BTreeSet<(ObjectId, ObjectId)>,
+        held: Option<PartId>,
+    ) -> BTreeSet<ObjectId> {
+        let report = self.pipeline.run_frame(Detail::Pairs);
+        self.colliding = pairs(&report.colliding);
+        let held = held.map(|part| self.parts[part as usize]);
+        let is_segment = |object: ObjectId| {
+            self.hand
+                .as_ref()
+                .is_some_and(|hand| hand.segments.contains(&object))
+        };
+        report
+            .colliding
+            .iter()
+            .filter(|pair| !colliding_before.contains(&(pair.a, pair.b)))
+            .filter(|&&CollidingPair { a, b, .. }| {
+                let grasp_contact =
+                    (Some(a) == held && is_segment(b)) || (Some(b) == held && is_segment(a));
+                !grasp_contact
+            })
+            .flat_map(|pair| [pair.a, pair.b])
+            .collect()
+    }
+
+    fn accept(
+        &mut self,
+        candidate: &CandidateFrame,
+        refused: &[(PartId, Isometry3<f64>)],
+        hand_accepted: bool,
+    ) {
+        for (id, pose) in candidate.part_poses.iter().enumerate() {
+            if pose.translation.vector.iter().all(|v| v.is_finite())
+                && !refused.iter().any(|&(part, _)| part as usize == id)
+                && let Some(verified) = self.verified.get_mut(id)
+            {
+                verified.pose = *pose;
+            }
+        }
+        if hand_accepted {
+            self.hand_root = candidate.hand.root;
+            self.flex = candidate.hand.flex;
+            self.touching = candidate
+                .hand
+                .touching
+                .iter()
+                .enumerate()
+                .filter(|(_, parts)| !parts.is_empty())
+                .fold(0, |bits, (segment, _)| bits | 1 << segment);
+        }
+    }
+
+    /// The frame to publish: verified poses, part flags, grasp and contact events.
+    fn frame(&mut self, candidate: CandidateFrame, hand_accepted: bool) -> VerifiedFrame {
+        let mut events = Vec::new();
+        for event in &candidate.events {
+            events.push(match *event {
+                GraspEvent::Grasp { part, grasp, .. } => Event {
+                    kind: EventKind::Grasp,
+                    grasp: wire_grasp(Some(grasp)),
+                    part,
+                    other: HAND_PART_ID,
+                },
+                GraspEvent::Release { part, .. } => Event {
+                    kind: EventKind::Release,
+                    grasp: wire_grasp(None),
+                    part,
+                    other: HAND_PART_ID,
+                },
+            });
+        }
+        let mut contacts = BTreeSet::new();
+        if hand_accepted || self.hand.is_none() {
+            for parts in &candidate.hand.touching {
+                contacts.extend(parts.iter().map(|&part| (part, HAND_PART_ID)));
+            }
+        } else {
+            // The hand stays where it was verified: so do its contacts.
+            contacts.extend(
+                self.contacts
+                    .iter()
+                    .filter(|&&(_, other)| other == HAND_PART_ID),
+            );
+        }
+        if let Some(held) = &candidate.held {
+            contacts.extend(held.touching.iter().map(|&other| (held.part, other)));
+        }
+        for &(part, other) in self.contacts.difference(&contacts) {
+            events.push(contact_event(EventKind::ContactEnd, part, other));
+        }
+        for &(part, other) in contacts.difference(&self.contacts) {
+            events.push(contact_event(EventKind::ContactBegin, part, other));
+        }
+        let held = candidate.held.as_ref().map(|held| held.part);
+        let released = self.held.is_some() && held.is_none();
+        self.held = held;
+        for (id, part) in self.verified.iter_mut().enumerate() {
+            let id = id as PartId;
+            let touching = contacts
+                .iter()
+                .any(|&(a, b)| a == id || (b == id && b != HAND_PART_ID));
+            let sliding = candidate
+                .held
+                .as_ref()
+                .is_some_and(|held| held.part == id && !held.touching.is_empty());
+            part.flags = if held == Some(id) { PART_GRASPED } else { 0 }
+                | if touching { PART_TOUCHING } else { 0 }
+                | if sliding { PART_SLIDING } else { 0 };
+        }
+        self.contacts = contacts;
+        VerifiedFrame {
+            stamps: candidate.stamps,
+            epoch: candidate.epoch,
+            hand_root: self.hand_root,
+            flex: self.flex,
+            touching: self.touching,
+            grasp: candidate.hand.grasp,
+            parts: self.verified.clone(),
+            events,
+            force: match (&candidate.held, released) {
+                (Some(held), _) => Some(held.wrench),
+                (None, true) => Some(crate::sliding::Wrench::default()),
+                (None, false) => None,
+            },
+        }
+    }
+}
+
+fn pairs(colliding: &[CollidingPair]) -> BTreeSet<(ObjectId, ObjectId)> {
+    colliding.iter().map(|pair| (pair.a, pair.b)).collect()
+}
+
+fn contact_event(kind: EventKind, part: PartId, other: u32) -> Event {
+    Event {
+        kind,
+        grasp: wire_grasp(None),
+        part,
+        other,
+    }
+}
