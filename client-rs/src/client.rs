@@ -11,9 +11,9 @@ use iceoryx2::prelude::*;
 use serde::Serialize;
 use vas_protocol::services::{self, config_with_prefix};
 use vas_protocol::{
-    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, GloveSample, HandFrame,
-    InputStats, MAX_PATH_BYTES, PART_MOVABLE, PartState, PartsFrameHeader, SlidingMetaphor,
-    TrackerSample, WirePose, WireText,
+    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, ForceFrame, GloveSample,
+    HandFrame, InputStats, MAX_PATH_BYTES, PART_MOVABLE, PartState, PartsFrameHeader, SimEvent,
+    SlidingMetaphor, TrackerSample, WirePose, WireText,
 };
 
 use crate::ClientError;
@@ -53,11 +53,15 @@ impl ClientBuilder {
         let glove = services::open_glove(&node)?;
         let parts = services::open_parts(&node)?;
         let hand = services::open_hand(&node)?;
+        let events = services::open_events(&node)?;
+        let force = services::open_force(&node)?;
         let control = services::open_control(&node)?;
         let tracker_wakeup = services::open_wakeup(&node, services::TRACKER)?;
         let glove_wakeup = services::open_wakeup(&node, services::GLOVE)?;
         let parts_wakeup = services::open_wakeup(&node, services::PARTS)?;
         let hand_wakeup = services::open_wakeup(&node, services::HAND)?;
+        let events_wakeup = services::open_wakeup(&node, services::EVENTS)?;
+        let force_wakeup = services::open_wakeup(&node, services::FORCE)?;
         let control_wakeup = services::open_wakeup(&node, services::CONTROL)?;
         Ok(Client {
             tracker: tracker
@@ -89,6 +93,22 @@ impl ClientBuilder {
                 .create()
                 .map_err(ClientError::port)?,
             hand_listener: hand_wakeup
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            events: events
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            events_listener: events_wakeup
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            force: force
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            force_listener: force_wakeup
                 .listener_builder()
                 .create()
                 .map_err(ClientError::port)?,
@@ -146,6 +166,10 @@ pub enum Frame {
     Parts(PartsFrame),
     /// A hand frame.
     Hand(HandFrame),
+    /// A grasp, release, contact begin or contact end.
+    Event(SimEvent),
+    /// The force and torque for a force-feedback device.
+    Force(ForceFrame),
 }
 
 /// How many frames a [`Client::poll`] received.
@@ -155,6 +179,10 @@ pub struct Received {
     pub parts: usize,
     /// Hand frames received.
     pub hand: usize,
+    /// Events received.
+    pub events: usize,
+    /// Force frames received.
+    pub force: usize,
 }
 
 /// The server's scene, as the control service describes it.
@@ -203,6 +231,10 @@ pub struct Client {
     parts_listener: Listener<ipc::Service>,
     hand: Subscriber<ipc::Service, HandFrame, ()>,
     hand_listener: Listener<ipc::Service>,
+    events: Subscriber<ipc::Service, SimEvent, ()>,
+    events_listener: Listener<ipc::Service>,
+    force: Subscriber<ipc::Service, ForceFrame, ()>,
+    force_listener: Listener<ipc::Service>,
     control: ControlPort<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     control_notifier: Notifier<ipc::Service>,
     control_listener: Listener<ipc::Service>,
@@ -250,27 +282,36 @@ impl Client {
         Ok(())
     }
 
-    /// Blocks until a parts or hand frame is ready to be received, the timeout passes, or (with
-    /// signal handling on) a termination signal arrives. Frames stay queued for
-    /// [`Client::poll`] or [`Client::receive`].
+    /// Blocks until an output frame (parts, hand, event or force) is ready to be received, the
+    /// timeout passes, or (with signal handling on) a termination signal arrives. Frames stay
+    /// queued for [`Client::poll`] or [`Client::receive`].
     pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
-        let (parts, hand) = (&self.parts, &self.hand);
+        let (parts, hand, events, force) = (&self.parts, &self.hand, &self.events, &self.force);
         wait_until_ready(
             &self.waitset,
-            &[&self.parts_listener, &self.hand_listener],
+            &[
+                &self.parts_listener,
+                &self.hand_listener,
+                &self.events_listener,
+                &self.force_listener,
+            ],
             timeout,
             || {
                 let has = |result: Result<bool, _>| {
                     result.map_err(|error| ClientError::ipc("check a subscriber", error))
                 };
-                Ok(has(parts.has_samples())? || has(hand.has_samples())?)
+                Ok(has(parts.has_samples())?
+                    || has(hand.has_samples())?
+                    || has(events.has_samples())?
+                    || has(force.has_samples())?)
             },
         )
     }
 
     /// Receives every queued frame, keeps the newest of each kind for [`Client::latest_parts`]
-    /// and [`Client::latest_hand`], and returns them all in arrival order per kind (parts
-    /// frames first).
+    /// and [`Client::latest_hand`], and returns them all in arrival order per kind: parts
+    /// frames, events, force frames, then hand frames (the server publishes a frame's hand
+    /// last, so the parts and events of a hand frame's own frame come with it or before it).
     pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
         let mut frames = Vec::new();
         while let Some(sample) = self
@@ -284,6 +325,20 @@ impl Client {
             }));
         }
         while let Some(sample) = self
+            .events
+            .receive()
+            .map_err(|error| ClientError::ipc("receive an event", error))?
+        {
+            frames.push(Frame::Event(*sample.payload()));
+        }
+        while let Some(sample) = self
+            .force
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a force frame", error))?
+        {
+            frames.push(Frame::Force(*sample.payload()));
+        }
+        while let Some(sample) = self
             .hand
             .receive()
             .map_err(|error| ClientError::ipc("receive a hand frame", error))?
@@ -294,6 +349,7 @@ impl Client {
             match frame {
                 Frame::Parts(parts) => self.latest_parts = Some(parts.clone()),
                 Frame::Hand(hand) => self.latest_hand = Some(*hand),
+                Frame::Event(_) | Frame::Force(_) => {}
             }
         }
         Ok(frames)
@@ -306,6 +362,8 @@ impl Client {
             match frame {
                 Frame::Parts(_) => received.parts += 1,
                 Frame::Hand(_) => received.hand += 1,
+                Frame::Event(_) => received.events += 1,
+                Frame::Force(_) => received.force += 1,
             }
         }
         Ok(received)
