@@ -1,0 +1,151 @@
+//! Faults the server must outlive: a server killed and restarted over its stale resources, and
+//! bursts of malformed input and requests, rejected and counted without changing the state.
+
+use std::process::Stdio;
+use std::time::Instant;
+
+use vas_client::{Client, ClientError, Frame};
+use vas_protocol::{
+    ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, InputStamp, TrackerSample,
+    WirePose, wall_clock_ns,
+};
+use vas_tests::{PATIENCE, Server, Spawned, binary, unique_prefix};
+
+fn tracker(seq: u64, position: [f64; 3]) -> TrackerSample {
+    TrackerSample {
+        seq,
+        timestamp_ns: wall_clock_ns(),
+        hand: WirePose {
+            position,
+            rotation: [0.0, 0.0, 0.0, 1.0],
+        },
+        cart: WirePose::IDENTITY,
+        sensor_id: 0,
+    }
+}
+
+/// Receives frames until the hand frame answering `sample`, failing after [`PATIENCE`].
+fn answer(client: &mut Client, sample: &TrackerSample) -> HandFrame {
+    let stamp = InputStamp {
+        seq: sample.seq,
+        timestamp_ns: sample.timestamp_ns,
+    };
+    let deadline = Instant::now() + PATIENCE;
+    loop {
+        assert!(Instant::now() < deadline, "no answer to {stamp:?}");
+        client.wait(PATIENCE).expect("wait");
+        let found = client
+            .receive()
+            .expect("receive")
+            .into_iter()
+            .find_map(|frame| match frame {
+                Frame::Hand(hand) if hand.tracker == stamp => Some(hand),
+                _ => None,
+            });
+        if let Some(hand) = found {
+            return hand;
+        }
+    }
+}
+
+#[test]
+fn a_server_killed_mid_stream_is_replaced_by_one_on_the_same_prefix() {
+    let prefix = unique_prefix("stale");
+    let start = || {
+        Spawned::start(
+            &binary("vas-server"),
+            &["run", "--prefix", prefix.as_str()],
+            Stdio::null(),
+        )
+    };
+    let mut first = start();
+    let mut client = Client::connect(Some(&prefix)).expect("connect");
+    client
+        .scene_info(PATIENCE)
+        .expect("the first server answers");
+    let sample = tracker(1, [0.0, -0.2, 1.2]);
+    client.send_tracker(&sample).expect("send");
+    answer(&mut client, &sample);
+    first.signal(libc::SIGKILL);
+    assert!(first.wait_exit(PATIENCE).is_some(), "the first server dies");
+
+    // Its ports, node and shared memory are left behind; the next server cleans them up.
+    let mut second = start();
+    assert!(
+        second.wait_for_log("serving", PATIENCE),
+        "the second server serves: {}",
+        second.log()
+    );
+    let mut client = Client::connect(Some(&prefix)).expect("connect again");
+    client
+        .scene_info(PATIENCE)
+        .expect("the second server answers");
+    let sample = tracker(2, [0.0, -0.2, 1.2]);
+    client.send_tracker(&sample).expect("send");
+    assert_eq!(answer(&mut client, &sample).tracker.seq, 2);
+    assert!(second.is_running());
+}
+
+#[test]
+fn bursts_of_malformed_input_are_rejected_and_counted_and_change_nothing() {
+    /// Below the input services' subscriber buffer, so that no sample is overwritten unread.
+    const BURST: u64 = 40;
+    let mut server = Server::start("burst");
+    let mut client = server.connect();
+    let scene = client.scene_info(PATIENCE).expect("scene");
+    let valid = tracker(1, [0.1, -0.2, 1.3]);
+    client.send_tracker(&valid).expect("send");
+    let before = answer(&mut client, &valid);
+
+    let mut seq = 1;
+    for round in 0..3 {
+        for _ in 0..BURST {
+            seq += 1;
+            let mut sample = tracker(seq, [0.0; 3]);
+            match round {
+                0 => sample.hand.position[1] = f64::NAN,
+                1 => sample.cart.rotation = [0.0, 0.0, 0.5, 0.5],
+                _ => sample.hand.position[2] = f64::INFINITY,
+            }
+            client.send_tracker(&sample).expect("send");
+        }
+        let mut flex = [0.0f32; FLEX_COUNT];
+        flex[round] = f32::NAN;
+        for _ in 0..BURST {
+            seq += 1;
+            let glove = GloveSample {
+                seq,
+                timestamp_ns: wall_clock_ns(),
+                flex,
+            };
+            client.send_glove(&glove).expect("send");
+        }
+        // Requests naming parts that do not exist are refused, each with its reason.
+        for id in [scene.parts.len() as u32, u32::MAX] {
+            match client.control(ControlRequest::part_info(id), PATIENCE) {
+                Err(ClientError::Refused { status, .. }) => {
+                    assert_eq!(status, ControlStatus::NoSuchPart);
+                }
+                other => panic!("part {id}: {other:?}"),
+            }
+        }
+    }
+    let stats = client.input_stats(PATIENCE).expect("stats");
+    assert_eq!(stats.tracker_accepted, 1);
+    assert_eq!(stats.tracker_rejected_non_finite, 2 * BURST);
+    assert_eq!(stats.tracker_rejected_quaternion, BURST);
+    assert_eq!(stats.glove_rejected_non_finite, 3 * BURST);
+    assert_eq!(stats.glove_accepted, 0);
+
+    // The state is the one before the burst: the same hand answers the same target.
+    let again = tracker(seq + 1, valid.hand.position);
+    client.send_tracker(&again).expect("send");
+    let after = answer(&mut client, &again);
+    assert_eq!(after.root, before.root);
+    assert_eq!(after.flex, before.flex);
+    let parts = client.latest_parts().expect("parts frames").clone();
+    for (state, part) in parts.parts.iter().zip(&scene.parts) {
+        assert_eq!(state.pose(), part.initial_pose, "part {}", part.name);
+    }
+    assert!(server.process.is_running());
+}
