@@ -255,3 +255,7 @@ pub fn configs_dir() -> PathBuf {
 pub fn fixtures_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
 }
+
+pub mod fixtures;
+pub mod offline;
+pub mod scenarios;
