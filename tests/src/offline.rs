@@ -71,6 +71,9 @@ pub struct OfflineRun {
     pub hand_roots: Vec<Isometry3<f64>>,
     /// Per part id, how many frames some hand segment touched it in.
     pub touched_frames: Vec<usize>,
+    /// The farthest the held part's visible pose was from where the hand held it (metres, the
+    /// distance between their origins): how far obstacles held it back.
+    pub max_held_back: f64,
     /// Every penetration parry found: frame, what entered what, and how deep.
     pub penetrations: Vec<String>,
 }
@@ -270,6 +273,7 @@ fn replay_inputs(
         final_poses: Vec::new(),
         hand_roots: Vec::new(),
         touched_frames: vec![0; scene.parts.len()],
+        max_held_back: 0.0,
         penetrations: Vec::new(),
     };
     for (frame, input) in inputs.iter().enumerate() {
@@ -299,6 +303,10 @@ fn replay_inputs(
         touched.dedup();
         for p in touched {
             run.touched_frames[p] += 1;
+        }
+        if let Some(held) = step.held {
+            let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
+            run.max_held_back = run.max_held_back.max(back);
         }
         run.hand_roots.push(step.hand.pose.root);
         run.penetrations

@@ -74,6 +74,9 @@ pub struct Scenario {
     pub events: &'static [ExpectedEvent],
     /// Where the scenario's part ends.
     pub final_pose: ExpectedPose,
+    /// At some frame the held part must have been held back at least this far (metres) from
+    /// where the hand held it: an obstacle stopped it and it slid. Zero: no such requirement.
+    pub min_held_back: f64,
 }
 
 impl Scenario {
@@ -123,6 +126,8 @@ pub const EXPECTED: [Scenario; 5] = [
             position_tolerance: 0.002,
             angle_tolerance: 0.05,
         },
+        // Held back by the hole's wall (1 mm clearance) from the 2 mm stray.
+        min_held_back: 0.0005,
     },
     Scenario {
         script: RecordedScenario::PipeThroughSheet,
@@ -136,6 +141,8 @@ pub const EXPECTED: [Scenario; 5] = [
             position_tolerance: 0.003,
             angle_tolerance: 0.05,
         },
+        // Held back by the sheet's rim (2.5 mm clearance) from the 4 mm sink.
+        min_held_back: 0.001,
     },
     Scenario {
         script: RecordedScenario::PrecisionPinch,
@@ -149,6 +156,7 @@ pub const EXPECTED: [Scenario; 5] = [
             position_tolerance: 0.002,
             angle_tolerance: 0.05,
         },
+        min_held_back: 0.0,
     },
     Scenario {
         script: RecordedScenario::Push,
@@ -162,6 +170,7 @@ pub const EXPECTED: [Scenario; 5] = [
             position_tolerance: 1e-12,
             angle_tolerance: 1e-12,
         },
+        min_held_back: 0.0,
     },
     Scenario {
         script: RecordedScenario::NavigateHolding,
@@ -176,5 +185,6 @@ pub const EXPECTED: [Scenario; 5] = [
             position_tolerance: 0.003,
             angle_tolerance: 0.05,
         },
+        min_held_back: 0.0,
     },
 ];

@@ -2,8 +2,11 @@
 //! each fixture is what its generator writes today, and its replay gives the expected grasp and
 //! release events, the expected final part pose, and no penetration by parry.
 
+use std::fs;
+
 use vas_client::recording::Recording;
 use vas_server::scene::Scene;
+use vas_tests::fixtures::write_fixture;
 use vas_tests::offline::{self, OfflineRun};
 use vas_tests::scenarios::{EXPECTED, Scenario};
 
@@ -31,7 +34,7 @@ fn check(scenario: &Scenario) {
         .expect("the expected part is in the scene");
     eprintln!(
         "{name}: {} frames, events {:?}, final {} off by {:.2e} m and {:.2e} rad, touched in {} \
-         frames, {} penetrations",
+         frames, held back up to {:.2e} m, {} penetrations",
         run.frames,
         run.events
             .iter()
@@ -41,6 +44,7 @@ fn check(scenario: &Scenario) {
         position_error,
         angle_error,
         run.touched_frames[part],
+        run.max_held_back,
         run.penetrations.len()
     );
     assert_eq!(run.rejected, 0, "{name}");
@@ -65,6 +69,12 @@ fn check(scenario: &Scenario) {
         run.touched_frames[part] > 0,
         "{name}: the hand never touched {}",
         expected.part
+    );
+    assert!(
+        run.max_held_back >= scenario.min_held_back,
+        "{name}: held back at most {:.2e} m, less than {:.2e} m",
+        run.max_held_back,
+        scenario.min_held_back
     );
     assert!(
         expected.holds(&pose),
@@ -98,4 +108,67 @@ fn push() {
 #[test]
 fn navigate_holding() {
     check(&EXPECTED[4]);
+}
+
+#[test]
+fn the_fixtures_are_what_the_generator_writes_every_time() {
+    let out = tempfile::tempdir().expect("a temporary folder");
+    for scenario in &EXPECTED {
+        let first = fs::read(
+            write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
+        )
+        .expect("written");
+        let second = fs::read(
+            write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
+        )
+        .expect("written");
+        assert_eq!(first, second, "{}: two runs differ", scenario.script);
+        let committed = fs::read(scenario.fixture_path()).expect("the fixture is committed");
+        assert!(
+            first == committed,
+            "{}: the committed fixture is stale; regenerate it (tests/fixtures/README.md)",
+            scenario.script
+        );
+    }
+}
+
+#[test]
+fn replaying_a_fixture_twice_gives_the_same_run() {
+    let scenario = &EXPECTED[0];
+    assert_eq!(replay(scenario).1, replay(scenario).1);
+}
+
+#[test]
+fn the_oracle_reports_parts_and_hands_that_overlap() {
+    // The peg put into the block's wall beside the hole: the two parts overlap from the start.
+    let peg_insert = &EXPECTED[0];
+    let mut scene = Scene::load(&peg_insert.scene_path()).expect("loads");
+    let recording = Recording::load(&peg_insert.fixture_path()).expect("loads");
+    let block = scene.parts[0].pose;
+    scene.parts[1].pose.translation = block.translation;
+    scene.parts[1].pose.translation.vector.x += 0.025;
+    let run = offline::replay(&scene, &recording).expect("replays");
+    assert!(
+        run.penetrations
+            .first()
+            .is_some_and(|p| p.starts_with("frame 0: parts block and peg overlap")),
+        "{:?}",
+        run.penetrations.first()
+    );
+
+    // The block where the hand appears: the hand is parked inside it until the tracker leads
+    // it out.
+    let push = &EXPECTED[3];
+    let mut scene = Scene::load(&push.scene_path()).expect("loads");
+    let recording = Recording::load(&push.fixture_path()).expect("loads");
+    let (inputs, _) = offline::hand_inputs(recording.samples.iter().map(|s| s.input));
+    scene.parts[0].pose.translation.vector = inputs[0].tracker.translation.vector;
+    let run = offline::replay(&scene, &recording).expect("replays");
+    assert!(
+        run.penetrations
+            .first()
+            .is_some_and(|p| p.starts_with("frame 0: hand segment")),
+        "{:?}",
+        run.penetrations.first()
+    );
 }

@@ -331,8 +331,15 @@ impl fmt::Display for RecordedScenario {
 const PEG_CARRY_GAP: f64 = 0.02;
 /// How deep the peg's lower end goes into the hole (metres).
 pub const PEG_INSERT_DEPTH: f64 = 0.035;
+/// How far the hand strays sideways while the peg goes down the second half of its way into the
+/// hole, before it comes back (metres): more than the hole's clearance, so the peg slides down
+/// along the hole's wall.
+pub const PEG_DRIFT: f64 = 0.002;
 /// How far the pipe's leading end goes past the sheet (metres).
 pub const PIPE_PASS_BEYOND: f64 = 0.06;
+/// How far the hand sinks while the pipe makes the second half of its way, before it comes back
+/// (metres): more than the hole's clearance, so the pipe slides along the sheet's rim.
+pub const PIPE_DRIFT: f64 = 0.004;
 /// The palm's inside face, this far from the hand root along -z (metres).
 const PALM_FACE: f64 = 0.0125;
 /// The palm's middle, this far from the hand root along +y (metres).
@@ -371,12 +378,14 @@ impl RecordedScenario {
     pub fn description(self) -> &'static str {
         match self {
             RecordedScenario::PegInsert => {
-                "power grasp on the peg, carried over the block, lowered 3.5 cm into its hole, \
-                 released there"
+                "power grasp on the peg, carried over the block, lowered 3.5 cm into its hole \
+                 (the hand straying 2 mm sideways on the way down, so the peg slides along the \
+                 hole's wall), released there"
             }
             RecordedScenario::PipeThroughSheet => {
                 "power grasp on the pipe, pushed along its axis through the open sheet's hole \
-                 until its end is 6 cm past the sheet, released"
+                 until its end is 6 cm past the sheet (the hand sinking 4 mm on the way, so the \
+                 pipe slides along the hole's rim), released"
             }
             RecordedScenario::PrecisionPinch => {
                 "thumb and index tips pinch the pin, lift it 5 cm, and open"
@@ -479,15 +488,18 @@ fn peg_insert(peg: &Part, block: &Part) -> Vec<Keyframe> {
     let lift = block_top + PEG_CARRY_GAP - peg_bottom;
     let mut over = block.pose.translation.vector - peg.pose.translation.vector;
     over.z = 0.0;
+    let drift = PEG_DRIFT * Vector3::y();
     let mut keys = power_grasp_on(peg);
     then(&mut keys, 0.2, shift(lift * up));
     then(&mut keys, 0.5, shift(over));
     then(&mut keys, 0.05, |_| {});
     then(
         &mut keys,
-        0.4,
-        shift(-(PEG_CARRY_GAP + PEG_INSERT_DEPTH) * up),
+        0.25,
+        shift(-(PEG_CARRY_GAP + PEG_INSERT_DEPTH / 2.0) * up),
     );
+    then(&mut keys, 0.25, shift(drift - PEG_INSERT_DEPTH / 2.0 * up));
+    then(&mut keys, 0.1, shift(-drift));
     then(&mut keys, 0.05, |_| {});
     open_and_rest(&mut keys);
     keys
@@ -502,9 +514,12 @@ fn pipe_through_sheet(pipe: &Part, sheet: &Part) -> Vec<Keyframe> {
     let (lo, hi) = extent(pipe, &axis);
     let half_length = (hi - lo) / 2.0;
     let travel = to_sheet.dot(&axis) - half_length + PIPE_PASS_BEYOND;
+    let drift = -PIPE_DRIFT * Vector3::z();
     let mut keys = power_grasp_on(pipe);
     then(&mut keys, 0.05, |_| {});
-    then(&mut keys, 0.6, shift(travel * axis));
+    then(&mut keys, 0.3, shift(travel / 2.0 * axis));
+    then(&mut keys, 0.3, shift(travel / 2.0 * axis + drift));
+    then(&mut keys, 0.1, shift(-drift));
     then(&mut keys, 0.05, |_| {});
     open_and_rest(&mut keys);
     keys
@@ -608,6 +623,19 @@ mod tests {
         assert!((samples[5].cart.translation.y - 0.01).abs() < 1e-12);
         assert!((samples[5].flex[3] - 0.5).abs() < 1e-12);
         assert_eq!(samples[10], b);
+    }
+
+    #[test]
+    fn a_recorded_scenario_names_the_part_its_scene_lacks() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/push.toml");
+        let scene = Scene::load(&path).expect("the push scene loads");
+        assert!(RecordedScenario::Push.keyframes(&scene).is_ok());
+        let error = RecordedScenario::PrecisionPinch
+            .keyframes(&scene)
+            .expect_err("the push scene has no pin");
+        assert_eq!(error.part, "pin");
+        assert_eq!(error.scenario, RecordedScenario::PrecisionPinch);
+        assert!(error.to_string().contains("\"pin\""), "{error}");
     }
 
     #[test]
