@@ -67,8 +67,6 @@ pub struct OfflineRun {
     pub events: Vec<ReplayEvent>,
     /// Every part's visible pose after the last frame, by id.
     pub final_poses: Vec<Isometry3<f64>>,
-    /// The visible hand root after every frame.
-    pub hand_roots: Vec<Isometry3<f64>>,
     /// Per part id, how many frames some hand segment touched it in.
     pub touched_frames: Vec<usize>,
     /// The farthest the held part's visible pose was from where the hand held it (metres, the
@@ -271,7 +269,6 @@ fn replay_inputs(
         rejected,
         events: Vec::new(),
         final_poses: Vec::new(),
-        hand_roots: Vec::new(),
         touched_frames: vec![0; scene.parts.len()],
         max_held_back: 0.0,
         penetrations: Vec::new(),
@@ -308,7 +305,6 @@ fn replay_inputs(
             let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
             run.max_held_back = run.max_held_back.max(back);
         }
-        run.hand_roots.push(step.hand.pose.root);
         run.penetrations
             .extend(oracle.penetrations(scene, &interaction, frame));
     }
