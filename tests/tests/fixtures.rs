@@ -5,6 +5,7 @@
 use std::fs;
 
 use vas_client::recording::Recording;
+use vas_server::grasping::script::RecordedScenario;
 use vas_server::scene::Scene;
 use vas_tests::fixtures::write_fixture;
 use vas_tests::offline::{self, OfflineRun};
@@ -171,4 +172,10 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
         "{:?}",
         run.penetrations.first()
     );
+}
+
+#[test]
+fn every_recorded_scenario_has_one_expected_outcome() {
+    let listed: Vec<_> = EXPECTED.iter().map(|s| s.script).collect();
+    assert_eq!(listed, RecordedScenario::ALL);
 }

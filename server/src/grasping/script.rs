@@ -302,8 +302,7 @@ pub struct MissingPart {
 /// The recorded scenarios of the replay fixtures: each a scripted motion of the right hand in its
 /// scene, placed from the poses of the scene's parts (so that a scene moved as a whole gives the
 /// same motion relative to its parts).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RecordedScenario {
     /// A power grasp on a peg standing beside a block, carried over the block's hole, lowered
     /// into it and released there.
@@ -330,16 +329,16 @@ impl fmt::Display for RecordedScenario {
 /// How far above the block's top the peg's lower end is carried (metres).
 const PEG_CARRY_GAP: f64 = 0.02;
 /// How deep the peg's lower end goes into the hole (metres).
-pub const PEG_INSERT_DEPTH: f64 = 0.035;
+const PEG_INSERT_DEPTH: f64 = 0.035;
 /// How far the hand strays sideways while the peg goes down the second half of its way into the
 /// hole, before it comes back (metres): more than the hole's clearance, so the peg slides down
 /// along the hole's wall.
-pub const PEG_DRIFT: f64 = 0.002;
+const PEG_DRIFT: f64 = 0.002;
 /// How far the pipe's leading end goes past the sheet (metres).
-pub const PIPE_PASS_BEYOND: f64 = 0.06;
+const PIPE_PASS_BEYOND: f64 = 0.06;
 /// How far the hand sinks while the pipe makes the second half of its way, before it comes back
 /// (metres): more than the hole's clearance, so the pipe slides along the sheet's rim.
-pub const PIPE_DRIFT: f64 = 0.004;
+const PIPE_DRIFT: f64 = 0.004;
 /// The palm's inside face, this far from the hand root along -z (metres).
 const PALM_FACE: f64 = 0.0125;
 /// The palm's middle, this far from the hand root along +y (metres).
@@ -347,11 +346,11 @@ const PALM_MIDDLE: f64 = 0.055;
 /// The pushing palm starts this far from the block (metres).
 const PUSH_GAP: f64 = 0.02;
 /// The push aims this far into the block (metres): the hand must stop at its face.
-pub const PUSH_DEPTH: f64 = 0.02;
+const PUSH_DEPTH: f64 = 0.02;
 /// How far the cart drives while the hand holds the handle (metres, in the world).
-pub const CART_DRIVE: [f64; 3] = [0.3, 0.2, 0.0];
+const CART_DRIVE: [f64; 3] = [0.3, 0.2, 0.0];
 /// How far the cart turns about its vertical axis meanwhile (degrees).
-pub const CART_TURN_DEGREES: f64 = 40.0;
+const CART_TURN_DEGREES: f64 = 40.0;
 
 impl RecordedScenario {
     /// Every recorded scenario, in the order of the fixtures' documentation.
