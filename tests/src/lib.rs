@@ -1,5 +1,7 @@
 //! Helpers for the end-to-end tests: the real `vas-server` and `vas-client` binaries as child
-//! processes, each test on its own iceoryx2 prefix.
+//! processes, each test on its own iceoryx2 prefix; and the recorded scenarios: their expected
+//! outcomes ([`scenarios`]), their fixture generator ([`fixtures`]) and their offline replay
+//! through the server's interaction model, checked by parry ([`offline`]).
 //!
 //! Finding the binaries: a test of this crate cannot use `env!("CARGO_BIN_EXE_...")` (that only
 //! names binaries of the crate under test), so [`binary`] runs `cargo build` for the server and
@@ -255,3 +257,7 @@ pub fn configs_dir() -> PathBuf {
 pub fn fixtures_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
 }
+
+pub mod fixtures;
+pub mod offline;
+pub mod scenarios;

@@ -1,0 +1,314 @@
+//! Offline replay: a recording stepped through the server's per-sample model of one hand among a
+//! scene's parts ([`Interaction`]), without threads or IPC, checked frame by frame for
+//! penetrations by parry, an oracle independent of the DOP-trees.
+//!
+//! The inputs reach the interaction as the server hands them over: every valid sample updates
+//! the latest tracker or glove target, and after each sample the interaction steps once with the
+//! latest tracker (hand and cart) and the latest glove values (a flat hand before the first glove
+//! sample). The hand starts parked at the first tracker sample's pose with a flat hand; invalid
+//! samples are counted and skipped.
+
+use std::sync::Arc;
+
+use nalgebra::Isometry3;
+use parry3d::query::{contact, intersection_test};
+use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh};
+use vas_client::recording::{InputSample, Recording};
+use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
+use vas_server::grasping::{
+    GraspEvent, GraspParams, GraspType, GraspingHand, HandInput, HandModel, HandPose, PrecisionKind,
+};
+use vas_server::runtime::interaction::Interaction;
+use vas_server::scene::Scene;
+
+/// Millimetres per metre: the oracle's unit. parry's GJK counts distances below 1.2e-6 of its
+/// unit as touching, which in metres would flag the clearance the clasp and sliding keep.
+const ORACLE_SCALE: f64 = 1000.0;
+
+/// A penetration deeper than this (millimetres) is reported: parry computes in `f32`, whose
+/// rounding at these sizes stays well below it.
+const DEPTH_SLACK_MM: f32 = 1e-3;
+
+/// Why a recording cannot be replayed in a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum OfflineError {
+    /// The scene names no hand model.
+    #[error("scene {0:?} names no hand")]
+    NoHand(String),
+    /// The hand model cannot be loaded or its collision geometry built.
+    #[error("hand model: {0}")]
+    Hand(String),
+    /// The recording has no valid tracker sample to place the hand.
+    #[error("the recording has no valid tracker sample")]
+    NoTracker,
+}
+
+/// A grasp or release during the replay.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplayEvent {
+    /// The frame (input sample index, from 0) it happened in.
+    pub frame: usize,
+    /// Grasp or release.
+    pub kind: EventKind,
+    /// The part's name.
+    pub part: String,
+    /// The grasp type, on the wire's scale; [`WireGrasp::None`] for a release.
+    pub grasp: WireGrasp,
+}
+
+/// What an offline replay gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OfflineRun {
+    /// Frames stepped: one per valid input sample.
+    pub frames: usize,
+    /// Input samples refused as invalid.
+    pub rejected: usize,
+    /// Grasps and releases, in order.
+    pub events: Vec<ReplayEvent>,
+    /// Every part's visible pose after the last frame, by id.
+    pub final_poses: Vec<Isometry3<f64>>,
+    /// Per part id, how many frames some hand segment touched it in.
+    pub touched_frames: Vec<usize>,
+    /// The farthest the held part's visible pose was from where the hand held it (metres, the
+    /// distance between their origins): how far obstacles held it back.
+    pub max_held_back: f64,
+    /// Every penetration parry found: frame, what entered what, and how deep.
+    pub penetrations: Vec<String>,
+}
+
+impl OfflineRun {
+    /// The final pose of the part named `name`, if the scene has it.
+    pub fn final_pose(&self, scene: &Scene, name: &str) -> Option<Isometry3<f64>> {
+        let id = scene.parts.iter().position(|p| p.name == name)?;
+        self.final_poses.get(id).copied()
+    }
+}
+
+/// The wire's grasp type for the analysis' grasp type.
+pub fn wire_grasp(grasp: GraspType) -> WireGrasp {
+    match grasp {
+        GraspType::Push => WireGrasp::Push,
+        GraspType::Precision(PrecisionKind::TipPinch) => WireGrasp::TipPinch,
+        GraspType::Precision(PrecisionKind::ThreeJawChuck) => WireGrasp::ThreeJawChuck,
+        GraspType::Precision(PrecisionKind::Key) => WireGrasp::Key,
+        GraspType::Precision(PrecisionKind::Other) => WireGrasp::Precision,
+        GraspType::ThreePointPinch => WireGrasp::ThreePointPinch,
+        GraspType::Cigarette => WireGrasp::Cigarette,
+        GraspType::Power => WireGrasp::Power,
+        GraspType::Gravity => WireGrasp::Gravity,
+    }
+}
+
+/// The hand input the server steps with after each sample: the latest valid tracker and glove
+/// samples of `samples` (`None` until the first valid tracker sample), and how many were
+/// refused.
+pub fn hand_inputs(samples: impl IntoIterator<Item = InputSample>) -> (Vec<HandInput>, usize) {
+    let mut tracker: Option<(Isometry3<f64>, Isometry3<f64>)> = None;
+    let mut flex = [0.0f32; FLEX_COUNT];
+    let mut inputs = Vec::new();
+    let mut rejected = 0;
+    for sample in samples {
+        let valid = match sample {
+            InputSample::Tracker(s) => s
+                .validate()
+                .map(|target| tracker = Some((target.cart, target.hand)))
+                .is_ok(),
+            InputSample::Glove(s) => s.validate().map(|target| flex = target.flex).is_ok(),
+        };
+        match (valid, tracker) {
+            (true, Some((cart, hand))) => inputs.push(HandInput {
+                cart,
+                tracker: hand,
+                flex,
+            }),
+            (true, None) => {}
+            (false, _) => rejected += 1,
+        }
+    }
+    (inputs, rejected)
+}
+
+/// parry's copies of the parts and of the hand's segments, in millimetres.
+struct Oracle {
+    parts: Vec<ParryTriMesh>,
+    segments: Vec<ConvexPolyhedron>,
+}
+
+fn scaled(pose: &Isometry3<f64>) -> Isometry3<f32> {
+    let mut pose = pose.cast::<f32>();
+    pose.translation.vector *= ORACLE_SCALE as f32;
+    pose
+}
+
+impl Oracle {
+    fn new(scene: &Scene, hand: &GraspingHand) -> Oracle {
+        let parts = scene
+            .parts
+            .iter()
+            .map(|p| {
+                let vertices = p
+                    .mesh
+                    .vertices()
+                    .iter()
+                    .map(|v| (v * ORACLE_SCALE).cast::<f32>())
+                    .collect();
+                ParryTriMesh::new(vertices, p.mesh.triangles().to_vec())
+                    .expect("a valid mesh makes a valid parry mesh")
+            })
+            .collect();
+        let segments = (0..hand.model().segments().len())
+            .map(|s| {
+                let points: Vec<_> = hand
+                    .geometry()
+                    .mesh(s)
+                    .vertices()
+                    .iter()
+                    .map(|v| (v * ORACLE_SCALE).cast::<f32>())
+                    .collect();
+                ConvexPolyhedron::from_convex_hull(&points).expect("segment meshes are convex")
+            })
+            .collect();
+        Oracle { parts, segments }
+    }
+
+    /// How deep two shapes that parry finds intersecting overlap (millimetres).
+    fn depth(
+        a_pose: &Isometry3<f32>,
+        a: &dyn parry3d::shape::Shape,
+        b_pose: &Isometry3<f32>,
+        b: &dyn parry3d::shape::Shape,
+    ) -> Option<f32> {
+        if !intersection_test(a_pose, a, b_pose, b).expect("parry supports these pairs") {
+            return None;
+        }
+        let depth = contact(a_pose, a, b_pose, b, 0.0)
+            .expect("parry supports these pairs")
+            .map_or(0.0, |c| -c.dist);
+        Some(depth).filter(|&d| d > DEPTH_SLACK_MM)
+    }
+
+    /// Every penetration at the interaction's current state: parts of interest to each other at
+    /// their visible poses, and the visible hand's segments against every part it does not hold.
+    fn penetrations(&self, scene: &Scene, interaction: &Interaction, frame: usize) -> Vec<String> {
+        let poses: Vec<Isometry3<f32>> = interaction.part_poses().map(|p| scaled(&p)).collect();
+        let mut found = Vec::new();
+        for a in 0..poses.len() {
+            for b in a + 1..poses.len() {
+                if !scene.pair_of_interest(a, b) {
+                    continue;
+                }
+                if let Some(depth) =
+                    Self::depth(&poses[a], &self.parts[a], &poses[b], &self.parts[b])
+                {
+                    found.push(format!(
+                        "frame {frame}: parts {} and {} overlap by {depth:.4} mm",
+                        scene.parts[a].name, scene.parts[b].name
+                    ));
+                }
+            }
+        }
+        let hand = interaction.hand();
+        let held = hand.held().map(|h| h.part as usize);
+        let visible = hand.visible();
+        let model = hand.model();
+        for (s, local) in model.segment_poses(&visible.flex).iter().enumerate() {
+            let segment_pose = scaled(&(visible.root * local));
+            for (p, part_pose) in poses.iter().enumerate() {
+                if Some(p) == held {
+                    continue;
+                }
+                if let Some(depth) =
+                    Self::depth(&segment_pose, &self.segments[s], part_pose, &self.parts[p])
+                {
+                    found.push(format!(
+                        "frame {frame}: hand segment {} enters part {} by {depth:.4} mm",
+                        model.segments()[s].name,
+                        scene.parts[p].name
+                    ));
+                }
+            }
+        }
+        found
+    }
+}
+
+/// Replays `recording` in `scene` as described in the module documentation.
+pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, OfflineError> {
+    let (inputs, rejected) = hand_inputs(recording.samples.iter().map(|s| s.input));
+    replay_inputs(scene, &inputs, rejected)
+}
+
+fn replay_inputs(
+    scene: &Scene,
+    inputs: &[HandInput],
+    rejected: usize,
+) -> Result<OfflineRun, OfflineError> {
+    let hand_file = scene
+        .hand
+        .as_ref()
+        .ok_or_else(|| OfflineError::NoHand(scene.name.clone()))?;
+    let model = HandModel::load(hand_file).map_err(|e| OfflineError::Hand(e.to_string()))?;
+    let first = inputs.first().ok_or(OfflineError::NoTracker)?;
+    let params = GraspParams {
+        clasp: scene.params.clasp,
+        ..GraspParams::default()
+    };
+    let hand = GraspingHand::new(
+        Arc::new(model),
+        params,
+        HandPose {
+            root: first.cart * first.tracker,
+            flex: [0.0; FLEX_COUNT],
+        },
+    )
+    .map_err(|e| OfflineError::Hand(e.to_string()))?;
+    let oracle = Oracle::new(scene, &hand);
+    let mut interaction = Interaction::new(hand, &scene.parts, scene.params.sliding.clone());
+    let mut run = OfflineRun {
+        frames: 0,
+        rejected,
+        events: Vec::new(),
+        final_poses: Vec::new(),
+        touched_frames: vec![0; scene.parts.len()],
+        max_held_back: 0.0,
+        penetrations: Vec::new(),
+    };
+    for (frame, input) in inputs.iter().enumerate() {
+        let step = interaction.step(input);
+        for event in &step.hand.events {
+            let (kind, part, grasp) = match *event {
+                GraspEvent::Grasp { part, grasp, .. } => {
+                    (EventKind::Grasp, part, wire_grasp(grasp))
+                }
+                GraspEvent::Release { part, .. } => (EventKind::Release, part, WireGrasp::None),
+            };
+            run.events.push(ReplayEvent {
+                frame,
+                kind,
+                part: scene.parts[part as usize].name.clone(),
+                grasp,
+            });
+        }
+        let mut touched: Vec<usize> = step
+            .hand
+            .touching
+            .iter()
+            .flatten()
+            .map(|&p| p as usize)
+            .collect();
+        touched.sort_unstable();
+        touched.dedup();
+        for p in touched {
+            run.touched_frames[p] += 1;
+        }
+        if let Some(held) = step.held {
+            let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
+            run.max_held_back = run.max_held_back.max(back);
+        }
+        run.penetrations
+            .extend(oracle.penetrations(scene, &interaction, frame));
+    }
+    run.frames = inputs.len();
+    run.final_poses = interaction.part_poses().collect();
+    Ok(run)
+}

@@ -1,0 +1,190 @@
+//! The expected outcome of every recorded scenario, in one place: the fixture tests check the
+//! offline replay against it, and end-to-end tests can check the live server's output against it.
+//!
+//! The figures follow from the scenes (`configs/`) and the scripts
+//! (`vas_server::grasping::script::RecordedScenario`); `tests/fixtures/README.md` lists the same
+//! table.
+
+use std::path::PathBuf;
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use vas_protocol::{EventKind, GraspType};
+use vas_server::grasping::script::RecordedScenario;
+
+/// A grasp or release the replay must produce.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ExpectedEvent {
+    /// Grasp or release.
+    pub kind: EventKind,
+    /// The part's name in the scene.
+    pub part: &'static str,
+    /// The grasp type of a grasp; [`GraspType::None`] for a release.
+    pub grasp: GraspType,
+}
+
+/// Where a part must be at the end of the replay.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExpectedPose {
+    /// The part's name in the scene.
+    pub part: &'static str,
+    /// Its position in the world, metres.
+    pub position: [f64; 3],
+    /// Its orientation: roll, pitch, yaw in degrees (about x, then y, then z, fixed axes).
+    pub rpy_degrees: [f64; 3],
+    /// How far its position may be from `position` (metres).
+    pub position_tolerance: f64,
+    /// How far its orientation may be from `rpy_degrees` (radians).
+    pub angle_tolerance: f64,
+}
+
+impl ExpectedPose {
+    /// The expected pose as an isometry.
+    pub fn pose(&self) -> Isometry3<f64> {
+        let [roll, pitch, yaw] = self.rpy_degrees.map(f64::to_radians);
+        Isometry3::from_parts(
+            Translation3::from(self.position),
+            UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+        )
+    }
+
+    /// How far `pose` is from the expected pose: (position error in metres, angle in radians).
+    pub fn errors(&self, pose: &Isometry3<f64>) -> (f64, f64) {
+        let expected = self.pose();
+        (
+            (pose.translation.vector - expected.translation.vector).norm(),
+            pose.rotation.angle_to(&expected.rotation),
+        )
+    }
+
+    /// Whether `pose` is within both tolerances.
+    pub fn holds(&self, pose: &Isometry3<f64>) -> bool {
+        let (position, angle) = self.errors(pose);
+        position <= self.position_tolerance && angle <= self.angle_tolerance
+    }
+}
+
+/// A recorded scenario: its script, scene, fixture and expected outcome.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scenario {
+    /// The scripted motion; its name is the fixture's file stem.
+    pub script: RecordedScenario,
+    /// The scene file, in `configs/`.
+    pub scene: &'static str,
+    /// The grasp and release events, in order; no other grasp or release may happen.
+    pub events: &'static [ExpectedEvent],
+    /// Where the scenario's part ends.
+    pub final_pose: ExpectedPose,
+    /// At some frame the held part must have been held back at least this far (metres) from
+    /// where the hand held it: an obstacle stopped it and it slid. Zero: no such requirement.
+    pub min_held_back: f64,
+}
+
+impl Scenario {
+    /// The fixture's file name, in `tests/fixtures/`.
+    pub fn fixture_file(&self) -> String {
+        format!("{}.jsonl", self.script.name())
+    }
+
+    /// The fixture's path in this repository.
+    pub fn fixture_path(&self) -> PathBuf {
+        crate::fixtures_dir().join(self.fixture_file())
+    }
+
+    /// The scene's path in this repository.
+    pub fn scene_path(&self) -> PathBuf {
+        crate::configs_dir().join(self.scene)
+    }
+}
+
+const fn grasp(part: &'static str, grasp: GraspType) -> ExpectedEvent {
+    ExpectedEvent {
+        kind: EventKind::Grasp,
+        part,
+        grasp,
+    }
+}
+
+const fn release(part: &'static str) -> ExpectedEvent {
+    ExpectedEvent {
+        kind: EventKind::Release,
+        part,
+        grasp: GraspType::None,
+    }
+}
+
+/// Every recorded scenario and what its replay must give.
+pub const EXPECTED: [Scenario; 5] = [
+    Scenario {
+        script: RecordedScenario::PegInsert,
+        scene: "peg_insert.toml",
+        events: &[grasp("peg", GraspType::Power), release("peg")],
+        // On the hole's axis, its lower end 3.5 cm below the block's top (z = 0.05), upright.
+        final_pose: ExpectedPose {
+            part: "peg",
+            position: [0.0, 0.0, 0.135],
+            rpy_degrees: [180.0, 0.0, 0.0],
+            position_tolerance: 0.002,
+            angle_tolerance: 0.05,
+        },
+        // Held back by the hole's wall (1 mm clearance) from the 2 mm stray.
+        min_held_back: 0.0005,
+    },
+    Scenario {
+        script: RecordedScenario::PipeThroughSheet,
+        scene: "pipe_through_open_sheet.toml",
+        events: &[grasp("pipe", GraspType::Power), release("pipe")],
+        // 11 cm along x: its leading end 6 cm past the sheet (x = 0), its middle 9 cm before it.
+        final_pose: ExpectedPose {
+            part: "pipe",
+            position: [-0.09, 0.0, 0.3],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.003,
+            angle_tolerance: 0.05,
+        },
+        // Held back by the sheet's rim (2.5 mm clearance) from the 4 mm sink.
+        min_held_back: 0.001,
+    },
+    Scenario {
+        script: RecordedScenario::PrecisionPinch,
+        scene: "precision_pinch.toml",
+        events: &[grasp("pin", GraspType::TipPinch), release("pin")],
+        // Lifted 5 cm and drawn 2 cm towards the fingers (+y).
+        final_pose: ExpectedPose {
+            part: "pin",
+            position: [0.0, 0.02, 0.15],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.002,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        script: RecordedScenario::Push,
+        scene: "push.toml",
+        events: &[],
+        // Never grasped, so never moved.
+        final_pose: ExpectedPose {
+            part: "block",
+            position: [0.1, 0.0, 0.2],
+            rpy_degrees: [0.0, 0.0, 0.0],
+            position_tolerance: 1e-12,
+            angle_tolerance: 1e-12,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        script: RecordedScenario::NavigateHolding,
+        scene: "navigate_holding.toml",
+        events: &[grasp("handle", GraspType::Power), release("handle")],
+        // Carried by the cart: turned 40 degrees about the world's z axis and driven by
+        // (0.3, 0.2, 0), from (0.1, 0, 0.2) to (0.3 + 0.1 cos 40°, 0.2 + 0.1 sin 40°, 0.2).
+        final_pose: ExpectedPose {
+            part: "handle",
+            position: [0.376_604_444, 0.264_278_761, 0.2],
+            rpy_degrees: [0.0, 90.0, 40.0],
+            position_tolerance: 0.003,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+];

@@ -1,0 +1,181 @@
+//! The recorded scenarios, replayed offline through the server's per-sample interaction model:
+//! each fixture is what its generator writes today, and its replay gives the expected grasp and
+//! release events, the expected final part pose, and no penetration by parry.
+
+use std::fs;
+
+use vas_client::recording::Recording;
+use vas_server::grasping::script::RecordedScenario;
+use vas_server::scene::Scene;
+use vas_tests::fixtures::write_fixture;
+use vas_tests::offline::{self, OfflineRun};
+use vas_tests::scenarios::{EXPECTED, Scenario};
+
+fn replay(scenario: &Scenario) -> (Scene, OfflineRun) {
+    let scene = Scene::load(&scenario.scene_path()).expect("the scenario's scene loads");
+    let recording =
+        Recording::load(&scenario.fixture_path()).expect("the scenario's fixture loads");
+    assert_eq!(recording.header.scene, scene.name, "{}", scenario.script);
+    let run = offline::replay(&scene, &recording).expect("the fixture replays");
+    (scene, run)
+}
+
+fn check(scenario: &Scenario) {
+    let (scene, run) = replay(scenario);
+    let name = scenario.script;
+    let expected = &scenario.final_pose;
+    let pose = run
+        .final_pose(&scene, expected.part)
+        .expect("the expected part is in the scene");
+    let (position_error, angle_error) = expected.errors(&pose);
+    let part = scene
+        .parts
+        .iter()
+        .position(|p| p.name == expected.part)
+        .expect("the expected part is in the scene");
+    eprintln!(
+        "{name}: {} frames, events {:?}, final {} off by {:.2e} m and {:.2e} rad, touched in {} \
+         frames, held back up to {:.2e} m, {} penetrations",
+        run.frames,
+        run.events
+            .iter()
+            .map(|e| format!("{:?} {} {:?} @{}", e.kind, e.part, e.grasp, e.frame))
+            .collect::<Vec<_>>(),
+        expected.part,
+        position_error,
+        angle_error,
+        run.touched_frames[part],
+        run.max_held_back,
+        run.penetrations.len()
+    );
+    assert_eq!(run.rejected, 0, "{name}");
+    assert!(
+        run.penetrations.is_empty(),
+        "{name}: {} penetrations, first {:?}",
+        run.penetrations.len(),
+        &run.penetrations[..run.penetrations.len().min(5)]
+    );
+    let events: Vec<_> = run
+        .events
+        .iter()
+        .map(|e| (e.kind, e.part.as_str(), e.grasp))
+        .collect();
+    let wanted: Vec<_> = scenario
+        .events
+        .iter()
+        .map(|e| (e.kind, e.part, e.grasp))
+        .collect();
+    assert_eq!(events, wanted, "{name}");
+    assert!(
+        run.touched_frames[part] > 0,
+        "{name}: the hand never touched {}",
+        expected.part
+    );
+    assert!(
+        run.max_held_back >= scenario.min_held_back,
+        "{name}: held back at most {:.2e} m, less than {:.2e} m",
+        run.max_held_back,
+        scenario.min_held_back
+    );
+    assert!(
+        expected.holds(&pose),
+        "{name}: {} ends at {pose:?}, {position_error:.2e} m and {angle_error:.2e} rad from \
+         {:?}",
+        expected.part,
+        expected.pose()
+    );
+}
+
+#[test]
+fn peg_insert() {
+    check(&EXPECTED[0]);
+}
+
+#[test]
+fn pipe_through_sheet() {
+    check(&EXPECTED[1]);
+}
+
+#[test]
+fn precision_pinch() {
+    check(&EXPECTED[2]);
+}
+
+#[test]
+fn push() {
+    check(&EXPECTED[3]);
+}
+
+#[test]
+fn navigate_holding() {
+    check(&EXPECTED[4]);
+}
+
+#[test]
+fn the_fixtures_are_what_the_generator_writes_every_time() {
+    let out = tempfile::tempdir().expect("a temporary folder");
+    for scenario in &EXPECTED {
+        let first = fs::read(
+            write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
+        )
+        .expect("written");
+        let second = fs::read(
+            write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
+        )
+        .expect("written");
+        assert_eq!(first, second, "{}: two runs differ", scenario.script);
+        let committed = fs::read(scenario.fixture_path()).expect("the fixture is committed");
+        assert!(
+            first == committed,
+            "{}: the committed fixture is stale; regenerate it (tests/fixtures/README.md)",
+            scenario.script
+        );
+    }
+}
+
+#[test]
+fn replaying_a_fixture_twice_gives_the_same_run() {
+    let scenario = &EXPECTED[0];
+    assert_eq!(replay(scenario).1, replay(scenario).1);
+}
+
+#[test]
+fn the_oracle_reports_parts_and_hands_that_overlap() {
+    // The peg put into the block's wall beside the hole: the two parts overlap from the start.
+    let peg_insert = &EXPECTED[0];
+    let mut scene = Scene::load(&peg_insert.scene_path()).expect("loads");
+    let recording = Recording::load(&peg_insert.fixture_path()).expect("loads");
+    let block = scene.parts[0].pose;
+    scene.parts[1].pose.translation = block.translation;
+    scene.parts[1].pose.translation.vector.x += 0.025;
+    let run = offline::replay(&scene, &recording).expect("replays");
+    assert!(
+        run.penetrations
+            .first()
+            .is_some_and(|p| p.starts_with("frame 0: parts block and peg overlap")),
+        "{:?}",
+        run.penetrations.first()
+    );
+
+    // The block where the hand appears: the hand is parked inside it until the tracker leads
+    // it out.
+    let push = &EXPECTED[3];
+    let mut scene = Scene::load(&push.scene_path()).expect("loads");
+    let recording = Recording::load(&push.fixture_path()).expect("loads");
+    let (inputs, _) = offline::hand_inputs(recording.samples.iter().map(|s| s.input));
+    scene.parts[0].pose.translation.vector = inputs[0].tracker.translation.vector;
+    let run = offline::replay(&scene, &recording).expect("replays");
+    assert!(
+        run.penetrations
+            .first()
+            .is_some_and(|p| p.starts_with("frame 0: hand segment")),
+        "{:?}",
+        run.penetrations.first()
+    );
+}
+
+#[test]
+fn every_recorded_scenario_has_one_expected_outcome() {
+    let listed: Vec<_> = EXPECTED.iter().map(|s| s.script).collect();
+    assert_eq!(listed, RecordedScenario::ALL);
+}
