@@ -15,10 +15,10 @@ use parry3d::query::{contact, intersection_test};
 use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh};
 use vas_client::recording::{InputSample, Recording};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
-use vas_server::grasping::{
-    GraspEvent, GraspParams, GraspType, GraspingHand, HandInput, HandModel, HandPose, PrecisionKind,
-};
+use vas_server::grasping::{GraspEvent, GraspParams, GraspingHand, HandInput, HandModel, HandPose};
+use vas_server::runtime::frames::wire_grasp;
 use vas_server::runtime::interaction::Interaction;
+use vas_server::runtime::verify::HandBodies;
 use vas_server::scene::Scene;
 
 /// Millimetres per metre: the oracle's unit. parry's GJK counts distances below 1.2e-6 of its
@@ -84,21 +84,6 @@ impl OfflineRun {
     }
 }
 
-/// The wire's grasp type for the analysis' grasp type.
-pub fn wire_grasp(grasp: GraspType) -> WireGrasp {
-    match grasp {
-        GraspType::Push => WireGrasp::Push,
-        GraspType::Precision(PrecisionKind::TipPinch) => WireGrasp::TipPinch,
-        GraspType::Precision(PrecisionKind::ThreeJawChuck) => WireGrasp::ThreeJawChuck,
-        GraspType::Precision(PrecisionKind::Key) => WireGrasp::Key,
-        GraspType::Precision(PrecisionKind::Other) => WireGrasp::Precision,
-        GraspType::ThreePointPinch => WireGrasp::ThreePointPinch,
-        GraspType::Cigarette => WireGrasp::Cigarette,
-        GraspType::Power => WireGrasp::Power,
-        GraspType::Gravity => WireGrasp::Gravity,
-    }
-}
-
 /// The hand input the server steps with after each sample: the latest valid tracker and glove
 /// samples of `samples` (`None` until the first valid tracker sample), and how many were
 /// refused.
@@ -128,10 +113,23 @@ pub fn hand_inputs(samples: impl IntoIterator<Item = InputSample>) -> (Vec<HandI
     (inputs, rejected)
 }
 
-/// parry's copies of the parts and of the hand's segments, in millimetres.
-struct Oracle {
+/// parry's copies of the parts and of the hand's segments, in millimetres: the independent
+/// judge of penetrations, for offline runs and for the live server's frames.
+pub struct Oracle {
     parts: Vec<ParryTriMesh>,
     segments: Vec<ConvexPolyhedron>,
+    model: Arc<HandModel>,
+}
+
+/// The visible hand of a frame, for the [`Oracle`].
+#[derive(Debug, Clone, Copy)]
+pub struct VisibleHand {
+    /// The root in the world.
+    pub root: Isometry3<f64>,
+    /// Joint angles, radians.
+    pub flex: [f64; FLEX_COUNT],
+    /// The part it holds, not checked against it.
+    pub held: Option<usize>,
 }
 
 fn scaled(pose: &Isometry3<f64>) -> Isometry3<f32> {
@@ -141,7 +139,8 @@ fn scaled(pose: &Isometry3<f64>) -> Isometry3<f32> {
 }
 
 impl Oracle {
-    fn new(scene: &Scene, hand: &GraspingHand) -> Oracle {
+    /// The judge of `scene` with the hand's segments (`bodies`, as the server builds them).
+    pub fn new(scene: &Scene, bodies: &HandBodies) -> Oracle {
         let parts = scene
             .parts
             .iter()
@@ -156,11 +155,11 @@ impl Oracle {
                     .expect("a valid mesh makes a valid parry mesh")
             })
             .collect();
-        let segments = (0..hand.model().segments().len())
-            .map(|s| {
-                let points: Vec<_> = hand
-                    .geometry()
-                    .mesh(s)
+        let segments = bodies
+            .meshes
+            .iter()
+            .map(|mesh| {
+                let points: Vec<_> = mesh
                     .vertices()
                     .iter()
                     .map(|v| (v * ORACLE_SCALE).cast::<f32>())
@@ -168,7 +167,11 @@ impl Oracle {
                 ConvexPolyhedron::from_convex_hull(&points).expect("segment meshes are convex")
             })
             .collect();
-        Oracle { parts, segments }
+        Oracle {
+            parts,
+            segments,
+            model: Arc::clone(&bodies.model),
+        }
     }
 
     /// How deep two shapes that parry finds intersecting overlap (millimetres).
@@ -187,10 +190,16 @@ impl Oracle {
         Some(depth).filter(|&d| d > DEPTH_SLACK_MM)
     }
 
-    /// Every penetration at the interaction's current state: parts of interest to each other at
-    /// their visible poses, and the visible hand's segments against every part it does not hold.
-    fn penetrations(&self, scene: &Scene, interaction: &Interaction, frame: usize) -> Vec<String> {
-        let poses: Vec<Isometry3<f32>> = interaction.part_poses().map(|p| scaled(&p)).collect();
+    /// Every penetration of a frame: parts of interest to each other at their visible poses,
+    /// and the visible hand's segments against every part it does not hold.
+    pub fn penetrations(
+        &self,
+        scene: &Scene,
+        part_poses: &[Isometry3<f64>],
+        hand: &VisibleHand,
+        frame: usize,
+    ) -> Vec<String> {
+        let poses: Vec<Isometry3<f32>> = part_poses.iter().map(scaled).collect();
         let mut found = Vec::new();
         for a in 0..poses.len() {
             for b in a + 1..poses.len() {
@@ -207,14 +216,11 @@ impl Oracle {
                 }
             }
         }
-        let hand = interaction.hand();
-        let held = hand.held().map(|h| h.part as usize);
-        let visible = hand.visible();
-        let model = hand.model();
-        for (s, local) in model.segment_poses(&visible.flex).iter().enumerate() {
-            let segment_pose = scaled(&(visible.root * local));
+        let model = &self.model;
+        for (s, local) in model.segment_poses(&hand.flex).iter().enumerate() {
+            let segment_pose = scaled(&(hand.root * local));
             for (p, part_pose) in poses.iter().enumerate() {
-                if Some(p) == held {
+                if Some(p) == hand.held {
                     continue;
                 }
                 if let Some(depth) =
@@ -247,14 +253,15 @@ fn replay_inputs(
         .hand
         .as_ref()
         .ok_or_else(|| OfflineError::NoHand(scene.name.clone()))?;
-    let model = HandModel::load(hand_file).map_err(|e| OfflineError::Hand(e.to_string()))?;
+    let model =
+        Arc::new(HandModel::load(hand_file).map_err(|e| OfflineError::Hand(e.to_string()))?);
     let first = inputs.first().ok_or(OfflineError::NoTracker)?;
     let params = GraspParams {
         clasp: scene.params.clasp,
         ..GraspParams::default()
     };
     let hand = GraspingHand::new(
-        Arc::new(model),
+        Arc::clone(&model),
         params,
         HandPose {
             root: first.cart * first.tracker,
@@ -262,8 +269,22 @@ fn replay_inputs(
         },
     )
     .map_err(|e| OfflineError::Hand(e.to_string()))?;
-    let oracle = Oracle::new(scene, &hand);
-    let mut interaction = Interaction::new(hand, &scene.parts, scene.params.sliding.clone());
+    let meshes = (0..hand.model().segments().len())
+        .map(|segment| hand.geometry().mesh(segment).clone())
+        .collect();
+    let oracle = Oracle::new(
+        scene,
+        &HandBodies {
+            model: Arc::clone(&model),
+            meshes,
+        },
+    );
+    let mut interaction = Interaction::new(
+        hand,
+        &scene.parts,
+        scene.params.sliding.clone(),
+        1.0 / scene.rates.sliding_hz,
+    );
     let mut run = OfflineRun {
         frames: 0,
         rejected,
@@ -278,7 +299,7 @@ fn replay_inputs(
         for event in &step.hand.events {
             let (kind, part, grasp) = match *event {
                 GraspEvent::Grasp { part, grasp, .. } => {
-                    (EventKind::Grasp, part, wire_grasp(grasp))
+                    (EventKind::Grasp, part, wire_grasp(Some(grasp)))
                 }
                 GraspEvent::Release { part, .. } => (EventKind::Release, part, WireGrasp::None),
             };
@@ -301,12 +322,18 @@ fn replay_inputs(
         for p in touched {
             run.touched_frames[p] += 1;
         }
-        if let Some(held) = step.held {
+        if let Some(held) = &step.held {
             let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
             run.max_held_back = run.max_held_back.max(back);
         }
+        let poses: Vec<Isometry3<f64>> = interaction.part_poses().collect();
+        let hand = VisibleHand {
+            root: step.hand.pose.root,
+            flex: step.hand.pose.flex,
+            held: step.held.as_ref().map(|held| held.part as usize),
+        };
         run.penetrations
-            .extend(oracle.penetrations(scene, &interaction, frame));
+            .extend(oracle.penetrations(scene, &poses, &hand, frame));
     }
     run.frames = inputs.len();
     run.final_poses = interaction.part_poses().collect();

@@ -85,7 +85,7 @@ fn scene_info_and_parts_frames_match_the_scene_config() {
 
     let frame: PartsFrame = wait_for(&mut client, "a parts frame", |frame| match frame {
         Frame::Parts(parts) => Some(parts.clone()),
-        Frame::Hand(_) => None,
+        _ => None,
     });
     assert_eq!(frame.header.part_count as usize, scene.parts.len());
     assert_eq!(frame.parts.len(), scene.parts.len());
