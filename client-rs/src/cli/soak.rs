@@ -3,9 +3,11 @@
 //! every second to show whether it grows.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use anyhow::Context;
+use anyhow::{Context, anyhow};
 use serde::Serialize;
 use vas_client::{Client, Frame, Wake};
 use vas_protocol::{HandFrame, InputStamp, wall_clock_ns};
@@ -18,6 +20,9 @@ const RSS_PERIOD: Duration = Duration::from_secs(1);
 
 /// How long to wait after the last sample for the answers still on their way.
 const DRAIN: Duration = Duration::from_secs(1);
+
+/// How often the threads look at each other's progress while waiting.
+const DRAIN_CHECK: Duration = Duration::from_millis(10);
 
 /// Arguments of `vas-client soak`.
 #[derive(Debug, clap::Args)]
@@ -78,6 +83,10 @@ pub struct SoakReport {
     pub glove: StreamCount,
     /// Samples of both streams without an answer.
     pub dropped: u64,
+    /// Hand frames the server published but this client never read (gaps in the frame
+    /// numbers): its buffer overflowed while it was descheduled. A sample whose only answer
+    /// was such a frame counts as dropped although the server answered it.
+    pub frames_missed_by_client: u64,
     /// From a sample's timestamp to the arrival of the first frame carrying it.
     pub latency: Option<LatencySummary>,
     /// How late after its due time each tick's samples were sent.
@@ -87,74 +96,55 @@ pub struct SoakReport {
 }
 
 /// Runs the soak against the server on `prefix`.
+///
+/// This thread paces and sends the samples (sleeping with nanosleep between ticks) and samples
+/// the memory; a second thread, with its own connection, sleeps on its WaitSet for the hand
+/// frames and marks the samples they answer, so that neither job delays the other.
 pub fn run(prefix: Option<&str>, args: &SoakArgs) -> anyhow::Result<()> {
-    let mut client = super::connect(prefix)?;
+    let client = super::connect(prefix)?;
     client
         .scene_info(super::CONTROL_TIMEOUT)
         .context("no vas server answers on this prefix")?;
-    let pid = args.server_pid;
     let ticks = args.rate * args.seconds;
-    let tick_time = |tick: u64| Duration::from_nanos(tick * 1_000_000_000 / args.rate);
-    tracing::info!(rate = args.rate, seconds = args.seconds, pid, "soaking");
+    let sent = SentStamps::new(ticks);
+    let done = AtomicBool::new(false);
+    let answered = AtomicU64::new(0);
+    tracing::info!(
+        rate = args.rate,
+        seconds = args.seconds,
+        pid = args.server_pid,
+        "soaking"
+    );
+    let (pacing, answers) = std::thread::scope(|scope| {
+        let (ready_tx, ready_rx) = mpsc::channel();
+        let receiver = scope.spawn(|| receive_answers(prefix, &sent, &done, &answered, ready_tx));
+        let pacing = match ready_rx.recv() {
+            Ok(()) => pace(&client, args, &sent, &answered).map(Some),
+            // The receiver failed to connect; its error is the one to report.
+            Err(_) => Ok(None),
+        };
+        done.store(true, Ordering::Release);
+        let answers = receiver
+            .join()
+            .map_err(|_| anyhow!("the receiving thread panicked"))?;
+        anyhow::Ok((pacing?, answers?))
+    })?;
+    let pacing = pacing.context("the receiving thread ended before the run")?;
 
-    let mut answers = Answers::with_capacity(ticks);
-    let mut lateness = Vec::with_capacity(usize::try_from(ticks).unwrap_or_default());
-    let start = Instant::now();
-    let mut memory = vec![(0.0, resident_kib(pid)?)];
-    let mut next_memory_sample = start + RSS_PERIOD;
-    let mut interrupted = false;
-    'ticks: for tick in 0..ticks {
-        let due = start + tick_time(tick);
-        loop {
-            answers.take_frames(&mut client)?;
-            let now = Instant::now();
-            if now >= next_memory_sample {
-                memory.push((start.elapsed().as_secs_f64(), resident_kib(pid)?));
-                next_memory_sample += RSS_PERIOD;
-            }
-            if now >= due {
-                break;
-            }
-            let nap = (due - now).min(next_memory_sample.saturating_duration_since(now));
-            if client.wait(nap)? == Wake::Terminated {
-                interrupted = true;
-                break 'ticks;
-            }
-        }
-        lateness.push(due.elapsed());
-        let seq = tick + 1;
-        let tracker = synthetic::tracker(seq);
-        client.send_tracker(&tracker)?;
-        answers
-            .tracker
-            .sent(stamp(tracker.seq, tracker.timestamp_ns));
-        let glove = synthetic::glove(seq);
-        client.send_glove(&glove)?;
-        answers.glove.sent(stamp(glove.seq, glove.timestamp_ns));
-    }
-    let elapsed_s = start.elapsed().as_secs_f64();
-    let drain_until = Instant::now() + DRAIN;
-    while !interrupted && !answers.all_answered() {
-        let remaining = drain_until.saturating_duration_since(Instant::now());
-        if remaining.is_zero() || client.wait(remaining)? != Wake::Ready {
-            break;
-        }
-        answers.take_frames(&mut client)?;
-    }
-    memory.push((start.elapsed().as_secs_f64(), resident_kib(pid)?));
-
-    let (tracker, glove) = (answers.tracker.count(), answers.glove.count());
+    let tracker = answers.tracker.count(pacing.ticks_sent);
+    let glove = answers.glove.count(pacing.ticks_sent);
     let report = SoakReport {
         rate_hz: args.rate,
-        elapsed_s,
-        interrupted,
+        elapsed_s: pacing.elapsed_s,
+        interrupted: pacing.interrupted,
         tracker,
         glove,
         dropped: tracker.dropped + glove.dropped,
+        frames_missed_by_client: answers.frames_missed,
         latency: LatencySummary::from_durations(&answers.latencies).ok(),
-        pacing_lateness: LatencySummary::from_durations(&lateness)
+        pacing_lateness: LatencySummary::from_durations(&pacing.lateness)
             .context("the run ended before its first sample")?,
-        memory: memory_report(memory),
+        memory: memory_report(pacing.memory),
     };
     print!("{}", render(&report));
     if let Some(out) = &args.out {
@@ -163,8 +153,102 @@ pub fn run(prefix: Option<&str>, args: &SoakArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn stamp(seq: u64, timestamp_ns: u64) -> InputStamp {
-    InputStamp { seq, timestamp_ns }
+/// What the pacing thread measured.
+struct Pacing {
+    /// Ticks whose two samples were sent.
+    ticks_sent: u64,
+    elapsed_s: f64,
+    interrupted: bool,
+    /// How late each tick was sent.
+    lateness: Vec<Duration>,
+    /// Seconds since the start and the server's resident KiB.
+    memory: Vec<(f64, u64)>,
+}
+
+/// Sends a tracker and a glove sample every tick, samples the server's memory every second,
+/// then waits (at most [`DRAIN`]) for the last answers.
+fn pace(
+    client: &Client,
+    args: &SoakArgs,
+    sent: &SentStamps,
+    answered: &AtomicU64,
+) -> anyhow::Result<Pacing> {
+    let pid = args.server_pid;
+    let ticks = sent.tracker.len() as u64;
+    let tick_time = |tick: u64| Duration::from_nanos(tick * 1_000_000_000 / args.rate);
+    let mut pacing = Pacing {
+        ticks_sent: 0,
+        elapsed_s: 0.0,
+        interrupted: false,
+        lateness: Vec::with_capacity(sent.tracker.len()),
+        memory: vec![(0.0, resident_kib(pid)?)],
+    };
+    let start = Instant::now();
+    let mut next_memory_sample = start + RSS_PERIOD;
+    for tick in 0..ticks {
+        let due = start + tick_time(tick);
+        let early = due.saturating_duration_since(Instant::now());
+        if !early.is_zero() && client.sleep(early) == Wake::Terminated {
+            pacing.interrupted = true;
+            break;
+        }
+        pacing.lateness.push(due.elapsed());
+        let seq = tick + 1;
+        let tracker = synthetic::tracker(seq);
+        sent.record(&sent.tracker, seq, tracker.timestamp_ns);
+        client.send_tracker(&tracker)?;
+        let glove = synthetic::glove(seq);
+        sent.record(&sent.glove, seq, glove.timestamp_ns);
+        client.send_glove(&glove)?;
+        pacing.ticks_sent = seq;
+        if Instant::now() >= next_memory_sample {
+            pacing
+                .memory
+                .push((start.elapsed().as_secs_f64(), resident_kib(pid)?));
+            next_memory_sample += RSS_PERIOD;
+        }
+    }
+    pacing.elapsed_s = start.elapsed().as_secs_f64();
+    let drain_until = Instant::now() + DRAIN;
+    while !pacing.interrupted
+        && answered.load(Ordering::Acquire) < 2 * pacing.ticks_sent
+        && Instant::now() < drain_until
+    {
+        if client.sleep(DRAIN_CHECK) == Wake::Terminated {
+            break;
+        }
+    }
+    pacing
+        .memory
+        .push((start.elapsed().as_secs_f64(), resident_kib(pid)?));
+    Ok(pacing)
+}
+
+/// The receiving thread: connects, says it is ready, then marks the samples every hand frame
+/// answers until `done`.
+fn receive_answers(
+    prefix: Option<&str>,
+    sent: &SentStamps,
+    done: &AtomicBool,
+    answered: &AtomicU64,
+    ready: mpsc::Sender<()>,
+) -> anyhow::Result<Answers> {
+    let mut client = super::connect(prefix)?;
+    let mut answers = Answers::new(sent.tracker.len());
+    // The pacing thread may have ended already; then `done` ends this loop at once.
+    let _ = ready.send(());
+    while !done.load(Ordering::Acquire) {
+        if client.wait(DRAIN_CHECK)? == Wake::Terminated {
+            break;
+        }
+        for frame in client.receive()? {
+            if let Frame::Hand(frame) = frame {
+                answers.mark(&frame, sent, wall_clock_ns());
+            }
+        }
+        answered.store(answers.answered(), Ordering::Release);
+    }
+    Ok(answers)
 }
 
 /// The summary of a memory series (at least one sample).
@@ -199,6 +283,7 @@ fn render(report: &SoakReport) -> String {
         .map_or_else(|| "n/a".to_owned(), |slope| format!("{slope:.1}"));
     format!(
         "soak at {} Hz per stream for {:.1} s{}\n{}{}\
+         hand frames missed by this client {}\n\
          latency         {latency}\n\
          pacing lateness {}\n\
          server RSS      start {} KiB, end {} KiB, max {} KiB, growth {growth} KiB/min\n",
@@ -211,11 +296,41 @@ fn render(report: &SoakReport) -> String {
         },
         stream("tracker", &report.tracker),
         stream("glove", &report.glove),
+        report.frames_missed_by_client,
         report.pacing_lateness,
         memory.start_kib,
         memory.end_kib,
         memory.max_kib,
     )
+}
+
+/// The timestamp of every sample the pacing thread sent (index `seq - 1`; 0 until sent), so
+/// that the receiving thread recognises this run's samples in the frames.
+struct SentStamps {
+    tracker: Vec<AtomicU64>,
+    glove: Vec<AtomicU64>,
+}
+
+impl SentStamps {
+    fn new(per_stream: u64) -> Self {
+        let stamps = || (0..per_stream).map(|_| AtomicU64::new(0)).collect();
+        Self {
+            tracker: stamps(),
+            glove: stamps(),
+        }
+    }
+
+    /// Notes sample `seq` (from 1) of `stream` before it is sent.
+    fn record(&self, stream: &[AtomicU64], seq: u64, timestamp_ns: u64) {
+        if let Some(slot) = index_of(seq).and_then(|index| stream.get(index)) {
+            slot.store(timestamp_ns, Ordering::Release);
+        }
+    }
+}
+
+/// The index of sample `seq` (numbered from 1).
+fn index_of(seq: u64) -> Option<usize> {
+    usize::try_from(seq).ok()?.checked_sub(1)
 }
 
 /// Which samples of the two streams have been answered, and how fast.
@@ -224,33 +339,35 @@ struct Answers {
     glove: AnswerBook,
     /// From each answered sample's timestamp to the arrival of its answer.
     latencies: Vec<Duration>,
+    /// The number of the last hand frame received.
+    last_frame: Option<u64>,
+    /// Hand frames skipped in the numbering: published, but lost before this client read them.
+    frames_missed: u64,
 }
 
 impl Answers {
-    fn with_capacity(per_stream: u64) -> Self {
+    fn new(per_stream: usize) -> Self {
         Self {
-            tracker: AnswerBook::with_capacity(per_stream),
-            glove: AnswerBook::with_capacity(per_stream),
+            tracker: AnswerBook::new(per_stream),
+            glove: AnswerBook::new(per_stream),
             latencies: Vec::new(),
+            last_frame: None,
+            frames_missed: 0,
         }
     }
 
-    /// Receives every queued frame and marks the samples its stamps answer.
-    fn take_frames(&mut self, client: &mut Client) -> anyhow::Result<()> {
-        for frame in client.receive()? {
-            if let Frame::Hand(frame) = frame {
-                self.mark(&frame, wall_clock_ns());
-            }
+    /// Marks the samples whose stamps `frame` carries, as received at `now_ns`, and counts the
+    /// frames missed since the previous one.
+    fn mark(&mut self, frame: &HandFrame, sent: &SentStamps, now_ns: u64) {
+        if let Some(last) = self.last_frame {
+            self.frames_missed += frame.frame.saturating_sub(last + 1);
         }
-        Ok(())
-    }
-
-    fn mark(&mut self, frame: &HandFrame, now_ns: u64) {
-        for (book, stamp) in [
-            (&mut self.tracker, frame.tracker),
-            (&mut self.glove, frame.glove),
+        self.last_frame = Some(frame.frame);
+        for (book, stream, stamp) in [
+            (&mut self.tracker, &sent.tracker, frame.tracker),
+            (&mut self.glove, &sent.glove, frame.glove),
         ] {
-            if book.answer(stamp) {
+            if book.answer(stamp, stream) {
                 self.latencies.push(Duration::from_nanos(
                     now_ns.saturating_sub(stamp.timestamp_ns),
                 ));
@@ -258,47 +375,35 @@ impl Answers {
         }
     }
 
-    fn all_answered(&self) -> bool {
-        self.tracker.count().dropped == 0 && self.glove.count().dropped == 0
+    /// Samples of both streams answered so far.
+    fn answered(&self) -> u64 {
+        self.tracker.answered_count + self.glove.answered_count
     }
 }
 
-/// The samples sent in one stream (numbered from 1) and which of them were answered.
-#[derive(Debug, Default)]
+/// Which samples of one stream were answered.
 struct AnswerBook {
-    /// Timestamp of sample `seq` at index `seq - 1`.
-    sent_timestamps: Vec<u64>,
     answered: Vec<bool>,
     answered_count: u64,
 }
 
 impl AnswerBook {
-    fn with_capacity(samples: u64) -> Self {
-        let capacity = usize::try_from(samples).unwrap_or_default();
+    fn new(samples: usize) -> Self {
         Self {
-            sent_timestamps: Vec::with_capacity(capacity),
-            answered: Vec::with_capacity(capacity),
+            answered: vec![false; samples],
             answered_count: 0,
         }
     }
 
-    /// Notes the next sample sent; its sequence number must follow the previous one.
-    fn sent(&mut self, stamp: InputStamp) {
-        debug_assert_eq!(stamp.seq, self.sent_timestamps.len() as u64 + 1);
-        self.sent_timestamps.push(stamp.timestamp_ns);
-        self.answered.push(false);
-    }
-
-    /// Marks the sample `stamp` names as answered; true the first time. Stamps of samples this
-    /// book did not send (another sender's, or none yet) are ignored.
-    fn answer(&mut self, stamp: InputStamp) -> bool {
-        let Some(index) = usize::try_from(stamp.seq)
-            .ok()
-            .and_then(|seq| seq.checked_sub(1))
-        else {
+    /// Marks the sample `stamp` names as answered; true the first time. Stamps of samples not
+    /// in `sent` (another sender's, or none yet) are ignored.
+    fn answer(&mut self, stamp: InputStamp, sent: &[AtomicU64]) -> bool {
+        let Some(index) = index_of(stamp.seq) else {
             return false;
         };
-        let ours = self.sent_timestamps.get(index) == Some(&stamp.timestamp_ns);
+        let ours = sent
+            .get(index)
+            .is_some_and(|sent| sent.load(Ordering::Acquire) == stamp.timestamp_ns);
         if !ours || self.answered[index] {
             return false;
         }
@@ -307,12 +412,12 @@ impl AnswerBook {
         true
     }
 
-    fn count(&self) -> StreamCount {
-        let sent = self.sent_timestamps.len() as u64;
+    /// The counts once `sent` samples were sent.
+    fn count(&self, sent: u64) -> StreamCount {
         StreamCount {
             sent,
             answered: self.answered_count,
-            dropped: sent - self.answered_count,
+            dropped: sent.saturating_sub(self.answered_count),
         }
     }
 }
@@ -339,6 +444,10 @@ fn parse_vm_rss(status: &str) -> Option<u64> {
 mod tests {
     use super::*;
 
+    fn stamp(seq: u64, timestamp_ns: u64) -> InputStamp {
+        InputStamp { seq, timestamp_ns }
+    }
+
     #[test]
     fn the_resident_set_is_read_from_a_status_text() {
         let status = "Name:\tvas-server\nVmPeak:\t  900 kB\nVmRSS:\t   12345 kB\nThreads:\t4\n";
@@ -363,18 +472,23 @@ mod tests {
 
     #[test]
     fn each_sample_is_answered_once_and_only_with_its_own_stamp() {
-        let mut book = AnswerBook::default();
+        let sent = SentStamps::new(5);
         for seq in 1..=4 {
-            book.sent(stamp(seq, 100 + seq));
+            sent.record(&sent.tracker, seq, 100 + seq);
         }
-        assert!(book.answer(stamp(2, 102)));
-        assert!(!book.answer(stamp(2, 102)), "a second frame with the stamp");
-        assert!(!book.answer(stamp(3, 999)), "another sender's sample 3");
-        assert!(!book.answer(stamp(0, 0)), "no sample yet");
-        assert!(!book.answer(stamp(9, 109)), "never sent");
-        assert!(book.answer(stamp(4, 104)));
+        let mut book = AnswerBook::new(5);
+        assert!(book.answer(stamp(2, 102), &sent.tracker));
+        assert!(!book.answer(stamp(2, 102), &sent.tracker), "a second frame");
+        assert!(
+            !book.answer(stamp(3, 999), &sent.tracker),
+            "another sender's 3"
+        );
+        assert!(!book.answer(stamp(0, 0), &sent.tracker), "no sample yet");
+        assert!(!book.answer(stamp(5, 105), &sent.tracker), "not sent yet");
+        assert!(!book.answer(stamp(9, 109), &sent.tracker), "beyond the run");
+        assert!(book.answer(stamp(4, 104), &sent.tracker));
         assert_eq!(
-            book.count(),
+            book.count(4),
             StreamCount {
                 sent: 4,
                 answered: 2,
@@ -385,9 +499,10 @@ mod tests {
 
     #[test]
     fn a_frame_answers_the_samples_of_both_streams_it_carries() {
-        let mut answers = Answers::with_capacity(2);
-        answers.tracker.sent(stamp(1, 1_000));
-        answers.glove.sent(stamp(1, 1_500));
+        let sent = SentStamps::new(2);
+        sent.record(&sent.tracker, 1, 1_000);
+        sent.record(&sent.glove, 1, 1_500);
+        let mut answers = Answers::new(2);
         let frame = HandFrame {
             frame: 1,
             tracker: stamp(1, 1_000),
@@ -398,9 +513,11 @@ mod tests {
             touching: 0,
             grasp_type: 0,
         };
-        answers.mark(&frame, 3_000);
-        answers.mark(&frame, 9_000);
-        assert!(answers.all_answered());
+        answers.mark(&frame, &sent, 3_000);
+        let later = HandFrame { frame: 4, ..frame };
+        answers.mark(&later, &sent, 9_000);
+        assert_eq!(answers.answered(), 2);
+        assert_eq!(answers.frames_missed, 2, "frames 2 and 3");
         assert_eq!(
             answers.latencies,
             [Duration::from_nanos(2_000), Duration::from_nanos(1_500)]
