@@ -17,8 +17,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use serde::Serialize;
-use vas_client::Client;
 use vas_client::recording::{InputSample, Recording};
+use vas_client::{Client, Wake};
 use vas_protocol::{InputStamp, wall_clock_ns};
 
 use super::echo::READY_LINE;
@@ -143,7 +143,7 @@ pub fn run(prefix: Option<&str>, args: &E2eArgs) -> anyhow::Result<()> {
 }
 
 /// Sends `input` stamped now and waits for the hand frame answering it; its round trip, or
-/// `None` if none came within `timeout`.
+/// `None` if none came within `timeout`. SIGINT or SIGTERM ends the benchmark.
 fn round_trip(
     client: &mut Client,
     input: InputSample,
@@ -160,7 +160,11 @@ fn round_trip(
         InputSample::Tracker(_) => frame.tracker == stamp,
         InputSample::Glove(_) => frame.glove == stamp,
     })?;
-    Ok(answer.map(|_| sent_at.elapsed()))
+    let round_trip = sent_at.elapsed();
+    if answer.is_none() && client.sleep(Duration::ZERO) == Wake::Terminated {
+        bail!("interrupted");
+    }
+    Ok(answer.map(|_| round_trip))
 }
 
 /// The results as a table.

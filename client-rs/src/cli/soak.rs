@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, anyhow};
+use anyhow::{Context, anyhow, bail};
 use serde::Serialize;
 use vas_client::{Client, Frame, Wake};
 use vas_protocol::{HandFrame, InputStamp, wall_clock_ns};
@@ -20,6 +20,10 @@ const RSS_PERIOD: Duration = Duration::from_secs(1);
 
 /// How long to wait after the last sample for the answers still on their way.
 const DRAIN: Duration = Duration::from_secs(1);
+
+/// The most samples per stream one run may send (1 kHz for five and a half hours): the soak
+/// keeps a timestamp and an answered flag per sample.
+const MAX_SAMPLES_PER_STREAM: u64 = 20_000_000;
 
 /// How often the threads look at each other's progress while waiting.
 const DRAIN_CHECK: Duration = Duration::from_millis(10);
@@ -101,11 +105,19 @@ pub struct SoakReport {
 /// the memory; a second thread, with its own connection, sleeps on its WaitSet for the hand
 /// frames and marks the samples they answer, so that neither job delays the other.
 pub fn run(prefix: Option<&str>, args: &SoakArgs) -> anyhow::Result<()> {
+    let ticks = args.rate * args.seconds;
+    if ticks > MAX_SAMPLES_PER_STREAM {
+        bail!(
+            "--rate {} for --seconds {} is {ticks} samples per stream; at most \
+             {MAX_SAMPLES_PER_STREAM} fit one run",
+            args.rate,
+            args.seconds
+        );
+    }
     let client = super::connect(prefix)?;
     client
         .scene_info(super::CONTROL_TIMEOUT)
         .context("no vas server answers on this prefix")?;
-    let ticks = args.rate * args.seconds;
     let sent = SentStamps::new(ticks);
     let done = AtomicBool::new(false);
     let answered = AtomicU64::new(0);
