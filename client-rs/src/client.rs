@@ -17,6 +17,7 @@ use vas_protocol::{
 };
 
 use crate::ClientError;
+use crate::recording::InputSample;
 use crate::wait::{Wake, deadline_after, new_waitset, signal_mode, wait_until_ready};
 
 /// How long a control request that reached no server waits before it is sent again (a server
@@ -280,6 +281,14 @@ impl Client {
             .notify()
             .map_err(|error| ClientError::ipc("notify the glove service", error))?;
         Ok(())
+    }
+
+    /// Sends a sample of either input stream and wakes the server.
+    pub fn send_input(&self, input: &InputSample) -> Result<(), ClientError> {
+        match input {
+            InputSample::Tracker(sample) => self.send_tracker(sample),
+            InputSample::Glove(sample) => self.send_glove(sample),
+        }
     }
 
     /// Blocks until an output frame (parts, hand, event or force) is ready to be received, the

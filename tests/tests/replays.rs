@@ -16,12 +16,26 @@ use vas_tests::offline::{Oracle, VisibleHand};
 use vas_tests::scenarios::{EXPECTED, Scenario};
 use vas_tests::{PATIENCE, Server};
 
-/// What one replay published, without frame numbers and timestamps (which differ between runs).
+/// A hand frame without its frame number and timestamps (which differ between runs).
+#[derive(Debug, PartialEq)]
+struct Answer {
+    /// Sequence numbers of the tracker and glove samples it answers.
+    seqs: [u64; 2],
+    /// Root position and rotation.
+    root: [f64; 7],
+    /// Flex values, bit for bit.
+    flex: Vec<u32>,
+    /// Touching segments.
+    touching: u32,
+    /// Grasp type code.
+    grasp: u32,
+}
+
+/// What one replay published.
 #[derive(Debug, PartialEq)]
 struct Replay {
-    /// Per sample: the stamps' sequence numbers, root, flex, touching bits and grasp of the
-    /// hand frame answering it.
-    answers: Vec<([u64; 2], [f64; 7], Vec<u32>, u32, u32)>,
+    /// Per sample, the hand frame answering it.
+    answers: Vec<Answer>,
     /// Every event: kind, grasp, part, other.
     events: Vec<[u32; 4]>,
     /// The last parts frame's poses.
@@ -47,11 +61,7 @@ fn replay(client: &mut Client, scene: &Scene, oracle: &Oracle, recording: &Recor
             seq: input.seq(),
             timestamp_ns: input.timestamp_ns(),
         };
-        match input {
-            InputSample::Tracker(sample) => client.send_tracker(&sample),
-            InputSample::Glove(sample) => client.send_glove(&sample),
-        }
-        .expect("send");
+        client.send_input(&input).expect("send");
         let answers = |hand: &HandFrame| match input {
             InputSample::Tracker(_) => hand.tracker == stamp,
             InputSample::Glove(_) => hand.glove == stamp,
@@ -91,13 +101,13 @@ fn replay(client: &mut Client, scene: &Scene, oracle: &Oracle, recording: &Recor
             .extend(oracle.penetrations(scene, &poses, &hand, index));
         let [x, y, z] = answer.root.position;
         let [qx, qy, qz, qw] = answer.root.rotation;
-        out.answers.push((
-            [answer.tracker.seq, answer.glove.seq],
-            [x, y, z, qx, qy, qz, qw],
-            answer.flex.iter().map(|v| v.to_bits()).collect(),
-            answer.touching,
-            answer.grasp_type,
-        ));
+        out.answers.push(Answer {
+            seqs: [answer.tracker.seq, answer.glove.seq],
+            root: [x, y, z, qx, qy, qz, qw],
+            flex: answer.flex.iter().map(|v| v.to_bits()).collect(),
+            touching: answer.touching,
+            grasp: answer.grasp_type,
+        });
     }
     // The last frame's parts and events were published before its hand frame.
     for frame in client.receive().expect("receive") {
@@ -164,9 +174,7 @@ fn check(scenario: &Scenario) {
     let grasps_and_releases: Vec<(u32, u32, u32)> = first
         .events
         .iter()
-        .filter(|[kind, ..]| {
-            *kind == EventKind::Grasp as u32 || *kind == EventKind::Release as u32
-        })
+        .filter(|[kind, ..]| *kind == EventKind::Grasp as u32 || *kind == EventKind::Release as u32)
         .map(|&[kind, grasp, part, _]| (kind, part, grasp))
         .collect();
     let expected: Vec<(u32, u32, u32)> = scenario

@@ -10,6 +10,7 @@ use vas_client::{Client, Frame, Wake};
 use vas_protocol::{InputStamp, wall_clock_ns};
 
 use super::send::wait_for_hand_frame;
+use super::stats::LatencySummary;
 
 /// Arguments of `vas-client replay`.
 #[derive(Debug, clap::Args)]
@@ -67,7 +68,7 @@ fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
             tracing::info!(sent, "replay interrupted");
             return Ok(());
         }
-        send(client, recorded.input.with_timestamp(wall_clock_ns()))?;
+        client.send_input(&recorded.input.with_timestamp(wall_clock_ns()))?;
     }
     tracing::info!(sent = recording.samples.len(), "replay finished");
     Ok(())
@@ -85,7 +86,7 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
             timestamp_ns: input.timestamp_ns(),
         };
         let sent_at = Instant::now();
-        send(client, input)?;
+        client.send_input(&input)?;
         let answer = wait_for_hand_frame(client, timeout, |frame| match input {
             InputSample::Tracker(_) => frame.tracker == stamp,
             InputSample::Glove(_) => frame.glove == stamp,
@@ -109,36 +110,16 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
         sent = recording.samples.len(),
         answered = round_trips.len(),
         unanswered,
-        round_trip = %summary(&mut round_trips),
-        input_to_publish = %summary(&mut server_latencies),
+        round_trip = %summary(&round_trips),
+        input_to_publish = %summary(&server_latencies),
         "lockstep replay finished"
     );
     out.flush()?;
     Ok(())
 }
 
-fn send(client: &Client, input: InputSample) -> anyhow::Result<()> {
-    match input {
-        InputSample::Tracker(sample) => client.send_tracker(&sample)?,
-        InputSample::Glove(sample) => client.send_glove(&sample)?,
-    }
-    Ok(())
-}
-
-/// Median, 99th percentile and maximum, in microseconds.
-fn summary(durations: &mut [Duration]) -> String {
-    if durations.is_empty() {
-        return "none".to_owned();
-    }
-    durations.sort_unstable();
-    let at = |fraction: f64| {
-        let index = ((durations.len() - 1) as f64 * fraction).round() as usize;
-        durations[index].as_secs_f64() * 1e6
-    };
-    format!(
-        "median {:.1} us, p99 {:.1} us, max {:.1} us",
-        at(0.5),
-        at(0.99),
-        at(1.0)
-    )
+/// The latencies' nearest-rank summary, or "none".
+fn summary(latencies: &[Duration]) -> String {
+    LatencySummary::from_durations(latencies)
+        .map_or_else(|_| "none".to_owned(), |summary| summary.to_string())
 }

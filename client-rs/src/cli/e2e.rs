@@ -1,0 +1,315 @@
+//! `vas-client bench e2e`, benchmark B7: the latency from an input sample published by this
+//! process to the hand frame that answers it, beside the bare iceoryx2 round trip measured in
+//! the same run.
+//!
+//! Both paths use the same client code: send a sample, then sleep on the client's WaitSet until
+//! the hand frame carrying the sample's stamp arrives. The `vas` path goes through the server;
+//! the `raw` path through an echo process ([`super::echo`]) that this command starts on a private
+//! prefix, which opens the same services and answers every tracker sample at once. The two
+//! paths alternate sample by sample, so that both see the same machine load. The first
+//! `--warmup` exchanges of each path (page faults, connection set-up, cold caches) are left out
+//! of the figures.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, bail};
+use serde::Serialize;
+use vas_client::recording::{InputSample, Recording};
+use vas_client::{Client, Wake};
+use vas_protocol::{InputStamp, wall_clock_ns};
+
+use super::echo::READY_LINE;
+use super::send::wait_for_hand_frame;
+use super::stats::LatencySummary;
+use super::synthetic;
+
+/// Arguments of `vas-client bench e2e`.
+#[derive(Debug, clap::Args)]
+pub struct E2eArgs {
+    /// Measured exchanges per path, after the warm-up.
+    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..))]
+    samples: u64,
+    /// Exchanges per path before measuring, left out of the figures.
+    #[arg(long, default_value_t = 200)]
+    warmup: u64,
+    /// Send this recording's samples (in order, repeated as needed) instead of the synthetic
+    /// tracker stream; each is renumbered and stamped when sent.
+    #[arg(long)]
+    recording: Option<PathBuf>,
+    /// Write the results as JSON to this file.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// How long to wait for each answer before counting the sample unanswered, in ms.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
+    answer_timeout_ms: u64,
+}
+
+/// One row of the results: the latency of one path.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathRow {
+    /// `raw` or `vas`.
+    pub path: &'static str,
+    /// Latency summary of the measured exchanges.
+    #[serde(flatten)]
+    pub latency: LatencySummary,
+}
+
+/// Everything `bench e2e` reports.
+#[derive(Debug, Clone, Serialize)]
+pub struct E2eReport {
+    /// The server's scene.
+    pub scene: String,
+    /// What was sent: `synthetic tracker` or the recording's path.
+    pub input: String,
+    /// Exchanges per path left out before measuring.
+    pub warmup: u64,
+    /// The `raw` and `vas` rows.
+    pub rows: Vec<PathRow>,
+    /// Samples per path that got no answer within the timeout (after the warm-up).
+    pub unanswered_raw: u64,
+    /// See `unanswered_raw`.
+    pub unanswered_vas: u64,
+    /// Samples per second the server answers when each sample is sent as soon as the previous
+    /// one is answered: measured `vas` exchanges divided by their total time.
+    pub vas_samples_per_s: f64,
+}
+
+/// Runs the benchmark against the server on `prefix`.
+pub fn run(prefix: Option<&str>, args: &E2eArgs) -> anyhow::Result<()> {
+    let inputs = match &args.recording {
+        Some(path) => InputStream::recording(path)?,
+        None => InputStream::Synthetic,
+    };
+    let mut server = super::connect(prefix)?;
+    let scene = server
+        .scene_info(super::CONTROL_TIMEOUT)
+        .context("no vas server answers on this prefix")?
+        .name;
+    let echo_prefix = format!("{}raw{}_", prefix.unwrap_or("vas_"), std::process::id());
+    let _echo = EchoProcess::spawn(&echo_prefix)?;
+    let mut echo = super::connect(Some(&echo_prefix))?;
+    tracing::info!(
+        scene,
+        samples = args.samples,
+        warmup = args.warmup,
+        "measuring the raw and vas round trips"
+    );
+
+    let timeout = Duration::from_millis(args.answer_timeout_ms);
+    let mut raw = Vec::new();
+    let mut vas = Vec::new();
+    let (mut unanswered_raw, mut unanswered_vas) = (0, 0);
+    let mut inputs = inputs.numbered();
+    for index in 0..args.warmup + args.samples {
+        let measured = index >= args.warmup;
+        let tracker = InputSample::Tracker(synthetic::tracker(index + 1));
+        match round_trip(&mut echo, tracker, timeout)? {
+            Some(latency) if measured => raw.push(latency),
+            None if measured => unanswered_raw += 1,
+            _ => {}
+        }
+        match round_trip(&mut server, inputs.next_sample(), timeout)? {
+            Some(latency) if measured => vas.push(latency),
+            None if measured => unanswered_vas += 1,
+            _ => {}
+        }
+    }
+
+    let summary = |path: &'static str, latencies: &[Duration]| -> anyhow::Result<PathRow> {
+        let latency = LatencySummary::from_durations(latencies)
+            .with_context(|| format!("no {path} sample was answered"))?;
+        Ok(PathRow { path, latency })
+    };
+    let report = E2eReport {
+        scene,
+        input: match &args.recording {
+            Some(path) => path.display().to_string(),
+            None => "synthetic tracker".to_owned(),
+        },
+        warmup: args.warmup,
+        vas_samples_per_s: vas.len() as f64 / vas.iter().sum::<Duration>().as_secs_f64(),
+        rows: vec![summary("raw", &raw)?, summary("vas", &vas)?],
+        unanswered_raw,
+        unanswered_vas,
+    };
+    print!("{}", render(&report));
+    if let Some(out) = &args.out {
+        super::write_json(out, &report)?;
+    }
+    Ok(())
+}
+
+/// Sends `input` stamped now and waits for the hand frame answering it; its round trip, or
+/// `None` if none came within `timeout`. SIGINT or SIGTERM ends the benchmark.
+fn round_trip(
+    client: &mut Client,
+    input: InputSample,
+    timeout: Duration,
+) -> anyhow::Result<Option<Duration>> {
+    let input = input.with_timestamp(wall_clock_ns());
+    let stamp = InputStamp {
+        seq: input.seq(),
+        timestamp_ns: input.timestamp_ns(),
+    };
+    let sent_at = Instant::now();
+    client.send_input(&input)?;
+    let answer = wait_for_hand_frame(client, timeout, |frame| match input {
+        InputSample::Tracker(_) => frame.tracker == stamp,
+        InputSample::Glove(_) => frame.glove == stamp,
+    })?;
+    let round_trip = sent_at.elapsed();
+    if answer.is_none() && client.sleep(Duration::ZERO) == Wake::Terminated {
+        bail!("interrupted");
+    }
+    Ok(answer.map(|_| round_trip))
+}
+
+/// The results as a table.
+fn render(report: &E2eReport) -> String {
+    let mut text = format!(
+        "B7 end to end ({}, scene {}, {} warm-up exchanges left out)\n\
+         path    p50_us    p99_us    max_us  samples  unanswered\n",
+        report.input, report.scene, report.warmup
+    );
+    for (row, unanswered) in report
+        .rows
+        .iter()
+        .zip([report.unanswered_raw, report.unanswered_vas])
+    {
+        let latency = &row.latency;
+        text += &format!(
+            "{:<4}  {:>8.1}  {:>8.1}  {:>8.1}  {:>7}  {:>10}\n",
+            row.path, latency.p50_us, latency.p99_us, latency.max_us, latency.samples, unanswered
+        );
+    }
+    text += &format!(
+        "vas sustains {:.0} samples/s in lockstep\n",
+        report.vas_samples_per_s
+    );
+    text
+}
+
+/// Where the `vas` path's samples come from.
+enum InputStream {
+    /// [`synthetic::tracker`].
+    Synthetic,
+    /// A recording's samples, in order, repeated.
+    Recording(Vec<InputSample>),
+}
+
+impl InputStream {
+    fn recording(path: &Path) -> anyhow::Result<Self> {
+        let recording = Recording::load(path)?;
+        if recording.samples.is_empty() {
+            bail!("{}: the recording has no samples", path.display());
+        }
+        Ok(Self::Recording(
+            recording
+                .samples
+                .iter()
+                .map(|sample| sample.input)
+                .collect(),
+        ))
+    }
+
+    /// The stream with fresh sequence numbers: from 1 in each input stream.
+    fn numbered(self) -> NumberedInputs {
+        NumberedInputs {
+            stream: self,
+            sent: 0,
+            tracker_seq: 0,
+            glove_seq: 0,
+        }
+    }
+}
+
+/// An [`InputStream`] renumbered per input stream as it is sent.
+struct NumberedInputs {
+    stream: InputStream,
+    sent: usize,
+    tracker_seq: u64,
+    glove_seq: u64,
+}
+
+impl NumberedInputs {
+    fn next_sample(&mut self) -> InputSample {
+        let recorded = match &self.stream {
+            InputStream::Synthetic => None,
+            InputStream::Recording(samples) => Some(samples[self.sent % samples.len()]),
+        };
+        self.sent += 1;
+        match recorded {
+            None => {
+                self.tracker_seq += 1;
+                InputSample::Tracker(synthetic::tracker(self.tracker_seq))
+            }
+            Some(InputSample::Tracker(mut sample)) => {
+                self.tracker_seq += 1;
+                sample.seq = self.tracker_seq;
+                InputSample::Tracker(sample)
+            }
+            Some(InputSample::Glove(mut sample)) => {
+                self.glove_seq += 1;
+                sample.seq = self.glove_seq;
+                InputSample::Glove(sample)
+            }
+        }
+    }
+}
+
+/// The echo child process; stopped with SIGTERM (by its pid) when dropped.
+struct EchoProcess {
+    child: Child,
+}
+
+impl EchoProcess {
+    /// How long a stopped echo may take to exit before it is killed.
+    const EXIT_PATIENCE: Duration = Duration::from_secs(2);
+
+    /// Starts `vas-client echo` on `prefix` and waits until it is ready.
+    fn spawn(prefix: &str) -> anyhow::Result<Self> {
+        let exe = std::env::current_exe().context("locating the vas-client executable")?;
+        let child = Command::new(&exe)
+            .args(["--prefix", prefix, "echo"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .spawn()
+            .with_context(|| format!("starting {} echo", exe.display()))?;
+        let mut echo = Self { child };
+        let stdout = echo.child.stdout.take().context("the echo's stdout")?;
+        let mut line = String::new();
+        BufReader::new(stdout)
+            .read_line(&mut line)
+            .context("reading the echo's readiness")?;
+        if line.trim_end() != READY_LINE {
+            bail!("the echo process did not start (it said {line:?})");
+        }
+        tracing::debug!(pid = echo.child.id(), prefix, "echo ready");
+        Ok(echo)
+    }
+}
+
+impl Drop for EchoProcess {
+    fn drop(&mut self) {
+        let pid = self.child.id();
+        // SAFETY: kill(2) only sends a signal; `pid` is our child, which has not been reaped
+        // (we own its `Child` and wait for it only below), so the id names no other process.
+        let signalled = libc::pid_t::try_from(pid)
+            .is_ok_and(|pid| unsafe { libc::kill(pid, libc::SIGTERM) } == 0);
+        let deadline = Instant::now() + Self::EXIT_PATIENCE;
+        while signalled && Instant::now() < deadline {
+            match self.child.try_wait() {
+                Ok(Some(_)) => return,
+                Ok(None) => std::thread::sleep(Duration::from_millis(10)),
+                Err(_) => break,
+            }
+        }
+        tracing::warn!(pid, "the echo did not stop on SIGTERM; killing it");
+        if let Err(error) = self.child.kill().and_then(|()| self.child.wait().map(drop)) {
+            tracing::error!(pid, %error, "cannot kill the echo");
+        }
+    }
+}

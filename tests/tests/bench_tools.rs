@@ -1,0 +1,106 @@
+//! The benchmark tools of `vas-client` against a real server: a short `bench e2e` and a short
+//! `soak` produce complete reports. Figures are not checked (speed is for benchmarks, not
+//! tests), only that every sample was measured and the reports hang together.
+
+use std::process::Stdio;
+
+use vas_tests::{PATIENCE, Server};
+
+fn report(path: &std::path::Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).expect("the report is written");
+    serde_json::from_str(&text).expect("the report is JSON")
+}
+
+fn run_tool(server: &Server, args: &[&str]) {
+    let mut tool = server.client_tool(args, Stdio::null());
+    let status = tool.wait_exit(PATIENCE).expect("the tool ends");
+    assert!(status.success(), "{}", tool.log());
+}
+
+#[test]
+fn bench_e2e_and_a_short_soak_report_every_sample() {
+    let mut server = Server::start("benchtools");
+    server.connect();
+    let dir = tempfile::tempdir().expect("temporary directory");
+
+    let e2e_out = dir.path().join("b7.json");
+    run_tool(
+        &server,
+        &[
+            "bench",
+            "e2e",
+            "--samples",
+            "40",
+            "--warmup",
+            "5",
+            "--out",
+            e2e_out.to_str().expect("utf-8"),
+        ],
+    );
+    let e2e = report(&e2e_out);
+    let rows = e2e["rows"].as_array().expect("rows");
+    let paths: Vec<&str> = rows
+        .iter()
+        .map(|row| row["path"].as_str().unwrap_or(""))
+        .collect();
+    assert_eq!(paths, ["raw", "vas"]);
+    for row in rows {
+        assert_eq!(row["samples"], 40, "{row}");
+        let [p50, p99, max] = ["p50_us", "p99_us", "max_us"].map(|key| {
+            row[key]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{key} in {row}"))
+        });
+        assert!(0.0 < p50 && p50 <= p99 && p99 <= max, "{row}");
+    }
+    assert_eq!(
+        (
+            e2e["unanswered_raw"].as_u64(),
+            e2e["unanswered_vas"].as_u64()
+        ),
+        (Some(0), Some(0))
+    );
+    assert!(
+        e2e["vas_samples_per_s"]
+            .as_f64()
+            .is_some_and(|rate| rate > 0.0),
+        "{e2e}"
+    );
+
+    let soak_out = dir.path().join("soak.json");
+    let pid = server.process.id().to_string();
+    run_tool(
+        &server,
+        &[
+            "soak",
+            "--rate",
+            "100",
+            "--seconds",
+            "2",
+            "--server-pid",
+            &pid,
+            "--out",
+            soak_out.to_str().expect("utf-8"),
+        ],
+    );
+    let soak = report(&soak_out);
+    for stream in ["tracker", "glove"] {
+        assert_eq!(soak[stream]["sent"], 200, "{soak}");
+    }
+    // The server answers every sample; a sample counts as dropped only when the one frame that
+    // answered it was lost in the soak's own full buffer, which its frame numbering reveals.
+    let dropped = soak["dropped"].as_u64().expect("dropped");
+    let missed = soak["frames_missed_by_client"]
+        .as_u64()
+        .expect("missed frames");
+    assert!(dropped <= missed, "{soak}");
+    let memory = &soak["memory"];
+    let samples = memory["samples"].as_array().expect("memory samples");
+    // Start, one per second, end.
+    assert!(samples.len() >= 3, "{memory}");
+    assert!(
+        memory["start_kib"].as_u64().is_some_and(|kib| kib > 0),
+        "{memory}"
+    );
+    assert!(memory["growth_kib_per_min"].is_f64(), "{memory}");
+}
