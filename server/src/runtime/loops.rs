@@ -153,6 +153,60 @@ impl Loops {
     }
 }
 
+/// How often a loop logs its rate.
+const RATE_LOG_PERIOD: Duration = Duration::from_secs(10);
+
+/// Frames a loop processed and the time it spent on them: the rate it sustains is frames per
+/// busy second, whatever rate its input comes at.
+struct LoopMeter {
+    name: &'static str,
+    frames: u64,
+    busy: Duration,
+    since: Instant,
+    logged: (u64, Duration),
+}
+
+impl LoopMeter {
+    fn new(name: &'static str) -> LoopMeter {
+        LoopMeter {
+            name,
+            frames: 0,
+            busy: Duration::ZERO,
+            since: Instant::now(),
+            logged: (0, Duration::ZERO),
+        }
+    }
+
+    /// Counts a frame whose processing started at `started`, and logs the rate now and then.
+    fn frame_done(&mut self, started: Instant) {
+        self.frames += 1;
+        self.busy += started.elapsed();
+        if self.since.elapsed() >= RATE_LOG_PERIOD {
+            self.log();
+        }
+    }
+
+    /// Logs the frames and busy time since the last log, and the rate they sustain.
+    fn log(&mut self) {
+        let frames = self.frames - self.logged.0;
+        let busy = self.busy - self.logged.1;
+        if frames > 0 {
+            let window = self.since.elapsed().as_secs_f64();
+            tracing::info!(
+                loop_name = self.name,
+                frames,
+                frames_per_s = format_args!("{:.0}", frames as f64 / window),
+                busy_percent = format_args!("{:.1}", 100.0 * busy.as_secs_f64() / window),
+                mean_us = format_args!("{:.1}", busy.as_secs_f64() * 1e6 / frames as f64),
+                sustains_per_s = format_args!("{:.0}", frames as f64 / busy.as_secs_f64()),
+                "loop rate"
+            );
+        }
+        self.logged = (self.frames, self.busy);
+        self.since = Instant::now();
+    }
+}
+
 /// The period of a loop rate (validated by the scene: positive and finite).
 fn period(hz: f64) -> Duration {
     Duration::try_from_secs_f64(1.0 / hz).unwrap_or(Duration::from_millis(10))
@@ -174,24 +228,29 @@ struct GraspingLoop {
 
 impl GraspingLoop {
     fn run(mut self) {
+        let mut meter = LoopMeter::new("grasping");
         loop {
             let deadline = match self.last {
                 Some((_, true)) if !self.lockstep => Some(self.stepped_at + self.period),
                 _ => None,
             };
-            match self.inbox.receive(deadline) {
+            let received = self.inbox.receive(deadline);
+            let started = Instant::now();
+            match received {
                 Received::Work(Work::Frame(input)) => self.step(input),
                 Received::Work(Work::Control(change)) => {
                     self.apply(change);
+                    continue;
                 }
-                Received::Timeout => {
-                    if let Some((input, _)) = self.last {
-                        self.step(input);
-                    }
-                }
+                Received::Timeout => match self.last {
+                    Some((input, _)) => self.step(input),
+                    None => continue,
+                },
                 Received::Closed => break,
             }
+            meter.frame_done(started);
         }
+        meter.log();
         self.outbox.close();
     }
 
@@ -255,18 +314,26 @@ struct SlidingLoop {
 
 impl SlidingLoop {
     fn run(mut self) {
+        let mut meter = LoopMeter::new("sliding");
         loop {
             let deadline = match self.last {
                 Some((_, _, true)) if !self.lockstep => Some(self.slid_at + self.period),
                 _ => None,
             };
-            match self.inbox.receive(deadline) {
+            let received = self.inbox.receive(deadline);
+            let started = Instant::now();
+            match received {
                 Received::Work(Work::Frame(frame)) => self.slide(frame),
-                Received::Work(Work::Control(change)) => self.apply(change),
+                Received::Work(Work::Control(change)) => {
+                    self.apply(change);
+                    continue;
+                }
                 Received::Timeout => self.keep_sliding(),
                 Received::Closed => break,
             }
+            meter.frame_done(started);
         }
+        meter.log();
         self.outbox.close();
     }
 
@@ -394,12 +461,15 @@ impl CollisionLoop {
     fn run(mut self) {
         let make_waker = std::mem::replace(&mut self.wake, Box::new(|| Box::new(|| {})));
         let mut wake = make_waker();
+        let mut meter = LoopMeter::new("collision");
         loop {
             match self.inbox.receive(None) {
                 Received::Work(Work::Frame(candidate)) => {
+                    let started = Instant::now();
                     if self.verify(candidate) {
                         wake();
                     }
+                    meter.frame_done(started);
                 }
                 Received::Work(Work::Control(Change::Restart(restart))) => {
                     let bodies = restart.hand_bodies.clone();
@@ -411,6 +481,7 @@ impl CollisionLoop {
                 Received::Closed => break,
             }
         }
+        meter.log();
     }
 
     /// Verifies a frame and hands it to the I/O thread; false for a frame of an older restart,
