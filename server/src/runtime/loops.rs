@@ -128,11 +128,24 @@ impl Loops {
         let spawn = |name: &str, body: Box<dyn FnOnce() + Send>| {
             std::thread::Builder::new().name(name.into()).spawn(body)
         };
+        // The collision pipeline runs its back end on the current rayon pool. Here it gets a pool
+        // of one thread, so it tests sequentially: a frame moves a handful of objects, and the
+        // pool's idle workers spin and yield for a while after each parallel stage, taking the
+        // cores the other loops need (profiled: a third of the server's time went to
+        // `sched_yield` with the global pool). The loops themselves are the parallelism.
+        let sequential = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .thread_name(|_| "collision".into())
+            .build()
+            .map_err(std::io::Error::other)?;
         Ok(Loops {
             threads: vec![
                 spawn("grasping", Box::new(move || grasping.run()))?,
                 spawn("sliding", Box::new(move || sliding.run()))?,
-                spawn("collision", Box::new(move || collision.run()))?,
+                spawn(
+                    "collision-pool",
+                    Box::new(move || sequential.install(move || collision.run())),
+                )?,
             ],
         })
     }
