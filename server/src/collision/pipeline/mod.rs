@@ -12,8 +12,9 @@
 //! plane, after many loops) and goes straight to the exact test.
 //!
 //! The back end is parallel on the current rayon pool: the pre-checks and the exact tests of a
-//! frame are spread over the threads with work stealing (coarse grain), and when fewer pairs than
-//! threads reach the exact test, each pair's own traversal is split (fine grain).
+//! frame are spread over the threads with work stealing (coarse grain), and the traversal of a
+//! pair expected to be expensive is itself split across the threads (fine grain; see
+//! [`PipelineConfig::split_min_bv_tests`]).
 //! [`ConcurrentPipeline`] runs the whole pipeline on a thread of its own.
 
 mod concurrent;
@@ -198,13 +199,34 @@ pub struct PipelineConfig {
     /// Whether the separating-plane stage runs at all (off: pairs go from the interest matrix
     /// straight to the exact test; for comparisons).
     pub separating_plane: bool,
+    /// Fine grain: a first-hit exact test is split across the threads when the pair's previous
+    /// one (the last frame it reached that stage) ran at least this many bounding-volume tests;
+    /// other pairs, and pairs never tested, traverse on one thread. See
+    /// [`SPLIT_MIN_BV_TESTS`] for why a cost and not the number of pairs decides.
+    pub split_min_bv_tests: u64,
 }
+
+/// Default of [`PipelineConfig::split_min_bv_tests`].
+///
+/// Deciding by the number of pairs (split when fewer pairs than threads reach the exact test)
+/// split the cheap first-hit tests that make up a sparse frame, and those got slower: a split
+/// traversal pays rayon task hand-overs, wakes the idle threads and walks its first levels without
+/// the sequential traversal's ordering, so on its own (one thread) it takes 1.5 times as long as
+/// the sequential one at 500 bounding-volume tests and still 1.1 times at 8,000 (DOP-trees of 500
+/// to 8,000 triangles). Two threads can win back at most half, so only long traversals gain. A
+/// bounding-volume test costs 0.02-0.03 us in a long traversal, and a pair's work changes little
+/// from one frame to the next (coherence), so the previous test's count predicts the next one's
+/// time. With the split's fixed cost of about 10 us (hand-over and wake-up) and its one-thread
+/// overhead, two threads come out ahead beyond roughly 40 us of traversal, about 1,500 tests;
+/// 2,048 keeps cheap pairs sequential with a margin.
+pub const SPLIT_MIN_BV_TESTS: u64 = 2048;
 
 impl Default for PipelineConfig {
     fn default() -> Self {
         PipelineConfig {
             plane_search: PlaneSearch::default(),
             separating_plane: true,
+            split_min_bv_tests: SPLIT_MIN_BV_TESTS,
         }
     }
 }
@@ -229,6 +251,9 @@ struct PairState {
     plane: SeparatingPlane,
     /// `Some` while the pair collides, with its triangle pairs if they were asked for.
     contact: Option<Option<Vec<[u32; 2]>>>,
+    /// Bounding-volume tests of the pair's last first-hit exact test (0 before the first): the
+    /// expected cost of the next one.
+    exact_bv_tests: u64,
 }
 
 /// One pair going down the back end in this frame.
@@ -238,8 +263,12 @@ struct PairWork {
     plane: SeparatingPlane,
     /// The pair collided when last tested: the pre-check would most likely fail, so it is skipped.
     was_colliding: bool,
+    /// Bounding-volume tests of the pair's last exact test.
+    expected_bv_tests: u64,
     separated: bool,
     loops: u32,
+    /// The exact test was split across threads.
+    split: bool,
     colliding: bool,
     triangles: Option<Vec<[u32; 2]>>,
     stats: QueryStats,
@@ -448,8 +477,10 @@ impl<C: ExactTest> CollisionPipeline<C> {
                     b_to_a: self.live(a).pose.inv_mul(&self.live(b).pose),
                     plane: state.map_or_else(SeparatingPlane::new, |state| state.plane),
                     was_colliding: state.is_some_and(|state| state.contact.is_some()),
+                    expected_bv_tests: state.map_or(0, |state| state.exact_bv_tests),
                     separated: false,
                     loops: 0,
+                    split: false,
                     colliding: false,
                     triangles: None,
                     stats: QueryStats::default(),
@@ -478,14 +509,21 @@ impl<C: ExactTest> CollisionPipeline<C> {
         stats.plane_loops = work.iter().map(|item| u64::from(item.loops)).sum();
 
         let stage_start = Instant::now();
-        let split = (unseparated as usize) < rayon::current_num_threads();
+        let split_min_bv_tests = if rayon::current_num_threads() > 1 {
+            self.config.split_min_bv_tests
+        } else {
+            u64::MAX
+        };
         let slots = &self.slots;
         let unseparated_items = work.iter_mut().filter(|item| !item.separated).collect();
         for_each_pair(unseparated_items, 1, |item| {
             let [a, b] = models(slots, item.pair);
             let (a, b) = (a.exact(), b.exact());
             item.colliding = match detail {
-                Detail::Pairs if split => a.intersects_split(b, &item.b_to_a, &mut item.stats),
+                Detail::Pairs if item.expected_bv_tests >= split_min_bv_tests => {
+                    item.split = true;
+                    a.intersects_split(b, &item.b_to_a, &mut item.stats)
+                }
                 Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
                 Detail::TrianglePairs => {
                     let mut triangles = Vec::new();
@@ -496,11 +534,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
                 }
             };
         });
-        stats.split_tests = if split && detail == Detail::Pairs {
-            unseparated
-        } else {
-            0
-        };
+        stats.split_tests = work.iter().filter(|item| item.split).count() as u64;
         stats.exact = StageCounters {
             pairs_in: unseparated,
             pairs_out: work.iter().filter(|item| item.colliding).count() as u64,
@@ -514,6 +548,9 @@ impl<C: ExactTest> CollisionPipeline<C> {
             let state = self.pairs.entry(item.pair).or_default();
             state.plane = item.plane;
             state.contact = item.colliding.then_some(item.triangles);
+            if !item.separated && detail == Detail::Pairs {
+                state.exact_bv_tests = item.stats.bv_tests;
+            }
         }
         if detail == Detail::TrianglePairs {
             self.fill_missing_triangles();
