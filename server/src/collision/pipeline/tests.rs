@@ -468,13 +468,13 @@ fn answers_do_not_depend_on_the_separating_plane_stage() {
 fn only_pairs_expensive_last_time_are_split() {
     use crate::collision::MeshCollider;
     use crate::geometry::shapes::{ShapeKind, ShapeSpec};
-    let block = ShapeSpec::unit(ShapeKind::BoxWithHole, 2000)
+    let block = ShapeSpec::unit(ShapeKind::BoxWithHole, 3000)
         .build()
         .unwrap();
     let peg = ShapeSpec::Cylinder {
-        radius: 0.48,
+        radius: 0.49,
         height: 2.0,
-        triangles: 2000,
+        triangles: 3000,
     }
     .build()
     .unwrap();
