@@ -210,15 +210,16 @@ pub struct PipelineConfig {
 ///
 /// Deciding by the number of pairs (split when fewer pairs than threads reach the exact test)
 /// split the cheap first-hit tests that make up a sparse frame, and those got several times
-/// slower: a split traversal hands rayon tasks over, wakes the idle threads and walks its first
-/// levels without the sequential traversal's ordering. Measured on two threads, one DOP-tree pair
-/// at a time (500 to 8,000 triangles, near-contact poses and pegs in holes), with the threads
-/// asleep beforehand as between frames: a first hit after 30-130 bounding-volume tests took
-/// 4.7-5.8 us sequential and 19-24 us split; the split still lost at 1,000-4,000 tests (1.6 times
-/// the sequential time) and won only beyond about 5,000 (0.65-0.95 of it, 100 us and more). A
-/// bounding-volume test costs 0.025-0.04 us in a long traversal, and a pair's work changes little
-/// from one frame to the next (coherence), so the previous test's count predicts the next one's
-/// time; 8,192 (about 200 us) splits only where the split was measured to win.
+/// slower: a split traversal hands rayon tasks over and wakes the idle threads, and even on one
+/// thread it takes 1.1-1.6 times as long as the sequential one. Measured on two threads, one
+/// DOP-tree pair at a time (500 to 8,000 triangles, random near-contact poses and pegs in holes),
+/// with the threads asleep beforehand as between frames: a first hit after 30-130
+/// bounding-volume tests took 4.7-5.8 us sequential and 19-24 us split; the split still lost at
+/// 1,000-4,000 tests (about 1.6 times the sequential time) and won only beyond about 5,000 tests
+/// (0.65-0.95 of the sequential time). A bounding-volume test costs 0.025-0.04 us in a long
+/// traversal, and a pair's work changes little from one frame to the next (coherence), so the
+/// previous test's count predicts the next one's time; 8,192 (about 200 us of traversal) splits
+/// only where the split was measured to win.
 pub const SPLIT_MIN_BV_TESTS: u64 = 8192;
 
 impl Default for PipelineConfig {
