@@ -24,6 +24,7 @@ use super::report::{self, LinePlot, Series, Table};
 use crate::collision::interest::GroupId;
 use crate::collision::pipeline::{
     CollisionModel, CollisionPipeline, Detail, FrameStats, ObjectDesc, ObjectId, PipelineConfig,
+    SPLIT_MIN_BV_TESTS,
 };
 use crate::collision::{DopTree, MeshCollider};
 use crate::geometry::ConvexHull;
@@ -57,6 +58,10 @@ pub struct BounceArgs {
     /// Run without the separating-plane stage (pairs go from the boxes to the exact test).
     #[arg(long)]
     pub no_separating_plane: bool,
+    /// Split a pair's exact test across the threads when its previous one ran at least this many
+    /// bounding-volume tests (the pipeline's fine-grain threshold).
+    #[arg(long, default_value_t = SPLIT_MIN_BV_TESTS)]
+    pub split_min_bv_tests: u64,
     /// Where to write the JSON results.
     #[arg(long, default_value = "bounce.json")]
     pub out: PathBuf,
@@ -93,6 +98,8 @@ pub struct StageMeans {
     pub unseparated_pairs: f64,
     /// Colliding pairs.
     pub colliding_pairs: f64,
+    /// Exact tests split across the threads.
+    pub split_tests: f64,
     /// Broad-phase time, microseconds.
     pub broad_phase_us: f64,
     /// Separating-plane stage time, microseconds.
@@ -242,6 +249,7 @@ fn run_scene(
     let mut scene = Scene::new(count, radii, side, args.seed);
     let mut pipeline = CollisionPipeline::new(PipelineConfig {
         separating_plane: !args.no_separating_plane,
+        split_min_bv_tests: args.split_min_bv_tests,
         ..PipelineConfig::default()
     });
     let mut ids: Vec<ObjectId> = Vec::with_capacity(count);
@@ -295,6 +303,7 @@ fn stage_means(stats: &[FrameStats]) -> StageMeans {
         interesting_pairs: mean(&|s| s.interest.pairs_out as f64),
         unseparated_pairs: mean(&|s| s.separating_plane.pairs_out as f64),
         colliding_pairs: mean(&|s| s.exact.pairs_out as f64),
+        split_tests: mean(&|s| s.split_tests as f64),
         broad_phase_us: mean(&|s| us(s.broad_phase.time)),
         separating_plane_us: mean(&|s| us(s.separating_plane.time)),
         exact_us: mean(&|s| us(s.exact.time)),
@@ -378,6 +387,7 @@ pub fn bounce_table(rows: &[BounceRow]) -> Table {
         "box_pairs",
         "unseparated",
         "colliding",
+        "split",
         "broad_us",
         "plane_us",
         "exact_us",
@@ -393,6 +403,7 @@ pub fn bounce_table(rows: &[BounceRow]) -> Table {
             report::format_number(s.box_pairs),
             report::format_number(s.unseparated_pairs),
             report::format_number(s.colliding_pairs),
+            report::format_number(s.split_tests),
             report::format_number(s.broad_phase_us),
             report::format_number(s.separating_plane_us),
             report::format_number(s.exact_us),

@@ -1,11 +1,12 @@
-//! How the pipeline runs an exact test: serially, or split across threads when few pairs reach
-//! the exact stage.
+//! How the pipeline runs an exact test: serially, or split across threads when the pair's last
+//! test was expensive.
 
 use crate::collision::{DopTree, MeshCollider, ParryMesh, QueryStats};
 use nalgebra::Isometry3;
 
-/// An exact test the pipeline can run on its thread pool: serially for a frame with many pairs,
-/// or split across threads when a few pairs dominate the frame.
+/// An exact test the pipeline can run on its thread pool: serially for a cheap pair, or split
+/// across threads for a pair whose last test was long (see
+/// [`PipelineConfig::split_min_bv_tests`](super::PipelineConfig::split_min_bv_tests)).
 pub trait ExactTest: MeshCollider {
     /// Like [`MeshCollider::intersects`], but free to split the work across the current rayon
     /// pool. Tests without a parallel traversal run serially.

@@ -12,8 +12,9 @@
 //! plane, after many loops) and goes straight to the exact test.
 //!
 //! The back end is parallel on the current rayon pool: the pre-checks and the exact tests of a
-//! frame are spread over the threads with work stealing (coarse grain), and when fewer pairs than
-//! threads reach the exact test, each pair's own traversal is split (fine grain).
+//! frame are spread over the threads with work stealing (coarse grain), and the traversal of a
+//! pair expected to be expensive is itself split across the threads (fine grain; see
+//! [`PipelineConfig::split_min_bv_tests`]).
 //! [`ConcurrentPipeline`] runs the whole pipeline on a thread of its own.
 
 mod concurrent;
@@ -198,13 +199,35 @@ pub struct PipelineConfig {
     /// Whether the separating-plane stage runs at all (off: pairs go from the interest matrix
     /// straight to the exact test; for comparisons).
     pub separating_plane: bool,
+    /// Fine grain: a first-hit exact test is split across the threads when the pair's previous
+    /// one (the last frame it reached that stage) ran at least this many bounding-volume tests;
+    /// other pairs, and pairs never tested, traverse on one thread. See
+    /// [`SPLIT_MIN_BV_TESTS`] for why a cost and not the number of pairs decides.
+    pub split_min_bv_tests: u64,
 }
+
+/// Default of [`PipelineConfig::split_min_bv_tests`].
+///
+/// Deciding by the number of pairs (split when fewer pairs than threads reach the exact test)
+/// split the cheap first-hit tests that make up a sparse frame, and those got several times
+/// slower: a split traversal hands rayon tasks over and wakes the idle threads, and even on one
+/// thread it takes 1.1-1.6 times as long as the sequential one. Measured on two threads, one
+/// DOP-tree pair at a time (500 to 8,000 triangles, random near-contact poses and pegs in holes),
+/// with the threads asleep beforehand as between frames: a first hit after 30-130
+/// bounding-volume tests took 4.7-5.8 us sequential and 19-24 us split; the split still lost at
+/// 1,000-4,000 tests (about 1.6 times the sequential time) and won only beyond about 5,000 tests
+/// (0.65-0.95 of the sequential time). A bounding-volume test costs 0.025-0.04 us in a long
+/// traversal, and a pair's work changes little from one frame to the next (coherence), so the
+/// previous test's count predicts the next one's time; 8,192 (about 200 us of traversal) splits
+/// only where the split was measured to win.
+pub const SPLIT_MIN_BV_TESTS: u64 = 8192;
 
 impl Default for PipelineConfig {
     fn default() -> Self {
         PipelineConfig {
             plane_search: PlaneSearch::default(),
             separating_plane: true,
+            split_min_bv_tests: SPLIT_MIN_BV_TESTS,
         }
     }
 }
@@ -229,6 +252,9 @@ struct PairState {
     plane: SeparatingPlane,
     /// `Some` while the pair collides, with its triangle pairs if they were asked for.
     contact: Option<Option<Vec<[u32; 2]>>>,
+    /// Bounding-volume tests of the pair's last first-hit exact test (0 before the first): the
+    /// expected cost of the next one.
+    exact_bv_tests: u64,
 }
 
 /// One pair going down the back end in this frame.
@@ -238,8 +264,12 @@ struct PairWork {
     plane: SeparatingPlane,
     /// The pair collided when last tested: the pre-check would most likely fail, so it is skipped.
     was_colliding: bool,
+    /// Bounding-volume tests of the pair's last exact test.
+    expected_bv_tests: u64,
     separated: bool,
     loops: u32,
+    /// The exact test was split across threads.
+    split: bool,
     colliding: bool,
     triangles: Option<Vec<[u32; 2]>>,
     stats: QueryStats,
@@ -448,8 +478,10 @@ impl<C: ExactTest> CollisionPipeline<C> {
                     b_to_a: self.live(a).pose.inv_mul(&self.live(b).pose),
                     plane: state.map_or_else(SeparatingPlane::new, |state| state.plane),
                     was_colliding: state.is_some_and(|state| state.contact.is_some()),
+                    expected_bv_tests: state.map_or(0, |state| state.exact_bv_tests),
                     separated: false,
                     loops: 0,
+                    split: false,
                     colliding: false,
                     triangles: None,
                     stats: QueryStats::default(),
@@ -478,14 +510,21 @@ impl<C: ExactTest> CollisionPipeline<C> {
         stats.plane_loops = work.iter().map(|item| u64::from(item.loops)).sum();
 
         let stage_start = Instant::now();
-        let split = (unseparated as usize) < rayon::current_num_threads();
+        let split_min_bv_tests = if rayon::current_num_threads() > 1 {
+            self.config.split_min_bv_tests
+        } else {
+            u64::MAX
+        };
         let slots = &self.slots;
         let unseparated_items = work.iter_mut().filter(|item| !item.separated).collect();
         for_each_pair(unseparated_items, 1, |item| {
             let [a, b] = models(slots, item.pair);
             let (a, b) = (a.exact(), b.exact());
             item.colliding = match detail {
-                Detail::Pairs if split => a.intersects_split(b, &item.b_to_a, &mut item.stats),
+                Detail::Pairs if item.expected_bv_tests >= split_min_bv_tests => {
+                    item.split = true;
+                    a.intersects_split(b, &item.b_to_a, &mut item.stats)
+                }
                 Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
                 Detail::TrianglePairs => {
                     let mut triangles = Vec::new();
@@ -496,11 +535,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
                 }
             };
         });
-        stats.split_tests = if split && detail == Detail::Pairs {
-            unseparated
-        } else {
-            0
-        };
+        stats.split_tests = work.iter().filter(|item| item.split).count() as u64;
         stats.exact = StageCounters {
             pairs_in: unseparated,
             pairs_out: work.iter().filter(|item| item.colliding).count() as u64,
@@ -514,6 +549,9 @@ impl<C: ExactTest> CollisionPipeline<C> {
             let state = self.pairs.entry(item.pair).or_default();
             state.plane = item.plane;
             state.contact = item.colliding.then_some(item.triangles);
+            if !item.separated && detail == Detail::Pairs {
+                state.exact_bv_tests = item.stats.bv_tests;
+            }
         }
         if detail == Detail::TrianglePairs {
             self.fill_missing_triangles();

@@ -227,25 +227,39 @@ fn pairs_equal_brute_force_over_thousands_of_random_frames_with_parry() {
 
 #[test]
 fn pairs_equal_brute_force_over_thousands_of_random_frames_with_dop_trees() {
-    pairs_equal_brute_force::<DopTree>(24);
+    let (split, exact) = pairs_equal_brute_force::<DopTree>(24);
+    assert!(
+        split * 10 > exact && split * 10 < exact * 9,
+        "{split} of {exact} exact tests on two threads were split"
+    );
 }
 
-/// Runs a random scene of 30 objects for 2,500 frames and compares every frame's colliding pairs
-/// (and every tenth frame's triangle pairs) with brute force, using the same exact test `C`.
-fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) {
+/// Runs a random scene of 30 objects for 2,500 frames, alternately on one and two threads, and
+/// compares every frame's colliding pairs (and every tenth frame's triangle pairs) with brute
+/// force, using the same exact test `C`. The split threshold is low enough for this scene's small
+/// meshes that two-thread frames run both split and unsplit first-hit tests; returns how many
+/// were split and how many ran in all.
+fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) -> (u64, u64) {
     let mut scene = Scene::<C>::new(seed);
-    let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
+    let mut pipeline = CollisionPipeline::new(PipelineConfig {
+        split_min_bv_tests: 40,
+        ..PipelineConfig::default()
+    });
     for _ in 0..30 {
         scene.add(&mut pipeline);
     }
     let ids: Vec<ObjectId> = scene.bodies.keys().copied().collect();
     scene.disallowed_object_pair = Some((ids[3], ids[7]));
     pipeline.set_interest(interest_rules((ids[3], ids[7])));
-    let two_threads = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .unwrap();
+    let pool = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    };
+    let (one_thread, two_threads) = (pool(1), pool(2));
     let (mut colliding_frames, mut separated_by_plane) = (0, 0);
+    let (mut split_tests, mut two_thread_exact_tests) = (0, 0);
     for frame in 0..2500 {
         for (id, pose) in scene.step() {
             pipeline.queue_move(id, pose).unwrap();
@@ -271,11 +285,17 @@ fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) {
             Detail::Pairs
         };
         let report = if frame % 2 == 0 {
-            pipeline.run_frame(detail)
+            one_thread.install(|| pipeline.run_frame(detail))
         } else {
             two_threads.install(|| pipeline.run_frame(detail))
         };
         let stats = report.stats;
+        if frame % 2 == 0 {
+            assert_eq!(stats.split_tests, 0, "one thread never splits");
+        } else if detail == Detail::Pairs {
+            split_tests += stats.split_tests;
+            two_thread_exact_tests += stats.exact.pairs_in;
+        }
         assert!(stats.broad_phase.pairs_out <= stats.broad_phase.pairs_in);
         assert_eq!(stats.interest.pairs_in, stats.broad_phase.pairs_out);
         assert_eq!(stats.separating_plane.pairs_in, stats.interest.pairs_out);
@@ -294,6 +314,7 @@ fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) {
         separated_by_plane > 10_000,
         "the plane stage separated only {separated_by_plane} pairs"
     );
+    (split_tests, two_thread_exact_tests)
 }
 
 #[test]
@@ -437,4 +458,90 @@ fn answers_do_not_depend_on_the_separating_plane_stage() {
         plane_tests * 2 < direct_tests,
         "{plane_tests} exact tests with the plane stage, {direct_tests} without"
     );
+}
+
+/// Fine grain goes by cost: of a peg in a hole with little clearance (a long traversal that finds
+/// no hit) and two overlapping spheres (a first hit within a few dozen bounding-volume tests),
+/// only the peg's exact test is split, once the pipeline has seen its cost, and only on more than
+/// one thread; the answers stay those of parry.
+#[test]
+fn only_pairs_expensive_last_time_are_split() {
+    use crate::collision::MeshCollider;
+    use crate::geometry::shapes::{ShapeKind, ShapeSpec};
+    let block = ShapeSpec::unit(ShapeKind::BoxWithHole, 3000)
+        .build()
+        .unwrap();
+    let peg = ShapeSpec::Cylinder {
+        radius: 0.49,
+        height: 2.0,
+        triangles: 3000,
+    }
+    .build()
+    .unwrap();
+    let ball = ShapeSpec::unit(ShapeKind::Sphere, 1000).build().unwrap();
+    let placed = |x: f64, z: f64| Isometry3::translation(x, 0.0, z);
+    let objects = [
+        (&block, placed(0.0, 0.0)),
+        (&peg, placed(0.005, 0.2)),
+        (&ball, placed(10.0, 0.0)),
+        (&ball, placed(11.5, 0.0)),
+    ];
+
+    // The oracle, and the premise: one pair costs far more than the threshold, the other far less.
+    let first_hit = |i: usize, j: usize| {
+        let (a, b) = (DopTree::build(objects[i].0), DopTree::build(objects[j].0));
+        let mut stats = QueryStats::default();
+        let b_to_a = objects[i].1.inv_mul(&objects[j].1);
+        let hit = a.intersects(&b, &b_to_a, &mut stats);
+        let parry = ParryMesh::build(objects[i].0).intersects(
+            &ParryMesh::build(objects[j].0),
+            &b_to_a,
+            &mut QueryStats::default(),
+        );
+        assert_eq!(hit, parry);
+        (hit, stats.bv_tests)
+    };
+    let (peg_hit, peg_work) = first_hit(0, 1);
+    let (balls_hit, balls_work) = first_hit(2, 3);
+    assert!(!peg_hit && balls_hit);
+    assert!(peg_work > 2 * SPLIT_MIN_BV_TESTS, "{peg_work}");
+    assert!(balls_work * 10 < SPLIT_MIN_BV_TESTS, "{balls_work}");
+
+    let mut pipeline = CollisionPipeline::<DopTree>::new(PipelineConfig::default());
+    let ids: Vec<ObjectId> = objects
+        .iter()
+        .map(|(mesh, pose)| {
+            pipeline
+                .add(ObjectDesc {
+                    model: model(mesh),
+                    pose: *pose,
+                    group: GroupId(0),
+                    is_static: false,
+                })
+                .unwrap()
+        })
+        .collect();
+    let pool = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    };
+    let (one_thread, two_threads) = (pool(1), pool(2));
+    let mut frame = |threads: &rayon::ThreadPool, nudge: f64| {
+        for (&id, (_, pose)) in ids.iter().zip(&objects) {
+            pipeline
+                .queue_move(id, Translation3::new(0.0, nudge, 0.0) * pose)
+                .unwrap();
+        }
+        let report = threads.install(|| pipeline.run_frame(Detail::Pairs));
+        let found: Vec<_> = report.colliding.iter().map(|p| (p.a, p.b)).collect();
+        assert_eq!(found, [(ids[2], ids[3])]);
+        assert_eq!(report.stats.exact.pairs_in, 2);
+        report.stats.split_tests
+    };
+    assert_eq!(frame(&two_threads, 0.0), 0, "no cost is known yet");
+    assert_eq!(frame(&two_threads, 1e-4), 1);
+    assert_eq!(frame(&one_thread, 2e-4), 0, "one thread never splits");
+    assert_eq!(frame(&two_threads, 3e-4), 1);
 }
