@@ -164,6 +164,9 @@ pub struct GraspingHand {
     candidate: Option<(PartId, u32)>,
     /// Frames the held part has not been held by the analysis.
     release_count: u32,
+    /// The part released last, not grasped again while any segment still touches it: fingers
+    /// opening along a part they just let go of must not take hold of it again.
+    released: Option<PartId>,
     /// Per segment, the contacts of the last analysed frame: what it touched then, and the
     /// contacts to reuse while the segment has not moved relative to the part (a held part, a
     /// hand at rest), as finding them costs more than the clasp.
@@ -195,6 +198,7 @@ impl GraspingHand {
             held: None,
             candidate: None,
             release_count: 0,
+            released: None,
             contacts: Default::default(),
             flex_totals: FlexReport::default(),
             rejected_samples: 0,
@@ -371,9 +375,14 @@ impl GraspingHand {
             }
             return;
         }
+        if let Some(part) = self.released
+            && analysed.iter().all(|a| a.part != part)
+        {
+            self.released = None;
+        }
         let Some(best) = analysed
             .iter()
-            .filter(|a| a.grasp.holds())
+            .filter(|a| a.grasp.holds() && Some(a.part) != self.released)
             .max_by_key(|a| a.grasp.firmness())
         else {
             self.candidate = None;
@@ -404,6 +413,7 @@ impl GraspingHand {
     fn release(&mut self, events: &mut Vec<GraspEvent>) {
         if let Some((part, pose)) = self.held_part_pose() {
             events.push(GraspEvent::Release { part, pose });
+            self.released = Some(part);
         }
         self.held = None;
         self.release_count = 0;
