@@ -97,17 +97,17 @@ impl InteractionManager {
             .create::<ipc::Service>()
             .map_err(|error| RuntimeError::ipc("create the WaitSet", error))?;
         let attach = |error| RuntimeError::ipc("attach to the WaitSet", error);
-        let _guards = [
+        // The guards keep the listeners attached until the loop ends.
+        let _attached = [
             &self.wakeups.tracker,
             &self.wakeups.glove,
             &self.wakeups.control,
             &self.wakeups.verified,
         ]
-        .map(|listener| waitset.attach_notification(listener));
-        let _guards = _guards
-            .into_iter()
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(attach)?;
+        .map(|listener| waitset.attach_notification(listener))
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(attach)?;
         let io = &mut self.io;
         let mut publish_hz = io.session.scene.rates.publish_hz;
         let mut publish_tick = waitset
