@@ -17,7 +17,7 @@ use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use vas_protocol::{GloveSample, TrackerSample};
+use vas_protocol::{GloveSample, HandFrame, InputStamp, TrackerSample};
 
 /// The `format` value of every recording header.
 pub const FORMAT: &str = "vas-recording";
@@ -74,6 +74,22 @@ impl InputSample {
         match self {
             Self::Tracker(sample) => sample.timestamp_ns,
             Self::Glove(sample) => sample.timestamp_ns,
+        }
+    }
+
+    /// The stamp an output frame carries when it answers this sample.
+    pub fn stamp(&self) -> InputStamp {
+        InputStamp {
+            seq: self.seq(),
+            timestamp_ns: self.timestamp_ns(),
+        }
+    }
+
+    /// Whether `frame` answers this sample: it carries the sample's stamp for its stream.
+    pub fn is_answered_by(&self, frame: &HandFrame) -> bool {
+        match self {
+            Self::Tracker(_) => frame.tracker == self.stamp(),
+            Self::Glove(_) => frame.glove == self.stamp(),
         }
     }
 

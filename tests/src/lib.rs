@@ -261,3 +261,18 @@ pub fn fixtures_dir() -> PathBuf {
 pub mod fixtures;
 pub mod offline;
 pub mod scenarios;
+
+/// A tracker sample stamped now: the hand root at `position` (no rotation), the cart at the
+/// origin.
+pub fn tracker(seq: u64, position: [f64; 3]) -> vas_protocol::TrackerSample {
+    vas_protocol::TrackerSample {
+        seq,
+        timestamp_ns: vas_protocol::wall_clock_ns(),
+        hand: vas_protocol::WirePose {
+            position,
+            rotation: [0.0, 0.0, 0.0, 1.0],
+        },
+        cart: vas_protocol::WirePose::IDENTITY,
+        sensor_id: 0,
+    }
+}

@@ -9,23 +9,10 @@ use vas_client::recording::{InputSample, Recording, RecordingHeader, RecordingWr
 use vas_client::{Client, ClientError, Frame, PartsFrame, Wake};
 use vas_protocol::{
     ControlStatus, FLEX_COUNT, FLEX_LIMITS_RAD, GloveSample, HandFrame, InputStamp,
-    SlidingMetaphor, TrackerSample, WirePose, wall_clock_ns,
+    SlidingMetaphor, TrackerSample, wall_clock_ns,
 };
 use vas_server::scene::{Scene, default_scene_path};
-use vas_tests::{PATIENCE, Server, configs_dir, fixtures_dir};
-
-fn tracker(seq: u64, position: [f64; 3]) -> TrackerSample {
-    TrackerSample {
-        seq,
-        timestamp_ns: wall_clock_ns(),
-        hand: WirePose {
-            position,
-            rotation: [0.0, 0.0, 0.0, 1.0],
-        },
-        cart: WirePose::IDENTITY,
-        sensor_id: 0,
-    }
-}
+use vas_tests::{PATIENCE, Server, configs_dir, fixtures_dir, tracker};
 
 /// Waits for frames and receives them, failing the test after [`PATIENCE`].
 fn next_frames(client: &mut Client, what: &str) -> Vec<Frame> {

@@ -7,22 +7,9 @@ use std::time::Instant;
 use vas_client::{Client, ClientError, Frame};
 use vas_protocol::{
     ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, InputStamp, TrackerSample,
-    WirePose, wall_clock_ns,
+    wall_clock_ns,
 };
-use vas_tests::{PATIENCE, Server, Spawned, binary, unique_prefix};
-
-fn tracker(seq: u64, position: [f64; 3]) -> TrackerSample {
-    TrackerSample {
-        seq,
-        timestamp_ns: wall_clock_ns(),
-        hand: WirePose {
-            position,
-            rotation: [0.0, 0.0, 0.0, 1.0],
-        },
-        cart: WirePose::IDENTITY,
-        sensor_id: 0,
-    }
-}
+use vas_tests::{PATIENCE, Server, Spawned, binary, tracker, unique_prefix};
 
 /// Receives frames until the hand frame answering `sample`, failing after [`PATIENCE`].
 fn answer(client: &mut Client, sample: &TrackerSample) -> HandFrame {

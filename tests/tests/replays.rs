@@ -7,9 +7,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Isometry3;
-use vas_client::recording::{InputSample, Recording};
+use vas_client::recording::Recording;
 use vas_client::{Client, Frame};
-use vas_protocol::{EventKind, GraspType, HandFrame, InputStamp, SimEvent, wall_clock_ns};
+use vas_protocol::{EventKind, GraspType, HandFrame, wall_clock_ns};
 use vas_server::runtime::frames::Restart;
 use vas_server::scene::Scene;
 use vas_tests::offline::{Oracle, VisibleHand};
@@ -53,52 +53,29 @@ fn replay(client: &mut Client, scene: &Scene, oracle: &Oracle, recording: &Recor
         final_poses: Vec::new(),
         penetrations: Vec::new(),
     };
-    let mut poses: Vec<Isometry3<f64>> = scene.parts.iter().map(|part| part.pose).collect();
-    let mut held: Option<usize> = None;
+    let mut seen = Seen {
+        poses: scene.parts.iter().map(|part| part.pose).collect(),
+        held: None,
+    };
     for (index, recorded) in recording.samples.iter().enumerate() {
         let input = recorded.input.with_timestamp(wall_clock_ns());
-        let stamp = InputStamp {
-            seq: input.seq(),
-            timestamp_ns: input.timestamp_ns(),
-        };
         client.send_input(&input).expect("send");
-        let answers = |hand: &HandFrame| match input {
-            InputSample::Tracker(_) => hand.tracker == stamp,
-            InputSample::Glove(_) => hand.glove == stamp,
-        };
         let deadline = Instant::now() + PATIENCE;
         let answer = loop {
             assert!(Instant::now() < deadline, "sample {index}: no answer");
             client.wait(PATIENCE).expect("wait");
-            let mut found = None;
-            for frame in client.receive().expect("receive") {
-                match frame {
-                    Frame::Parts(parts) => {
-                        poses = parts
-                            .parts
-                            .iter()
-                            .map(|state| state.pose().to_isometry())
-                            .collect();
-                    }
-                    Frame::Event(event) => {
-                        record_event(&mut out, &mut held, &event);
-                    }
-                    Frame::Hand(hand) if answers(&hand) => found = Some(hand),
-                    Frame::Hand(_) | Frame::Force(_) => {}
-                }
-            }
-            if let Some(hand) = found {
+            let hands = seen.take(&mut out, client.receive().expect("receive"));
+            if let Some(hand) = hands.into_iter().find(|hand| input.is_answered_by(hand)) {
                 break hand;
             }
         };
-        let root = answer.root.to_isometry();
         let hand = VisibleHand {
-            root,
+            root: answer.root.to_isometry(),
             flex: answer.flex.map(f64::from),
-            held,
+            held: seen.held,
         };
         out.penetrations
-            .extend(oracle.penetrations(scene, &poses, &hand, index));
+            .extend(oracle.penetrations(scene, &seen.poses, &hand, index));
         let [x, y, z] = answer.root.position;
         let [qx, qy, qz, qw] = answer.root.rotation;
         out.answers.push(Answer {
@@ -110,31 +87,46 @@ fn replay(client: &mut Client, scene: &Scene, oracle: &Oracle, recording: &Recor
         });
     }
     // The last frame's parts and events were published before its hand frame.
-    for frame in client.receive().expect("receive") {
-        match frame {
-            Frame::Parts(parts) => {
-                poses = parts
-                    .parts
-                    .iter()
-                    .map(|state| state.pose().to_isometry())
-                    .collect();
-            }
-            Frame::Event(event) => record_event(&mut out, &mut held, &event),
-            Frame::Hand(_) | Frame::Force(_) => {}
-        }
-    }
-    out.final_poses = poses;
+    seen.take(&mut out, client.receive().expect("receive"));
+    out.final_poses = seen.poses;
     out
 }
 
-fn record_event(out: &mut Replay, held: &mut Option<usize>, event: &SimEvent) {
-    match EventKind::try_from(event.kind) {
-        Ok(EventKind::Grasp) => *held = Some(event.part as usize),
-        Ok(EventKind::Release) => *held = None,
-        _ => {}
+/// The state the frames received so far show: the latest part poses and the held part.
+struct Seen {
+    poses: Vec<Isometry3<f64>>,
+    held: Option<usize>,
+}
+
+impl Seen {
+    /// Takes in received frames: parts frames and events update the state (events are also
+    /// recorded in `out`); the hand frames are returned.
+    fn take(&mut self, out: &mut Replay, frames: Vec<Frame>) -> Vec<HandFrame> {
+        let mut hands = Vec::new();
+        for frame in frames {
+            match frame {
+                Frame::Parts(parts) => {
+                    self.poses = parts
+                        .parts
+                        .iter()
+                        .map(|state| state.pose().to_isometry())
+                        .collect();
+                }
+                Frame::Event(event) => {
+                    match EventKind::try_from(event.kind) {
+                        Ok(EventKind::Grasp) => self.held = Some(event.part as usize),
+                        Ok(EventKind::Release) => self.held = None,
+                        _ => {}
+                    }
+                    out.events
+                        .push([event.kind, event.grasp_type, event.part, event.other]);
+                }
+                Frame::Hand(hand) => hands.push(hand),
+                Frame::Force(_) => {}
+            }
+        }
+        hands
     }
-    out.events
-        .push([event.kind, event.grasp_type, event.part, event.other]);
 }
 
 fn check(scenario: &Scenario) {

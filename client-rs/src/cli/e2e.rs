@@ -19,7 +19,7 @@ use anyhow::{Context, bail};
 use serde::Serialize;
 use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Wake};
-use vas_protocol::{InputStamp, wall_clock_ns};
+use vas_protocol::wall_clock_ns;
 
 use super::echo::READY_LINE;
 use super::send::wait_for_hand_frame;
@@ -150,16 +150,9 @@ fn round_trip(
     timeout: Duration,
 ) -> anyhow::Result<Option<Duration>> {
     let input = input.with_timestamp(wall_clock_ns());
-    let stamp = InputStamp {
-        seq: input.seq(),
-        timestamp_ns: input.timestamp_ns(),
-    };
     let sent_at = Instant::now();
     client.send_input(&input)?;
-    let answer = wait_for_hand_frame(client, timeout, |frame| match input {
-        InputSample::Tracker(_) => frame.tracker == stamp,
-        InputSample::Glove(_) => frame.glove == stamp,
-    })?;
+    let answer = wait_for_hand_frame(client, timeout, |frame| input.is_answered_by(frame))?;
     let round_trip = sent_at.elapsed();
     if answer.is_none() && client.sleep(Duration::ZERO) == Wake::Terminated {
         bail!("interrupted");

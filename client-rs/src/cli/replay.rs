@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use vas_client::recording::{InputSample, Recording};
+use vas_client::recording::Recording;
 use vas_client::{Client, Frame, Wake};
-use vas_protocol::{InputStamp, wall_clock_ns};
+use vas_protocol::wall_clock_ns;
 
 use super::send::wait_for_hand_frame;
 use super::stats::LatencySummary;
@@ -81,16 +81,10 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
     let mut out = std::io::stdout().lock();
     for recorded in &recording.samples {
         let input = recorded.input.with_timestamp(wall_clock_ns());
-        let stamp = InputStamp {
-            seq: input.seq(),
-            timestamp_ns: input.timestamp_ns(),
-        };
+        let stamp = input.stamp();
         let sent_at = Instant::now();
         client.send_input(&input)?;
-        let answer = wait_for_hand_frame(client, timeout, |frame| match input {
-            InputSample::Tracker(_) => frame.tracker == stamp,
-            InputSample::Glove(_) => frame.glove == stamp,
-        })?;
+        let answer = wait_for_hand_frame(client, timeout, |frame| input.is_answered_by(frame))?;
         match answer {
             Some(frame) => {
                 serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
