@@ -175,6 +175,8 @@ struct LoopMeter {
     name: &'static str,
     frames: u64,
     busy: Duration,
+    /// The longest frame since the last log.
+    longest: Duration,
     since: Instant,
     logged: (u64, Duration),
 }
@@ -185,6 +187,7 @@ impl LoopMeter {
             name,
             frames: 0,
             busy: Duration::ZERO,
+            longest: Duration::ZERO,
             since: Instant::now(),
             logged: (0, Duration::ZERO),
         }
@@ -192,8 +195,10 @@ impl LoopMeter {
 
     /// Counts a frame whose processing started at `started`, and logs the rate now and then.
     fn frame_done(&mut self, started: Instant) {
+        let took = started.elapsed();
         self.frames += 1;
-        self.busy += started.elapsed();
+        self.busy += took;
+        self.longest = self.longest.max(took);
         if self.since.elapsed() >= RATE_LOG_PERIOD {
             self.log();
         }
@@ -211,11 +216,13 @@ impl LoopMeter {
                 frames_per_s = format_args!("{:.0}", frames as f64 / window),
                 busy_percent = format_args!("{:.1}", 100.0 * busy.as_secs_f64() / window),
                 mean_us = format_args!("{:.1}", busy.as_secs_f64() * 1e6 / frames as f64),
+                max_us = format_args!("{:.1}", self.longest.as_secs_f64() * 1e6),
                 sustains_per_s = format_args!("{:.0}", frames as f64 / busy.as_secs_f64()),
                 "loop rate"
             );
         }
         self.logged = (self.frames, self.busy);
+        self.longest = Duration::ZERO;
         self.since = Instant::now();
     }
 }
