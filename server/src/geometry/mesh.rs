@@ -131,6 +131,19 @@ impl TriMesh {
         (lo, hi)
     }
 
+    /// The centre of the bounding box and the radius of the sphere around it that holds every
+    /// vertex: a cheap bound for culling, and the pivot and reach of a grasped part.
+    pub fn bounding_sphere(&self) -> (Point, f64) {
+        let (lo, hi) = self.bounding_box();
+        let centre = nalgebra::center(&lo, &hi);
+        let radius = self
+            .vertices
+            .iter()
+            .map(|v| (v - centre).norm())
+            .fold(0.0, f64::max);
+        (centre, radius)
+    }
+
     /// A copy with every vertex mapped by `f` (translation, rotation, scaling); triangles whose
     /// image is degenerate are dropped as in [`TriMesh::new`].
     pub fn map_vertices(&self, f: impl Fn(&Point) -> Point) -> Result<TriMesh, MeshError> {

@@ -110,13 +110,7 @@ impl PartGeometry {
     /// with inconsistent winding, where a volume centroid is not.
     pub fn new(mesh: TriMesh) -> PartGeometry {
         let tree = DopTree::build(&mesh);
-        let (lo, hi) = mesh.bounding_box();
-        let centre = nalgebra::center(&lo, &hi);
-        let radius = mesh
-            .vertices()
-            .iter()
-            .map(|v| (v - centre).norm())
-            .fold(0.0, f64::max);
+        let (centre, radius) = mesh.bounding_sphere();
         let mut area = 0.0;
         let mut weighted = Vector3::zeros();
         for i in 0..mesh.triangles().len() {

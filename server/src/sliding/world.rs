@@ -48,15 +48,7 @@ impl<C: MeshCollider> SlideBody<C> {
     /// The centre of the mesh's bounding box and the radius of the sphere around it that holds
     /// every vertex: the pivot and radius of a grasped part.
     pub fn pivot_and_radius(&self) -> (Point, f64) {
-        let (lo, hi) = self.mesh.bounding_box();
-        let centre = nalgebra::center(&lo, &hi);
-        let radius = self
-            .mesh
-            .vertices()
-            .iter()
-            .map(|v| (v - centre).norm())
-            .fold(0.0, f64::max);
-        (centre, radius)
+        self.mesh.bounding_sphere()
     }
 
     fn side<'a>(&'a self, pose: &'a Pose) -> ContactSide<'a> {
