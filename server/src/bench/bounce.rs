@@ -7,8 +7,12 @@
 //! (equal masses: the velocity components along the line between the centres are exchanged).
 //! Every object moves every frame, so every frame runs the front-end queue, the broad phase, the
 //! interest matrix, the separating-plane pre-check and the DOP-tree exact test over the whole
-//! scene. The scene is seeded and the pipeline's answers do not depend on the thread count, so
-//! every thread count replays exactly the same frames; each runs on its own rayon pool.
+//! scene. Each thread count has its own pipeline on its own rayon pool, and they take turns in
+//! blocks of [`BLOCK_FRAMES`] frames: the block's leader (rotating from block to block) runs the
+//! scene live, and the others replay the same poses and must report the same colliding pairs.
+//! Within a block a pipeline runs frame after frame, as the paper's benchmark does, so its threads
+//! stay awake between frames; across blocks, slow phases of the machine hit every thread count
+//! alike instead of whichever happened to run during them.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -208,12 +212,11 @@ impl Scene {
     }
 }
 
-/// What one thread count's run records of its timed frames.
+/// What one thread count's pipeline records of its timed frames.
+#[derive(Default)]
 struct SceneRun {
     times: Vec<Duration>,
     stats: Vec<FrameStats>,
-    /// The colliding pairs (object indices) of every frame.
-    history: Vec<Vec<(usize, usize)>>,
 }
 
 /// The shared models: one per shape kind, unit half-size.
@@ -230,68 +233,123 @@ fn models(triangles: usize) -> Vec<Arc<CollisionModel<DopTree>>> {
         .collect()
 }
 
-/// Runs the scene for `warmup + frames` frames on `threads` threads and records the timed frames
-/// (their colliding pairs too, to check that thread counts agree).
+/// One thread count's pipeline over the scene, on its own pool.
+struct Contender {
+    threads: usize,
+    pool: rayon::ThreadPool,
+    pipeline: CollisionPipeline<DopTree>,
+    ids: Vec<ObjectId>,
+    run: SceneRun,
+}
+
+impl Contender {
+    fn new(
+        args: &BounceArgs,
+        models: &[Arc<CollisionModel<DopTree>>],
+        poses: &[Isometry3<f64>],
+        threads: usize,
+    ) -> Result<Contender> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .context("building the thread pool")?;
+        let mut pipeline = CollisionPipeline::new(PipelineConfig {
+            separating_plane: !args.no_separating_plane,
+            split_min_bv_tests: args.split_min_bv_tests,
+            ..PipelineConfig::default()
+        });
+        let ids = poses
+            .iter()
+            .enumerate()
+            .map(|(i, pose)| {
+                pipeline.add(ObjectDesc {
+                    model: Arc::clone(&models[i % models.len()]),
+                    pose: *pose,
+                    group: GroupId::default(),
+                    is_static: false,
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Contender {
+            threads,
+            pool,
+            pipeline,
+            ids,
+            run: SceneRun::default(),
+        })
+    }
+
+    /// Moves every object to `poses`, runs a frame and returns its colliding pairs (object
+    /// indices), recording the frame's time and counters when `timed`.
+    fn frame(&mut self, poses: &[Isometry3<f64>], timed: bool) -> Result<Vec<(usize, usize)>> {
+        let start = Instant::now();
+        for (id, pose) in self.ids.iter().zip(poses) {
+            self.pipeline.queue_move(*id, *pose)?;
+        }
+        let pipeline = &mut self.pipeline;
+        let report = self.pool.install(|| pipeline.run_frame(Detail::Pairs));
+        let elapsed = start.elapsed();
+        if timed {
+            self.run.times.push(elapsed);
+            self.run.stats.push(report.stats);
+        }
+        // Ids are added in order into an empty pipeline, so an object's slot is its index.
+        Ok(report
+            .colliding
+            .iter()
+            .map(|pair| (pair.a.index() as usize, pair.b.index() as usize))
+            .collect())
+    }
+}
+
+/// Frames a thread count runs back to back before the next one takes its turn.
+pub const BLOCK_FRAMES: u32 = 50;
+
+/// Runs the scene for `warmup + frames` frames, the thread counts taking turns block by block,
+/// and returns what each recorded of the timed frames.
 fn run_scene(
     args: &BounceArgs,
     models: &[Arc<CollisionModel<DopTree>>],
     side: f64,
-    threads: usize,
-) -> Result<SceneRun> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .context("building the thread pool")?;
+) -> Result<Vec<Contender>> {
     let count = args.objects as usize;
     let radii = (0..count)
         .map(|i| models[i % models.len()].hull().radius())
         .collect();
     let mut scene = Scene::new(count, radii, side, args.seed);
-    let mut pipeline = CollisionPipeline::new(PipelineConfig {
-        separating_plane: !args.no_separating_plane,
-        split_min_bv_tests: args.split_min_bv_tests,
-        ..PipelineConfig::default()
-    });
-    let mut ids: Vec<ObjectId> = Vec::with_capacity(count);
-    let mut index_of = std::collections::HashMap::new();
-    for (i, pose) in scene.poses.iter().enumerate() {
-        let id = pipeline.add(ObjectDesc {
-            model: Arc::clone(&models[i % models.len()]),
-            pose: *pose,
-            group: GroupId::default(),
-            is_static: false,
-        })?;
-        index_of.insert(id, i);
-        ids.push(id);
-    }
-    let mut times = Vec::with_capacity(args.frames as usize);
-    let mut stats = Vec::with_capacity(args.frames as usize);
-    let mut history = Vec::with_capacity(args.frames as usize);
+    let mut contenders = args
+        .threads
+        .iter()
+        .map(|&threads| Contender::new(args, models, &scene.poses, threads))
+        .collect::<Result<Vec<_>>>()?;
+    let total = args.warmup + args.frames;
     let mut colliding = Vec::new();
-    for frame in 0..args.warmup + args.frames {
-        scene.step(colliding.iter().copied());
-        let start = Instant::now();
-        for (id, pose) in ids.iter().zip(&scene.poses) {
-            pipeline.queue_move(*id, *pose)?;
+    for block_start in (0..total).step_by(BLOCK_FRAMES as usize) {
+        let frames = block_start..(block_start + BLOCK_FRAMES).min(total);
+        let leader = (block_start / BLOCK_FRAMES) as usize % contenders.len();
+        let mut block = Vec::with_capacity(BLOCK_FRAMES as usize);
+        for frame in frames.clone() {
+            scene.step(colliding.iter().copied());
+            colliding = contenders[leader].frame(&scene.poses, frame >= args.warmup)?;
+            block.push((scene.poses.clone(), colliding.clone()));
         }
-        let report = pool.install(|| pipeline.run_frame(Detail::Pairs));
-        let elapsed = start.elapsed();
-        colliding = report
-            .colliding
-            .iter()
-            .map(|pair| (index_of[&pair.a], index_of[&pair.b]))
-            .collect();
-        if frame >= args.warmup {
-            times.push(elapsed);
-            stats.push(report.stats);
-            history.push(colliding.clone());
+        let leader_threads = contenders[leader].threads;
+        for (index, contender) in contenders.iter_mut().enumerate() {
+            if index == leader {
+                continue;
+            }
+            for (frame, (poses, expected)) in frames.clone().zip(&block) {
+                let found = contender.frame(poses, frame >= args.warmup)?;
+                ensure!(
+                    found == *expected,
+                    "frame {frame}: {} threads found other colliding pairs than {leader_threads} \
+                     threads",
+                    contender.threads
+                );
+            }
         }
     }
-    Ok(SceneRun {
-        times,
-        stats,
-        history,
-    })
+    Ok(contenders)
 }
 
 fn stage_means(stats: &[FrameStats]) -> StageMeans {
@@ -333,28 +391,15 @@ pub fn run_bounce(args: &BounceArgs) -> Result<BounceReport> {
         / models.len() as f64;
     let side = (f64::from(args.objects) * ball_volume / args.fill).cbrt();
     let mut rows: Vec<BounceRow> = Vec::new();
-    let mut reference: Option<Vec<Vec<(usize, usize)>>> = None;
-    for &threads in &args.threads {
-        let SceneRun {
-            times,
-            stats,
-            history,
-        } = run_scene(args, &models, side, threads)?;
-        match &reference {
-            None => reference = Some(history),
-            Some(expected) => ensure!(
-                *expected == history,
-                "{threads} threads found other colliding pairs than {} threads",
-                args.threads[0]
-            ),
-        }
+    for contender in run_scene(args, &models, side)? {
+        let SceneRun { times, stats } = contender.run;
         let mut micros: Vec<f64> = times.iter().map(|t| t.as_secs_f64() * 1e6).collect();
         let mean = micros.iter().sum::<f64>() / micros.len() as f64;
         micros.sort_by(f64::total_cmp);
         let p99 = micros[((micros.len() as f64 * 0.99).ceil() as usize).clamp(1, micros.len()) - 1];
         let speedup = rows.first().map_or(1.0, |first| first.mean_frame_us / mean);
         rows.push(BounceRow {
-            threads,
+            threads: contender.threads,
             objects: args.objects,
             mean_frame_us: mean,
             p99_frame_us: p99,

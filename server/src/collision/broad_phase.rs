@@ -125,6 +125,8 @@ pub struct SweepAndPrune {
     overlaps: Vec<Vec<u32>>,
     /// Overlaps that ended since the last [`SweepAndPrune::drain_ended`].
     ended: Vec<[u32; 2]>,
+    /// Overlaps that started since the last [`SweepAndPrune::drain_started`].
+    started: Vec<[u32; 2]>,
     /// Per axis, the endpoint crossings of a batched update, (now first, now second); kept to
     /// reuse the memory.
     crossings: [Vec<(Endpoint, Endpoint)>; 3],
@@ -318,6 +320,7 @@ impl SweepAndPrune {
         {
             self.overlaps[a as usize].push(b);
             self.overlaps[b as usize].push(a);
+            self.started.push([a, b]);
         }
     }
 
@@ -326,6 +329,14 @@ impl SweepAndPrune {
     /// none should still drain it now and then.
     pub fn drain_ended(&mut self) -> std::vec::Drain<'_, [u32; 2]> {
         self.ended.drain(..)
+    }
+
+    /// The overlaps that started (box pairs that came to overlap) since the last call, each once:
+    /// a caller that already looked at the overlaps of the boxes before moving them finds here
+    /// the pairs it has not seen. An overlap that starts and then ends between two calls is
+    /// listed by both drains.
+    pub fn drain_started(&mut self) -> std::vec::Drain<'_, [u32; 2]> {
+        self.started.drain(..)
     }
 
     /// The boxes overlapping box `id` (empty for an absent id).
@@ -469,8 +480,24 @@ mod tests {
                 .drain_ended()
                 .map(|[a, b]| (a.min(b), a.max(b)))
                 .collect();
+            let started: BTreeSet<(u32, u32)> = sap
+                .drain_started()
+                .map(|[a, b]| (a.min(b), a.max(b)))
+                .collect();
             for pair in previous.difference(&now) {
                 assert!(ended.contains(pair), "the end of {pair:?} was not reported");
+            }
+            for pair in now.difference(&previous) {
+                assert!(
+                    started.contains(pair),
+                    "the start of {pair:?} was not reported"
+                );
+            }
+            for pair in &started {
+                assert!(
+                    now.contains(pair) || ended.contains(pair),
+                    "{pair:?} was reported started but neither overlaps nor ended"
+                );
             }
             assert_eq!(listed(&sap, count), now, "frame {frame}");
             previous = now;

@@ -11,8 +11,11 @@
 //! A pair that collided when last tested skips the pre-check (it would most likely fail to find a
 //! plane, after many loops) and goes straight to the exact test.
 //!
-//! The back end is parallel on the current rayon pool: the pre-checks and the exact tests of a
-//! frame are spread over the threads with work stealing (coarse grain), and the traversal of a
+//! The back end is parallel on the current rayon pool: the pairs of a frame are spread over the
+//! threads with work stealing, each going through its pre-check and, if need be, its exact test
+//! in the same task (coarse grain); it starts on the pairs that overlapped at the last frame while
+//! the bounding-box stage moves the boxes, so that the broad phase, mostly serial, runs beside it
+//! instead of before it (see [`CollisionPipeline::run_frame`]); and the traversal of a
 //! pair expected to be expensive is itself split across the threads (fine grain; see
 //! [`PipelineConfig::split_min_bv_tests`]).
 //! [`ConcurrentPipeline`] runs the whole pipeline on a thread of its own.
@@ -141,7 +144,9 @@ pub struct StageCounters {
     pub pairs_in: u64,
     /// Pairs the stage passed on (for the exact test: the colliding ones).
     pub pairs_out: u64,
-    /// Wall time spent in the stage.
+    /// Time spent in the stage: wall time for the broad phase and the interest matrix; for the
+    /// separating-plane and exact stages, which share one parallel pass over the pairs, the sum
+    /// of their per-pair times over all threads (their work, not their share of the frame).
     pub time: Duration,
 }
 
@@ -257,7 +262,7 @@ struct PairState {
     exact_bv_tests: u64,
 }
 
-/// One pair going down the back end in this frame.
+/// One pair going down the back end in this frame, and what it found.
 struct PairWork {
     pair: PairKey,
     b_to_a: Isometry3<f64>,
@@ -273,6 +278,122 @@ struct PairWork {
     colliding: bool,
     triangles: Option<Vec<[u32; 2]>>,
     stats: QueryStats,
+}
+
+impl PairWork {
+    /// A pair not yet looked at (the back end fills in its state).
+    fn new(pair: PairKey) -> Self {
+        PairWork {
+            pair,
+            b_to_a: Isometry3::identity(),
+            plane: SeparatingPlane::new(),
+            was_colliding: false,
+            expected_bv_tests: 0,
+            separated: false,
+            loops: 0,
+            split: false,
+            colliding: false,
+            triangles: None,
+            stats: QueryStats::default(),
+        }
+    }
+}
+
+/// Pairs a back-end task takes: a pre-check costs about 0.25 us, so much smaller tasks would let
+/// rayon's hand-overs dominate, and much larger ones would leave a thread idle behind a task that
+/// happens to hold several exact tests.
+const PAIRS_PER_TASK: usize = 8;
+
+/// What the back end reads while it tests the pairs of a frame, on any thread.
+struct BackEnd<'a, C> {
+    slots: &'a [Slot<C>],
+    pairs: &'a FxHashMap<PairKey, PairState>,
+    /// `None` when the separating-plane stage is off.
+    plane_search: Option<PlaneSearch>,
+    split_min_bv_tests: u64,
+    detail: Detail,
+}
+
+impl<'a, C: ExactTest> BackEnd<'a, C> {
+    /// The back end of a frame over `slots`, reading the pairs' kept state from `pairs`.
+    fn new(
+        slots: &'a [Slot<C>],
+        pairs: &'a FxHashMap<PairKey, PairState>,
+        config: &PipelineConfig,
+        detail: Detail,
+    ) -> Self {
+        BackEnd {
+            slots,
+            pairs,
+            plane_search: config.separating_plane.then_some(config.plane_search),
+            // On one thread, a split traversal would only add its overhead.
+            split_min_bv_tests: if rayon::current_num_threads() > 1 {
+                config.split_min_bv_tests
+            } else {
+                u64::MAX
+            },
+            detail,
+        }
+    }
+
+    /// Takes the pairs down the back end, spread over the current rayon pool, and returns the
+    /// time the separating-plane and the exact stages took, summed over the threads.
+    fn run(&self, work: &mut [PairWork]) -> (Duration, Duration) {
+        if rayon::current_num_threads() == 1 || work.len() <= PAIRS_PER_TASK {
+            return self.test(work);
+        }
+        work.par_chunks_mut(PAIRS_PER_TASK)
+            .map(|chunk| self.test(chunk))
+            .reduce(
+                || (Duration::ZERO, Duration::ZERO),
+                |a, b| (a.0 + b.0, a.1 + b.1),
+            )
+    }
+
+    /// Takes a task's pairs through the separating-plane stage and the unseparated ones through
+    /// the exact test, and returns the time each stage took. Both stages share one parallel pass
+    /// (a pass per stage cost a second hand-over to the sleeping threads every frame); the
+    /// stages still run one after the other within a task, so that each is timed as a whole.
+    fn test(&self, pairs: &mut [PairWork]) -> (Duration, Duration) {
+        for item in pairs.iter_mut() {
+            let state = self.pairs.get(&item.pair);
+            item.b_to_a = pose(self.slots, item.pair.0).inv_mul(&pose(self.slots, item.pair.1));
+            if let Some(state) = state {
+                item.plane = state.plane;
+                item.was_colliding = state.contact.is_some();
+                item.expected_bv_tests = state.exact_bv_tests;
+            }
+        }
+        let start = Instant::now();
+        if let Some(search) = &self.plane_search {
+            for item in pairs.iter_mut().filter(|item| !item.was_colliding) {
+                let [a, b] = models(self.slots, item.pair);
+                let check = item.plane.check(a.hull(), b.hull(), &item.b_to_a, search);
+                item.separated = check.separated;
+                item.loops = check.loops;
+            }
+        }
+        let planes_done = Instant::now();
+        for item in pairs.iter_mut().filter(|item| !item.separated) {
+            let [a, b] = models(self.slots, item.pair);
+            let (a, b) = (a.exact(), b.exact());
+            item.colliding = match self.detail {
+                Detail::Pairs if item.expected_bv_tests >= self.split_min_bv_tests => {
+                    item.split = true;
+                    a.intersects_split(b, &item.b_to_a, &mut item.stats)
+                }
+                Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
+                Detail::TrianglePairs => {
+                    let mut triangles = Vec::new();
+                    a.intersecting_pairs(b, &item.b_to_a, &mut triangles, &mut item.stats);
+                    let colliding = !triangles.is_empty();
+                    item.triangles = Some(triangles);
+                    colliding
+                }
+            };
+        }
+        (planes_done - start, planes_done.elapsed())
+    }
 }
 
 /// The pipeline over one scene, generic over the exact test `C`.
@@ -432,114 +553,89 @@ impl<C: ExactTest> CollisionPipeline<C> {
     /// Runs one frame over the front-end queue and reports every colliding pair of the scene.
     /// Parallel stages run on the current rayon pool (call it inside `ThreadPool::install` to
     /// choose the threads).
+    ///
+    /// The pairs whose boxes overlapped at the last frame and involve a moved object mostly still
+    /// overlap (coherence), so the back end starts on them while the broad phase moves the boxes,
+    /// the two running side by side; the pairs whose overlap ended are then dropped, and those
+    /// whose overlap started go down the back end after them. A frame's answers are those of
+    /// running the stages one after the other; only the wall time differs.
     pub fn run_frame(&mut self, detail: Detail) -> FrameReport {
         let frame_start = Instant::now();
+        let moved = self.queue.len() as u64;
         let mut stats = FrameStats {
-            moved: self.queue.len() as u64,
+            moved,
             ..FrameStats::default()
         };
+        // Overlaps that objects added since the last frame started are gathered below with the
+        // others of the moved objects.
+        self.broad_phase.drain_started().for_each(drop);
 
-        let stage_start = Instant::now();
-        let mut candidates = self.broad_phase_stage();
-        let moved = self.queue.len() as u64;
-        let others = self.len() as u64 - moved;
-        stats.broad_phase = StageCounters {
-            pairs_in: moved * others + moved * moved.saturating_sub(1) / 2,
-            pairs_out: candidates.len() as u64,
-            time: stage_start.elapsed(),
-        };
+        let carried = self.overlapping_moved_pairs();
+        let interest_start = Instant::now();
+        let mut carried_work = self.interesting_work(&carried);
+        let mut interest_time = interest_start.elapsed();
+
+        let back_end = BackEnd::new(&self.slots, &self.pairs, &self.config, detail);
+        let broad_phase = &mut self.broad_phase;
+        let (broad_phase_time, carried_times) = rayon::join(
+            || move_boxes(broad_phase, &self.slots, &self.queue),
+            || back_end.run(&mut carried_work),
+        );
         for &index in &self.queue {
             self.queued[index as usize] = false;
         }
         self.queue.clear();
 
-        let stage_start = Instant::now();
-        candidates.retain(|&(a, b)| {
-            let interesting = self
-                .interest
-                .is_interesting(&self.live(a).key, &self.live(b).key);
-            if !interesting {
-                self.pairs.remove(&(a, b));
-            }
-            interesting
-        });
-        stats.interest = StageCounters {
-            pairs_in: stats.broad_phase.pairs_out,
-            pairs_out: candidates.len() as u64,
-            time: stage_start.elapsed(),
+        let mut ended: Vec<PairKey> = self
+            .broad_phase
+            .drain_ended()
+            .map(|[a, b]| ordered(a, b))
+            .collect();
+        ended.sort_unstable();
+        let has_ended = |pair: &PairKey| ended.binary_search(pair).is_ok();
+        for pair in &ended {
+            self.pairs.remove(pair);
+        }
+        let mut started: Vec<PairKey> = self
+            .broad_phase
+            .drain_started()
+            .map(|[a, b]| ordered(a, b))
+            .collect();
+        // An overlap can start and end again within one update of several boxes.
+        started.retain(|&(a, b)| self.broad_phase.overlaps(a).contains(&b));
+        let still_overlapping = carried.iter().filter(|pair| !has_ended(pair)).count();
+        stats.broad_phase = StageCounters {
+            pairs_in: moved * (self.len() as u64 - moved) + moved * moved.saturating_sub(1) / 2,
+            pairs_out: (still_overlapping + started.len()) as u64,
+            time: broad_phase_time,
         };
 
-        let mut work: Vec<PairWork> = candidates
-            .iter()
-            .map(|&(a, b)| {
-                let state = self.pairs.get(&(a, b));
-                PairWork {
-                    pair: (a, b),
-                    b_to_a: self.live(a).pose.inv_mul(&self.live(b).pose),
-                    plane: state.map_or_else(SeparatingPlane::new, |state| state.plane),
-                    was_colliding: state.is_some_and(|state| state.contact.is_some()),
-                    expected_bv_tests: state.map_or(0, |state| state.exact_bv_tests),
-                    separated: false,
-                    loops: 0,
-                    split: false,
-                    colliding: false,
-                    triangles: None,
-                    stats: QueryStats::default(),
-                }
-            })
-            .collect();
+        carried_work.retain(|item| !has_ended(&item.pair));
+        let interest_start = Instant::now();
+        let mut started_work = self.interesting_work(&started);
+        interest_time += interest_start.elapsed();
+        let back_end = BackEnd::new(&self.slots, &self.pairs, &self.config, detail);
+        let started_times = back_end.run(&mut started_work);
+        let mut work = carried_work;
+        work.append(&mut started_work);
+        stats.interest = StageCounters {
+            pairs_in: stats.broad_phase.pairs_out,
+            pairs_out: work.len() as u64,
+            time: interest_time,
+        };
 
-        let stage_start = Instant::now();
-        if self.config.separating_plane {
-            let search = self.config.plane_search;
-            let slots = &self.slots;
-            let unknown = work.iter_mut().filter(|item| !item.was_colliding).collect();
-            for_each_pair(unknown, 16, |item| {
-                let [a, b] = models(slots, item.pair);
-                let check = item.plane.check(a.hull(), b.hull(), &item.b_to_a, &search);
-                item.separated = check.separated;
-                item.loops = check.loops;
-            });
-        }
         let unseparated = work.iter().filter(|item| !item.separated).count() as u64;
         stats.separating_plane = StageCounters {
             pairs_in: work.len() as u64,
             pairs_out: unseparated,
-            time: stage_start.elapsed(),
+            time: carried_times.0 + started_times.0,
         };
         stats.plane_loops = work.iter().map(|item| u64::from(item.loops)).sum();
-
-        let stage_start = Instant::now();
-        let split_min_bv_tests = if rayon::current_num_threads() > 1 {
-            self.config.split_min_bv_tests
-        } else {
-            u64::MAX
-        };
-        let slots = &self.slots;
-        let unseparated_items = work.iter_mut().filter(|item| !item.separated).collect();
-        for_each_pair(unseparated_items, 1, |item| {
-            let [a, b] = models(slots, item.pair);
-            let (a, b) = (a.exact(), b.exact());
-            item.colliding = match detail {
-                Detail::Pairs if item.expected_bv_tests >= split_min_bv_tests => {
-                    item.split = true;
-                    a.intersects_split(b, &item.b_to_a, &mut item.stats)
-                }
-                Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
-                Detail::TrianglePairs => {
-                    let mut triangles = Vec::new();
-                    a.intersecting_pairs(b, &item.b_to_a, &mut triangles, &mut item.stats);
-                    let colliding = !triangles.is_empty();
-                    item.triangles = Some(triangles);
-                    colliding
-                }
-            };
-        });
         stats.split_tests = work.iter().filter(|item| item.split).count() as u64;
         stats.exact = StageCounters {
             pairs_in: unseparated,
             pairs_out: work.iter().filter(|item| item.colliding).count() as u64,
-            time: stage_start.elapsed(),
+            time: carried_times.1 + started_times.1,
         };
         for item in &work {
             stats.exact_work += item.stats;
@@ -563,31 +659,35 @@ impl<C: ExactTest> CollisionPipeline<C> {
         }
     }
 
-    /// Moves the queued objects' boxes and returns the overlapping pairs that involve a moved
-    /// object, each once as (smaller index, larger index).
-    fn broad_phase_stage(&mut self) -> Vec<PairKey> {
-        let updates: Vec<(u32, Aabb)> = self
-            .queue
-            .iter()
-            .filter_map(|&index| {
-                let object = self.slots[index as usize].object.as_ref()?;
-                Some((
-                    index,
-                    Aabb::transformed(object.model.local_bounds(), &object.pose),
-                ))
-            })
-            .collect();
-        self.broad_phase.update_many(&updates);
-        self.drop_ended_pairs();
-        let mut candidates = Vec::new();
+    /// The pairs whose boxes overlap and that involve a queued object, each once as (smaller
+    /// index, larger index).
+    fn overlapping_moved_pairs(&self) -> Vec<PairKey> {
+        let mut pairs = Vec::new();
         for &index in &self.queue {
             for &other in self.broad_phase.overlaps(index) {
                 if !self.queued[other as usize] || index < other {
-                    candidates.push(ordered(index, other));
+                    pairs.push(ordered(index, other));
                 }
             }
         }
-        candidates
+        pairs
+    }
+
+    /// The back-end work for the pairs of interest among `pairs`; the state kept for the others
+    /// is dropped.
+    fn interesting_work(&mut self, pairs: &[PairKey]) -> Vec<PairWork> {
+        let mut work = Vec::with_capacity(pairs.len());
+        for &(a, b) in pairs {
+            if self
+                .interest
+                .is_interesting(&self.live(a).key, &self.live(b).key)
+            {
+                work.push(PairWork::new((a, b)));
+            } else {
+                self.pairs.remove(&(a, b));
+            }
+        }
+        work
     }
 
     /// Computes triangle pairs for colliding pairs that were last tested without them.
@@ -633,6 +733,23 @@ impl<C: ExactTest> CollisionPipeline<C> {
     }
 }
 
+/// Moves the boxes of the queued objects to their objects' poses, and returns the time it took.
+fn move_boxes<C>(broad_phase: &mut SweepAndPrune, slots: &[Slot<C>], queue: &[u32]) -> Duration {
+    let start = Instant::now();
+    let updates: Vec<(u32, Aabb)> = queue
+        .iter()
+        .filter_map(|&index| {
+            let object = slots[index as usize].object.as_ref()?;
+            Some((
+                index,
+                Aabb::transformed(object.model.local_bounds(), &object.pose),
+            ))
+        })
+        .collect();
+    broad_phase.update_many(&updates);
+    start.elapsed()
+}
+
 fn models<C>(slots: &[Slot<C>], (a, b): PairKey) -> [&CollisionModel<C>; 2] {
     [a, b].map(|index| {
         &*slots[index as usize]
@@ -649,20 +766,6 @@ fn pose<C>(slots: &[Slot<C>], index: u32) -> Isometry3<f64> {
         .as_ref()
         .expect("pairs name live objects")
         .pose
-}
-
-/// Runs `f` on every item, in parallel on the current rayon pool when it has more than one
-/// thread (work stealing balances uneven items), in chunks of at least `min_len` items.
-fn for_each_pair(
-    items: Vec<&mut PairWork>,
-    min_len: usize,
-    f: impl Fn(&mut PairWork) + Sync + Send,
-) {
-    if rayon::current_num_threads() == 1 {
-        items.into_iter().for_each(f);
-    } else {
-        items.into_par_iter().with_min_len(min_len).for_each(f);
-    }
 }
 
 fn ordered(a: u32, b: u32) -> PairKey {
