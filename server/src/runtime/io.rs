@@ -25,7 +25,7 @@ use super::control::{self, Session};
 use super::frames::{Change, InputFrame, LoopWork, VerifiedFrame};
 use super::loops::Loops;
 use super::ports::{Ports, Wakeups};
-use super::rendezvous::{Handoff, Work};
+use super::rendezvous::{FramesInFlight, Handoff, Work};
 use super::{RuntimeError, publish_period};
 
 /// How often the input counters are logged, when they changed.
@@ -43,6 +43,8 @@ struct Io {
     session: Session,
     inputs: Arc<Handoff<InputFrame, Change>>,
     verified: Receiver<VerifiedFrame>,
+    /// Frames the collision loop is verifying.
+    verifying: Arc<FramesInFlight>,
     lockstep: Lockstep,
     /// The latest published part states, for the periodic parts frames.
     parts: Vec<PartState>,
@@ -66,6 +68,7 @@ impl InteractionManager {
         session: Session,
         inputs: Arc<Handoff<InputFrame, Change>>,
         verified: Receiver<VerifiedFrame>,
+        verifying: Arc<FramesInFlight>,
         lockstep: bool,
     ) -> Result<Self, RuntimeError> {
         let (ports, wakeups) = Ports::open(node, session.scene.parts.len())?;
@@ -75,6 +78,7 @@ impl InteractionManager {
             session,
             inputs,
             verified,
+            verifying,
             lockstep: Lockstep {
                 enabled: lockstep,
                 in_flight: false,
@@ -98,7 +102,7 @@ impl InteractionManager {
             .map_err(|error| RuntimeError::ipc("create the WaitSet", error))?;
         let attach = |error| RuntimeError::ipc("attach to the WaitSet", error);
         // The guards keep the listeners attached until the loop ends.
-        let _attached = [
+        let attached = [
             &self.wakeups.tracker,
             &self.wakeups.glove,
             &self.wakeups.control,
@@ -117,11 +121,15 @@ impl InteractionManager {
         io.submit(Work::Control(start));
         io.publish_parts(None);
         tracing::info!(lockstep = io.lockstep.enabled, "serving");
+        let [tracker_attachment, glove_attachment] = [&attached[0], &attached[1]];
         loop {
             let mut publish_due = false;
+            let mut input_due = false;
             let outcome = waitset
                 .wait_and_process_once(|attachment| {
                     publish_due |= attachment.has_event_from(&publish_tick);
+                    input_due |= attachment.has_event_from(tracker_attachment)
+                        || attachment.has_event_from(glove_attachment);
                     CallbackProgression::Continue
                 })
                 .map_err(|error| RuntimeError::ipc("wait on the WaitSet", error))?;
@@ -130,6 +138,10 @@ impl InteractionManager {
             }
             // `Interrupt` means a signal cut the wait short; if it was SIGINT or SIGTERM, the
             // next wait reports the termination request.
+            if input_due && !(io.lockstep.enabled && io.lockstep.in_flight) {
+                // The grasping loop wakes while the samples are taken in.
+                io.inputs.announce();
+            }
             io.log_failure(self.wakeups.drain());
             io.process_tracker_samples();
             io.process_glove_samples();
@@ -274,8 +286,14 @@ impl Io {
             .collect();
     }
 
-    /// Publishes every frame the collision loop verified since the last call.
+    /// Publishes the frames the collision loop verified since the last call; while the collision loop is verifying one it announced,
+    /// waits for it awake (briefly: see `FramesInFlight`).
     fn publish_verified_frames(&mut self) {
+        let verifying = Arc::clone(&self.verifying);
+        verifying.wait_awake(|| self.take_verified_frames());
+    }
+
+    fn take_verified_frames(&mut self) {
         while let Ok(frame) = self.verified.try_recv() {
             // A frame of the scene before a restart still answers its sample, but its parts
             // are not the scene's any more.

@@ -25,7 +25,7 @@ use super::frames::{
     wire_grasp,
 };
 use super::interaction::{GraspStage, HeldPart, SlideStage};
-use super::rendezvous::{Handoff, Received, Work};
+use super::rendezvous::{ANNOUNCED_WAIT, FramesInFlight, Handoff, Received, Work};
 use super::verify::Verifier;
 use crate::grasping::{HandInput, PartId};
 use crate::scene::Scene;
@@ -63,6 +63,8 @@ pub struct Links {
     pub inputs: Arc<Handoff<InputFrame, Change>>,
     grasped: Arc<Handoff<GraspedFrame, Change>>,
     candidates: Arc<Handoff<CandidateFrame, Change>>,
+    /// Collision loop → I/O thread: frames being verified.
+    pub verifying: Arc<FramesInFlight>,
     feedback: Arc<PoseFeedback>,
     refusals: (Sender<Refusal>, Receiver<Refusal>),
 }
@@ -73,6 +75,7 @@ impl Default for Links {
             inputs: Arc::default(),
             grasped: Arc::default(),
             candidates: Arc::default(),
+            verifying: Arc::default(),
             feedback: Arc::default(),
             refusals: crossbeam_channel::unbounded(),
         }
@@ -119,6 +122,7 @@ impl Loops {
         let collision = CollisionLoop {
             inbox: Arc::clone(&links.candidates),
             verified,
+            verifying: Arc::clone(&links.verifying),
             wake,
             feedback: Arc::clone(&links.feedback),
             refusals: links.refusals.0.clone(),
@@ -288,6 +292,7 @@ impl GraspingLoop {
     }
 
     fn step(&mut self, input: InputFrame) {
+        self.outbox.announce();
         self.stepped_at = Instant::now();
         let hand = self.stage.as_mut().map(|stage| {
             if let Some(poses) = self.feedback.read(self.epoch) {
@@ -393,6 +398,7 @@ impl SlidingLoop {
         let Some(stage) = &mut self.stage else {
             return;
         };
+        self.outbox.announce();
         self.slid_at = Instant::now();
         let (mut hand, held, events) = match &frame.hand {
             Some(hand_frame) => {
@@ -442,6 +448,7 @@ impl SlidingLoop {
         let (Some(stage), Some((stamps, hand, _))) = (&mut self.stage, &self.last) else {
             return;
         };
+        self.outbox.announce();
         self.slid_at = Instant::now();
         let held = stage.keep_sliding();
         let mut hand = hand.clone();
@@ -470,6 +477,7 @@ pub type MakeWaker = Box<dyn FnOnce() -> Box<dyn FnMut()> + Send>;
 struct CollisionLoop {
     inbox: Arc<Handoff<CandidateFrame, Change>>,
     verified: Sender<VerifiedFrame>,
+    verifying: Arc<FramesInFlight>,
     wake: MakeWaker,
     feedback: Arc<PoseFeedback>,
     refusals: Sender<Refusal>,
@@ -482,13 +490,25 @@ impl CollisionLoop {
         let make_waker = std::mem::replace(&mut self.wake, Box::new(|| Box::new(|| {})));
         let mut wake = make_waker();
         let mut meter = LoopMeter::new("collision");
+        let mut last_frame = Duration::ZERO;
         loop {
             match self.inbox.receive(None) {
                 Received::Work(Work::Frame(candidate)) => {
                     let started = Instant::now();
+                    // Wake the I/O thread now, so that it waits for the frame awake; not when
+                    // frames take longer than it would wait (see `FramesInFlight`).
+                    let announce = last_frame <= ANNOUNCED_WAIT;
+                    if announce {
+                        self.verifying.start();
+                        wake();
+                    }
                     if self.verify(candidate) {
                         wake();
                     }
+                    if announce {
+                        self.verifying.finish();
+                    }
+                    last_frame = started.elapsed();
                     meter.frame_done(started);
                 }
                 Received::Work(Work::Control(Change::Restart(restart))) => {
