@@ -1,6 +1,7 @@
 //! The `vas-server` command line.
 
 use std::io::IsTerminal;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -81,34 +82,41 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .with_ansi(std::io::stderr().is_terminal())
         .init();
-    let result = match Cli::parse().command {
-        Command::Run {
-            scene,
-            prefix,
-            lockstep,
-        } => runtime::run(&runtime::RunOptions {
-            scene: scene.unwrap_or_else(default_scene_path),
-            prefix,
-            lockstep,
-        })
-        .map_err(Into::into),
-        Command::Shape {
-            kind,
-            triangles,
-            out,
-        } => write_shape(kind, triangles, &out),
-        Command::CheckScene { file } => Scene::load(&file)
-            .map(|scene| println!("{}", scene.summary()))
+    let result =
+        match Cli::parse().command {
+            Command::Run {
+                scene,
+                prefix,
+                lockstep,
+            } => runtime::run(&runtime::RunOptions {
+                scene: scene.unwrap_or_else(default_scene_path),
+                prefix,
+                lockstep,
+            })
             .map_err(Into::into),
-        Command::Bench { benchmark } => match benchmark {
-            BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
-            BenchCommand::Random(args) => bench::random::run_cli(&args),
-            BenchCommand::Orbit(args) => bench::orbit::run_cli(&args),
-            BenchCommand::Bounce(args) => bench::bounce::run_cli(&args),
-            BenchCommand::Slide(args) => bench::slide::run_bench(&args).map(drop),
-            BenchCommand::Grasp(args) => bench::grasp::run_cli(&args),
-        },
-    };
+            Command::Shape {
+                kind,
+                triangles,
+                out,
+            } => write_shape(kind, triangles, &out),
+            Command::CheckScene { file } => Scene::load(&file)
+                .map_err(anyhow::Error::from)
+                .and_then(|scene| {
+                    match writeln!(std::io::stdout().lock(), "{}", scene.summary()) {
+                        // The reader went away (`check-scene ... | head`): nothing is wrong.
+                        Err(error) if error.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+                        written => written.map_err(Into::into),
+                    }
+                }),
+            Command::Bench { benchmark } => match benchmark {
+                BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
+                BenchCommand::Random(args) => bench::random::run_cli(&args),
+                BenchCommand::Orbit(args) => bench::orbit::run_cli(&args),
+                BenchCommand::Bounce(args) => bench::bounce::run_cli(&args),
+                BenchCommand::Slide(args) => bench::slide::run_bench(&args).map(drop),
+                BenchCommand::Grasp(args) => bench::grasp::run_cli(&args),
+            },
+        };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {

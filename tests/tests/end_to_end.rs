@@ -325,6 +325,24 @@ fn watch_prints_frames_as_json_lines() {
 }
 
 #[test]
+fn watch_ends_quietly_when_its_reader_goes_away() {
+    let mut server = Server::start("watch_reader_gone");
+    server.connect();
+    // Like `vas-client watch | head -1`: the reader takes a line and closes the pipe.
+    let mut watch = server.client_tool(&["watch", "--count", "100000"], Stdio::piped());
+    let stdout = watch.take_stdout().expect("piped");
+    let mut first = String::new();
+    BufReader::new(stdout)
+        .read_line(&mut first)
+        .expect("a first line");
+    assert!(first.starts_with('{'), "{first}");
+    let status = watch
+        .wait_exit(PATIENCE)
+        .expect("watch ends once its output is closed");
+    assert!(status.success(), "{}", watch.log());
+}
+
+#[test]
 fn record_writes_the_samples_clients_send() {
     let mut server = Server::start("record");
     let client = server.connect();
