@@ -301,23 +301,27 @@ mod tests {
         ));
     }
 
+    /// A receiver thread that gathers the events of every frame until the hand-off is closed.
+    fn collect_events(
+        handoff: Arc<Handoff<Frame, &'static str>>,
+    ) -> std::thread::JoinHandle<Vec<u32>> {
+        std::thread::spawn(move || {
+            let mut values = Vec::new();
+            loop {
+                match handoff.receive(None) {
+                    Received::Work(Work::Frame(f)) => values.extend(f.events),
+                    Received::Work(Work::Control(_)) => {}
+                    Received::Timeout => panic!("no deadline was given"),
+                    Received::Closed => return values,
+                }
+            }
+        })
+    }
+
     #[test]
     fn a_closed_handoff_delivers_what_was_queued_then_reports_closed() {
         let handoff: Arc<Handoff<Frame, &'static str>> = Arc::new(Handoff::default());
-        let receiver = {
-            let handoff = Arc::clone(&handoff);
-            std::thread::spawn(move || {
-                let mut values = Vec::new();
-                loop {
-                    match handoff.receive(None) {
-                        Received::Work(Work::Frame(f)) => values.extend(f.events),
-                        Received::Work(Work::Control(_)) => {}
-                        Received::Timeout => panic!("no deadline was given"),
-                        Received::Closed => return values,
-                    }
-                }
-            })
-        };
+        let receiver = collect_events(Arc::clone(&handoff));
         for value in 0..100 {
             handoff.send(frame(value));
             if value % 10 == 0 {
@@ -344,20 +348,7 @@ mod tests {
     #[test]
     fn announced_frames_arrive_and_an_announcement_without_a_frame_is_outwaited() {
         let handoff: Arc<Handoff<Frame, &'static str>> = Arc::new(Handoff::default());
-        let receiver = {
-            let handoff = Arc::clone(&handoff);
-            std::thread::spawn(move || {
-                let mut values = Vec::new();
-                loop {
-                    match handoff.receive(None) {
-                        Received::Work(Work::Frame(f)) => values.extend(f.events),
-                        Received::Work(Work::Control(_)) => {}
-                        Received::Timeout => panic!("no deadline was given"),
-                        Received::Closed => return values,
-                    }
-                }
-            })
-        };
+        let receiver = collect_events(Arc::clone(&handoff));
         for value in 0..200 {
             handoff.announce();
             if value % 50 == 7 {
