@@ -15,15 +15,12 @@ use parry3d::query::{contact, intersection_test};
 use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh};
 use vas_client::recording::{InputSample, Recording};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
+use vas_server::collision::parry_mesh::{ORACLE_SCALE, millimetre_pose, millimetre_trimesh};
 use vas_server::grasping::{GraspEvent, GraspParams, GraspingHand, HandInput, HandModel, HandPose};
 use vas_server::runtime::frames::wire_grasp;
 use vas_server::runtime::interaction::Interaction;
 use vas_server::runtime::verify::HandBodies;
 use vas_server::scene::Scene;
-
-/// Millimetres per metre: the oracle's unit. parry's GJK counts distances below 1.2e-6 of its
-/// unit as touching, which in metres would flag the clearance the clasp and sliding keep.
-const ORACLE_SCALE: f64 = 1000.0;
 
 /// A penetration deeper than this (millimetres) is reported: parry computes in `f32`, whose
 /// rounding at these sizes stays well below it.
@@ -132,28 +129,13 @@ pub struct VisibleHand {
     pub held: Option<usize>,
 }
 
-fn scaled(pose: &Isometry3<f64>) -> Isometry3<f32> {
-    let mut pose = pose.cast::<f32>();
-    pose.translation.vector *= ORACLE_SCALE as f32;
-    pose
-}
-
 impl Oracle {
     /// The judge of `scene` with the hand's segments (`bodies`, as the server builds them).
     pub fn new(scene: &Scene, bodies: &HandBodies) -> Oracle {
         let parts = scene
             .parts
             .iter()
-            .map(|p| {
-                let vertices = p
-                    .mesh
-                    .vertices()
-                    .iter()
-                    .map(|v| (v * ORACLE_SCALE).cast::<f32>())
-                    .collect();
-                ParryTriMesh::new(vertices, p.mesh.triangles().to_vec())
-                    .expect("a valid mesh makes a valid parry mesh")
-            })
+            .map(|p| millimetre_trimesh(&p.mesh))
             .collect();
         let segments = bodies
             .meshes
@@ -199,7 +181,7 @@ impl Oracle {
         hand: &VisibleHand,
         frame: usize,
     ) -> Vec<String> {
-        let poses: Vec<Isometry3<f32>> = part_poses.iter().map(scaled).collect();
+        let poses: Vec<Isometry3<f32>> = part_poses.iter().map(millimetre_pose).collect();
         let mut found = Vec::new();
         for a in 0..poses.len() {
             for b in a + 1..poses.len() {
@@ -218,7 +200,7 @@ impl Oracle {
         }
         let model = &self.model;
         for (s, local) in model.segment_poses(&hand.flex).iter().enumerate() {
-            let segment_pose = scaled(&(hand.root * local));
+            let segment_pose = millimetre_pose(&(hand.root * local));
             for (p, part_pose) in poses.iter().enumerate() {
                 if Some(p) == hand.held {
                     continue;

@@ -20,6 +20,7 @@ use serde::Serialize;
 use super::report::{
     LinePlot, Series, Table, format_number, median, write_json, write_svg_line_plot,
 };
+use crate::collision::parry_mesh::ORACLE_SCALE;
 use crate::collision::{DopTree, MeshCollider, ParryMesh, QueryStats};
 use crate::geometry::{TriMesh, shapes};
 use crate::scene::Scene;
@@ -191,23 +192,17 @@ struct PenetrationOracle {
     obstacles: Vec<(ParryMesh, Pose)>,
 }
 
-/// Millimetres per metre: the oracle's length unit.
-const ORACLE_SCALE: f64 = 1000.0;
-
 impl PenetrationOracle {
     fn new(scenario: &Scenario) -> Self {
-        let scaled = |mesh: &TriMesh| {
-            let mesh = mesh
-                .map_vertices(|v| v * ORACLE_SCALE)
-                .expect("uniform scaling keeps a valid mesh valid");
-            ParryMesh::build(&mesh)
-        };
         PenetrationOracle {
-            part: scaled(&scenario.part),
+            part: ParryMesh::in_millimetres(&scenario.part),
             obstacles: scenario
                 .obstacles
                 .iter()
-                .map(|o| (scaled(o.oracle_mesh.as_deref().unwrap_or(&o.mesh)), o.pose))
+                .map(|o| {
+                    let mesh = o.oracle_mesh.as_deref().unwrap_or(&o.mesh);
+                    (ParryMesh::in_millimetres(mesh), o.pose)
+                })
                 .collect(),
         }
     }

@@ -379,6 +379,7 @@ mod tests {
     use parry3d::query::intersection_test;
     use parry3d::shape::TriMesh as ParryTriMesh;
 
+    use crate::collision::parry_mesh::{millimetre_pose, millimetre_trimesh};
     use crate::geometry::{TriMesh, shapes};
     use crate::grasping::model::tests::right_hand;
     use crate::grasping::script::{Keyframe, ScriptedGrasp, open_hand, sample};
@@ -388,10 +389,6 @@ mod tests {
 
     /// Input samples per second (a tracker and glove at 1 kHz).
     const RATE: f64 = 1000.0;
-
-    /// Millimetres per metre: the oracle's unit. parry's GJK counts distances below 1.2e-6 of
-    /// its unit as touching, which in metres would flag the clearance sliding keeps.
-    const ORACLE_SCALE: f64 = 1000.0;
 
     /// The handle's id, and the table's in the scenes with one.
     const HANDLE: PartId = 0;
@@ -421,19 +418,7 @@ mod tests {
 
     impl Oracle {
         fn new(parts: &[Part]) -> Oracle {
-            let meshes = parts
-                .iter()
-                .map(|p| {
-                    let vertices = p
-                        .mesh
-                        .vertices()
-                        .iter()
-                        .map(|v| (v * ORACLE_SCALE).cast::<f32>())
-                        .collect();
-                    ParryTriMesh::new(vertices, p.mesh.triangles().to_vec())
-                        .expect("a valid mesh makes a valid parry mesh")
-                })
-                .collect();
+            let meshes = parts.iter().map(|p| millimetre_trimesh(&p.mesh)).collect();
             Oracle { meshes }
         }
 
@@ -445,15 +430,10 @@ mod tests {
             b: PartId,
             pose_b: &Isometry3<f64>,
         ) -> bool {
-            let scaled = |p: &Isometry3<f64>| {
-                let mut p = p.cast::<f32>();
-                p.translation.vector *= ORACLE_SCALE as f32;
-                p
-            };
             intersection_test(
-                &scaled(pose_a),
+                &millimetre_pose(pose_a),
                 &self.meshes[a as usize],
-                &scaled(pose_b),
+                &millimetre_pose(pose_b),
                 &self.meshes[b as usize],
             )
             .expect("parry supports mesh pairs")
