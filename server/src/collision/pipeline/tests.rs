@@ -206,6 +206,14 @@ impl<C: ExactTest> Scene<C> {
     }
 }
 
+/// A rayon pool of `threads` threads.
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+}
+
 fn interest_rules(disallowed: (ObjectId, ObjectId)) -> InterestMatrix {
     let mut interest = InterestMatrix::new();
     interest.disallow_groups(GroupId(2), GroupId(1));
@@ -251,12 +259,6 @@ fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) -> (u64, u64) {
     let ids: Vec<ObjectId> = scene.bodies.keys().copied().collect();
     scene.disallowed_object_pair = Some((ids[3], ids[7]));
     pipeline.set_interest(interest_rules((ids[3], ids[7])));
-    let pool = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-    };
     let (one_thread, two_threads) = (pool(1), pool(2));
     let (mut colliding_frames, mut separated_by_plane) = (0, 0);
     let (mut split_tests, mut two_thread_exact_tests) = (0, 0);
@@ -338,12 +340,7 @@ fn concurrent_runner_gives_the_same_reports_as_the_pipeline() {
         })
         .unwrap();
     }
-    let pool = Arc::new(
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap(),
-    );
+    let pool = Arc::new(pool(2));
     let concurrent = ConcurrentPipeline::spawn(twin, Some(pool)).unwrap();
     for frame in 0..300 {
         for (id, pose) in scene.step(0.5) {
@@ -524,12 +521,6 @@ fn only_pairs_expensive_last_time_are_split() {
                 .unwrap()
         })
         .collect();
-    let pool = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-    };
     let (one_thread, two_threads) = (pool(1), pool(2));
     let mut frame = |threads: &rayon::ThreadPool, nudge: f64| {
         for (&id, (_, pose)) in ids.iter().zip(&objects) {
