@@ -79,9 +79,9 @@ impl InputSample {
 
     /// The stamp an output frame carries when it answers this sample.
     pub fn stamp(&self) -> InputStamp {
-        InputStamp {
-            seq: self.seq(),
-            timestamp_ns: self.timestamp_ns(),
+        match self {
+            Self::Tracker(sample) => sample.stamp(),
+            Self::Glove(sample) => sample.stamp(),
         }
     }
 

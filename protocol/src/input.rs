@@ -111,14 +111,19 @@ impl GloveTarget {
 }
 
 impl TrackerSample {
+    /// The stamp an output frame carries when it answers this sample.
+    pub fn stamp(&self) -> InputStamp {
+        InputStamp {
+            seq: self.seq,
+            timestamp_ns: self.timestamp_ns,
+        }
+    }
+
     /// Checks the sample: every value finite, both rotations unit quaternions within
     /// [`UNIT_QUATERNION_TOLERANCE`] (renormalised in the result).
     pub fn validate(&self) -> Result<TrackerTarget, InputRejection> {
         Ok(TrackerTarget {
-            stamp: InputStamp {
-                seq: self.seq,
-                timestamp_ns: self.timestamp_ns,
-            },
+            stamp: self.stamp(),
             sensor_id: self.sensor_id,
             hand: validate_pose(&self.hand, "hand.position", "hand.rotation")?,
             cart: validate_pose(&self.cart, "cart.position", "cart.rotation")?,
@@ -152,6 +157,14 @@ fn validate_pose(
 }
 
 impl GloveSample {
+    /// The stamp an output frame carries when it answers this sample.
+    pub fn stamp(&self) -> InputStamp {
+        InputStamp {
+            seq: self.seq,
+            timestamp_ns: self.timestamp_ns,
+        }
+    }
+
     /// Checks the sample: every flex value finite (else rejected), then clamped into
     /// [`FLEX_LIMITS_RAD`], with the clamped joints reported in [`GloveTarget::clamped`].
     pub fn validate(&self) -> Result<GloveTarget, InputRejection> {
@@ -170,10 +183,7 @@ impl GloveSample {
             }
         }
         Ok(GloveTarget {
-            stamp: InputStamp {
-                seq: self.seq,
-                timestamp_ns: self.timestamp_ns,
-            },
+            stamp: self.stamp(),
             flex,
             clamped,
         })

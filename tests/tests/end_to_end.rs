@@ -42,13 +42,6 @@ fn hand_answering(client: &mut Client, stamp: InputStamp) -> HandFrame {
     })
 }
 
-fn stamp_of(sample: &TrackerSample) -> InputStamp {
-    InputStamp {
-        seq: sample.seq,
-        timestamp_ns: sample.timestamp_ns,
-    }
-}
-
 #[test]
 fn scene_info_and_parts_frames_match_the_scene_config() {
     let mut server = Server::start("sceneinfo");
@@ -90,7 +83,7 @@ fn a_tracker_sample_is_answered_by_a_hand_frame_carrying_its_seq() {
     sample.cart.position = [0.0, 0.0, 1.0];
     client.send_tracker(&sample).expect("send");
 
-    let frame = hand_answering(&mut client, stamp_of(&sample));
+    let frame = hand_answering(&mut client, sample.stamp());
     assert_eq!(frame.tracker.seq, 42);
     assert_eq!(frame.root.position, [0.1, -0.2, 1.3], "cart * hand");
     assert!(frame.timestamp_ns >= sample.timestamp_ns);
@@ -111,11 +104,7 @@ fn glove_values_beyond_the_joint_limits_are_clamped_and_counted() {
         flex,
     };
     client.send_glove(&sample).expect("send");
-    let stamp = InputStamp {
-        seq: 7,
-        timestamp_ns: sample.timestamp_ns,
-    };
-    let frame = hand_answering(&mut client, stamp);
+    let frame = hand_answering(&mut client, sample.stamp());
     assert_eq!(frame.flex[5], FLEX_LIMITS_RAD[5].1);
     assert_eq!(frame.flex[4], 0.2);
     let stats = client.input_stats(PATIENCE).expect("stats");
@@ -142,7 +131,7 @@ fn a_nan_sample_is_rejected_and_counted_and_the_server_keeps_answering() {
         |frame| match frame {
             Frame::Hand(hand) => {
                 answered.push(hand.tracker.seq);
-                (hand.tracker == stamp_of(&valid)).then_some(())
+                (hand.tracker == valid.stamp()).then_some(())
             }
             _ => None,
         },
@@ -159,7 +148,7 @@ fn a_nan_sample_is_rejected_and_counted_and_the_server_keeps_answering() {
 
     let after = tracker(4, [0.0, 0.1, 0.0]);
     client.send_tracker(&after).expect("send");
-    assert_eq!(hand_answering(&mut client, stamp_of(&after)).tracker.seq, 4);
+    assert_eq!(hand_answering(&mut client, after.stamp()).tracker.seq, 4);
 }
 
 /// Writes a recording of `count` tracker samples 1 ms apart.
@@ -217,7 +206,7 @@ fn a_killed_client_leaves_the_server_running_and_a_new_client_gets_the_latest_fr
     let sample = tracker(SAMPLES + 1, [0.0; 3]);
     newcomer.send_tracker(&sample).expect("send");
     assert_eq!(
-        hand_answering(&mut newcomer, stamp_of(&sample)).tracker.seq,
+        hand_answering(&mut newcomer, sample.stamp()).tracker.seq,
         SAMPLES + 1
     );
     assert!(server.process.is_running());

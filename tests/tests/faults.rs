@@ -6,17 +6,13 @@ use std::time::Instant;
 
 use vas_client::{Client, ClientError, Frame};
 use vas_protocol::{
-    ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, InputStamp, TrackerSample,
-    wall_clock_ns,
+    ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, TrackerSample, wall_clock_ns,
 };
 use vas_tests::{PATIENCE, Server, Spawned, binary, tracker, unique_prefix};
 
 /// Receives frames until the hand frame answering `sample`, failing after [`PATIENCE`].
 fn answer(client: &mut Client, sample: &TrackerSample) -> HandFrame {
-    let stamp = InputStamp {
-        seq: sample.seq,
-        timestamp_ns: sample.timestamp_ns,
-    };
+    let stamp = sample.stamp();
     let deadline = Instant::now() + PATIENCE;
     loop {
         assert!(Instant::now() < deadline, "no answer to {stamp:?}");

@@ -121,10 +121,7 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
             .receive()
             .map_err(|e| ipc("receive a tracker sample", e))?
         {
-            frame.tracker = InputStamp {
-                seq: sample.seq,
-                timestamp_ns: sample.timestamp_ns,
-            };
+            frame.tracker = sample.stamp();
             frame.root = sample.hand;
             answer(&mut frame)?;
         }
@@ -132,10 +129,7 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
             .receive()
             .map_err(|e| ipc("receive a glove sample", e))?
         {
-            frame.glove = InputStamp {
-                seq: sample.seq,
-                timestamp_ns: sample.timestamp_ns,
-            };
+            frame.glove = sample.stamp();
             frame.flex = sample.flex;
             answer(&mut frame)?;
         }

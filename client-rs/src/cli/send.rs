@@ -5,9 +5,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use vas_client::{Client, Frame, Wake};
-use vas_protocol::{
-    FLEX_COUNT, GloveSample, HandFrame, InputStamp, TrackerSample, WirePose, wall_clock_ns,
-};
+use vas_protocol::{FLEX_COUNT, GloveSample, HandFrame, TrackerSample, WirePose, wall_clock_ns};
 
 /// Arguments of `vas-client send-tracker`.
 #[derive(Debug, clap::Args)]
@@ -94,10 +92,7 @@ pub fn tracker(prefix: Option<&str>, args: &TrackerArgs) -> anyhow::Result<()> {
     };
     let mut client = super::connect(prefix)?;
     client.send_tracker(&sample)?;
-    let stamp = InputStamp {
-        seq: sample.seq,
-        timestamp_ns: sample.timestamp_ns,
-    };
+    let stamp = sample.stamp();
     report_answer(&mut client, &args.answer, |frame| frame.tracker == stamp)
 }
 
@@ -114,10 +109,7 @@ pub fn glove(prefix: Option<&str>, args: &GloveArgs) -> anyhow::Result<()> {
     };
     let mut client = super::connect(prefix)?;
     client.send_glove(&sample)?;
-    let stamp = InputStamp {
-        seq: sample.seq,
-        timestamp_ns: sample.timestamp_ns,
-    };
+    let stamp = sample.stamp();
     report_answer(&mut client, &args.answer, |frame| frame.glove == stamp)
 }
 
