@@ -4,11 +4,14 @@
 //! through the server's interaction model, checked by parry ([`offline`]).
 //!
 //! Finding the binaries: a test of this crate cannot use `env!("CARGO_BIN_EXE_...")` (that only
-//! names binaries of the crate under test), so [`binary`] runs `cargo build` for the server and
-//! client binaries once per test process, with the profile the tests were built with, and takes
-//! them from the same target directory as the test executable. When they are up to date this
-//! costs one cargo invocation; when the sources changed it rebuilds them, so the tests never run
-//! a stale server.
+//! names binaries of the crate under test), so [`binary`] runs `cargo build` for the workspace's
+//! binaries once per test process, with the profile the tests were built with, and takes them
+//! from the same target directory as the test executable. When they are up to date this costs
+//! one cargo invocation; when the sources changed it rebuilds them, so the tests never run a
+//! stale server. The build selects the same targets as `cargo test --workspace` (bins and tests
+//! of every member), so cargo resolves the same dependency features and reuses what the test
+//! run compiled: building only the two binaries would resolve without the dev-dependencies'
+//! features and compile iceoryx2, parry and their build tools a second time.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -54,11 +57,9 @@ fn build_binaries() -> PathBuf {
             "build",
             "--profile",
             profile,
-            "-p",
-            "vas-server",
-            "-p",
-            "vas-client",
+            "--workspace",
             "--bins",
+            "--tests",
         ])
         .status()
         .expect("cargo runs");
