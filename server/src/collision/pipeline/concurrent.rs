@@ -45,13 +45,14 @@ impl<C: ExactTest + 'static> ConcurrentPipeline<C> {
         let worker = std::thread::Builder::new()
             .name("collision-pipeline".into())
             .spawn(move || {
-                serve(
-                    pipeline,
-                    &worker_front,
-                    &command_receiver,
-                    &report_sender,
-                    pool.as_deref(),
-                )
+                let serve = || serve(pipeline, &worker_front, &command_receiver, &report_sender);
+                // The whole loop runs inside the pool, so the thread that runs the frames is one
+                // of the pool's own: a frame starts without a hand-over to the pool, and the
+                // first queued move can wake the pool's other threads (see `wake_pool`).
+                match pool {
+                    Some(pool) => pool.install(serve),
+                    None => serve(),
+                }
             })?;
         Ok(ConcurrentPipeline {
             front,
@@ -127,7 +128,6 @@ fn serve<C: ExactTest>(
     front: &Mutex<Moves>,
     commands: &Receiver<Command<C>>,
     reports: &Sender<FrameReport>,
-    pool: Option<&ThreadPool>,
 ) -> CollisionPipeline<C> {
     let mut back = Moves::new();
     for command in commands {
@@ -143,10 +143,7 @@ fn serve<C: ExactTest>(
                         rejected += 1;
                     }
                 }
-                let mut report = match pool {
-                    Some(pool) => pool.install(|| pipeline.run_frame(detail)),
-                    None => pipeline.run_frame(detail),
-                };
+                let mut report = pipeline.run_frame(detail);
                 report.stats.rejected_moves = rejected;
                 if reports.send(report).is_err() {
                     break;

@@ -538,6 +538,9 @@ impl<C: ExactTest> CollisionPipeline<C> {
     }
 
     fn enqueue(&mut self, index: u32) {
+        if self.queue.is_empty() {
+            wake_pool();
+        }
         if !self.queued[index as usize] {
             self.queued[index as usize] = true;
             self.queue.push(index);
@@ -552,7 +555,8 @@ impl<C: ExactTest> CollisionPipeline<C> {
 
     /// Runs one frame over the front-end queue and reports every colliding pair of the scene.
     /// Parallel stages run on the current rayon pool (call it inside `ThreadPool::install` to
-    /// choose the threads).
+    /// choose the threads; best around the whole loop that queues moves and runs frames, so
+    /// that no frame waits for a hand-over to the pool).
     ///
     /// The pairs whose boxes overlapped at the last frame and involve a moved object mostly still
     /// overlap (coherence), so the back end starts on them while the broad phase moves the boxes,
@@ -573,12 +577,17 @@ impl<C: ExactTest> CollisionPipeline<C> {
         let carried = self.overlapping_moved_pairs();
         let interest_start = Instant::now();
         let mut carried_work = self.interesting_work(&carried);
-        let mut interest_time = interest_start.elapsed();
+        let carried_interest_time = interest_start.elapsed();
 
         let back_end = BackEnd::new(&self.slots, &self.pairs, &self.config, detail);
-        let broad_phase = &mut self.broad_phase;
-        let (broad_phase_time, carried_times) = rayon::join(
-            || move_boxes(broad_phase, &self.slots, &self.queue),
+        let boxes = BoxStage {
+            broad_phase: &mut self.broad_phase,
+            slots: &self.slots,
+            queue: &self.queue,
+            interest: &self.interest,
+        };
+        let (mut update, carried_times) = rayon::join(
+            || boxes.update(&back_end),
             || back_end.run(&mut carried_work),
         );
         for &index in &self.queue {
@@ -586,43 +595,27 @@ impl<C: ExactTest> CollisionPipeline<C> {
         }
         self.queue.clear();
 
-        let mut ended: Vec<PairKey> = self
-            .broad_phase
-            .drain_ended()
-            .map(|[a, b]| ordered(a, b))
-            .collect();
-        ended.sort_unstable();
-        let has_ended = |pair: &PairKey| ended.binary_search(pair).is_ok();
-        for pair in &ended {
+        // Ended pairs go before the results are written back: a pair whose overlap ended and
+        // started again within the update has a fresh result among the started pairs.
+        for pair in &update.ended {
             self.pairs.remove(pair);
         }
-        let mut started: Vec<PairKey> = self
-            .broad_phase
-            .drain_started()
-            .map(|[a, b]| ordered(a, b))
-            .collect();
-        // An overlap can start and end again within one update of several boxes.
-        started.retain(|&(a, b)| self.broad_phase.overlaps(a).contains(&b));
+        let has_ended = |pair: &PairKey| update.ended.binary_search(pair).is_ok();
         let still_overlapping = carried.iter().filter(|pair| !has_ended(pair)).count();
         stats.broad_phase = StageCounters {
             pairs_in: moved * (self.len() as u64 - moved) + moved * moved.saturating_sub(1) / 2,
-            pairs_out: (still_overlapping + started.len()) as u64,
-            time: broad_phase_time,
+            pairs_out: (still_overlapping + update.started) as u64,
+            time: update.time,
         };
-
         carried_work.retain(|item| !has_ended(&item.pair));
-        let interest_start = Instant::now();
-        let mut started_work = self.interesting_work(&started);
-        interest_time += interest_start.elapsed();
-        let back_end = BackEnd::new(&self.slots, &self.pairs, &self.config, detail);
-        let started_times = back_end.run(&mut started_work);
         let mut work = carried_work;
-        work.append(&mut started_work);
+        work.append(&mut update.started_work);
         stats.interest = StageCounters {
             pairs_in: stats.broad_phase.pairs_out,
             pairs_out: work.len() as u64,
-            time: interest_time,
+            time: carried_interest_time + update.interest_time,
         };
+        let started_times = update.started_times;
 
         let unseparated = work.iter().filter(|item| !item.separated).count() as u64;
         stats.separating_plane = StageCounters {
@@ -733,21 +726,105 @@ impl<C: ExactTest> CollisionPipeline<C> {
     }
 }
 
-/// Moves the boxes of the queued objects to their objects' poses, and returns the time it took.
-fn move_boxes<C>(broad_phase: &mut SweepAndPrune, slots: &[Slot<C>], queue: &[u32]) -> Duration {
-    let start = Instant::now();
-    let updates: Vec<(u32, Aabb)> = queue
-        .iter()
-        .filter_map(|&index| {
-            let object = slots[index as usize].object.as_ref()?;
-            Some((
-                index,
-                Aabb::transformed(object.model.local_bounds(), &object.pose),
-            ))
-        })
-        .collect();
-    broad_phase.update_many(&updates);
-    start.elapsed()
+/// The bounding-box stage of a frame, with what it reads: the half of [`CollisionPipeline::run_frame`]
+/// that runs beside the back end's carried pairs.
+struct BoxStage<'a, C> {
+    broad_phase: &'a mut SweepAndPrune,
+    slots: &'a [Slot<C>],
+    queue: &'a [u32],
+    interest: &'a InterestMatrix,
+}
+
+/// What the bounding-box stage changed, and the back end's results for the started pairs.
+struct BoxUpdate {
+    /// Wall time of moving the boxes.
+    time: Duration,
+    /// Pairs whose overlap ended, sorted.
+    ended: Vec<PairKey>,
+    /// Number of pairs whose overlap started.
+    started: usize,
+    /// The started pairs of interest, tested.
+    started_work: Vec<PairWork>,
+    /// Time of the interest matrix on the started pairs.
+    interest_time: Duration,
+    /// Separating-plane and exact times of the started pairs, as [`BackEnd::run`] gives them.
+    started_times: (Duration, Duration),
+}
+
+impl<C: ExactTest> BoxStage<'_, C> {
+    /// Moves the boxes of the queued objects to their objects' poses, then gathers the pairs
+    /// whose overlap ended and tests those whose overlap started: here rather than after the
+    /// join, so that this work too runs beside the carried pairs instead of after them.
+    ///
+    /// A started pair has no kept state (a pair's state is dropped when its overlap ends), so
+    /// the interest matrix only filters it.
+    fn update(self, back_end: &BackEnd<'_, C>) -> BoxUpdate {
+        let start = Instant::now();
+        let updates: Vec<(u32, Aabb)> = self
+            .queue
+            .iter()
+            .filter_map(|&index| {
+                let object = self.slots[index as usize].object.as_ref()?;
+                Some((
+                    index,
+                    Aabb::transformed(object.model.local_bounds(), &object.pose),
+                ))
+            })
+            .collect();
+        self.broad_phase.update_many(&updates);
+        let time = start.elapsed();
+
+        let mut ended: Vec<PairKey> = self
+            .broad_phase
+            .drain_ended()
+            .map(|[a, b]| ordered(a, b))
+            .collect();
+        ended.sort_unstable();
+        let mut started: Vec<PairKey> = self
+            .broad_phase
+            .drain_started()
+            .map(|[a, b]| ordered(a, b))
+            .collect();
+        // An overlap can start and end again within one update of several boxes.
+        started.retain(|&(a, b)| self.broad_phase.overlaps(a).contains(&b));
+
+        let interest_start = Instant::now();
+        let key = |index: u32| {
+            &self.slots[index as usize]
+                .object
+                .as_ref()
+                .expect("pairs name live objects")
+                .key
+        };
+        let mut started_work: Vec<PairWork> = started
+            .iter()
+            .filter(|&&(a, b)| self.interest.is_interesting(key(a), key(b)))
+            .map(|&pair| PairWork::new(pair))
+            .collect();
+        let interest_time = interest_start.elapsed();
+        let started_times = back_end.run(&mut started_work);
+        BoxUpdate {
+            time,
+            ended,
+            started: started.len(),
+            started_work,
+            interest_time,
+            started_times,
+        }
+    }
+}
+
+/// Wakes the idle threads of the current rayon pool; called when a frame's first move is
+/// queued.
+///
+/// A pool thread asleep between frames took 23-31 us to take up the back end once a two-thread
+/// frame handed it work (measured in B4); woken by the first move, it is up by the time the
+/// frame starts. Only from inside a pool of several threads: elsewhere there is no pool of the
+/// pipeline's to wake.
+fn wake_pool() {
+    if rayon::current_thread_index().is_some() && rayon::current_num_threads() > 1 {
+        rayon::spawn(|| {});
+    }
 }
 
 fn models<C>(slots: &[Slot<C>], (a, b): PairKey) -> [&CollisionModel<C>; 2] {
