@@ -85,10 +85,19 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
     );
     let soak = report(&soak_out);
     for stream in ["tracker", "glove"] {
-        assert_eq!(soak[stream]["sent"], 200, "{soak}");
+        let count = &soak[stream];
+        assert_eq!(count["sent"], 200, "{soak}");
+        let parts = ["answered", "superseded", "dropped"].map(|key| count[key].as_u64());
+        assert_eq!(
+            parts.iter().copied().sum::<Option<u64>>(),
+            Some(200),
+            "{soak}"
+        );
     }
-    // The server answers every sample; a sample counts as dropped only when the one frame that
-    // answered it was lost in the soak's own full buffer, which its frame numbering reveals.
+    // The server answers every sample, or merges it into the frame of a newer one of its stream
+    // when that one arrives first (superseded: the latest wins); a sample counts as dropped only
+    // when the frames that answered it were lost in the soak's own full buffer, which its frame
+    // numbering reveals.
     let dropped = soak["dropped"].as_u64().expect("dropped");
     let missed = soak["frames_missed_by_client"]
         .as_u64()

@@ -52,7 +52,14 @@ pub struct StreamCount {
     pub sent: u64,
     /// Samples whose stamp came back in a hand frame.
     pub answered: u64,
-    /// Samples whose stamp never came back: dropped (or rejected) on the way.
+    /// Samples without an answer of their own but followed by an answered one: the server keeps
+    /// only the latest target of a stream, so a sample that a newer one replaced before a frame
+    /// took it up is merged into that frame (its target still takes effect: the latest wins).
+    /// Seen from the client, a sample lost on the way and then replaced looks the same, and has
+    /// the same effect.
+    pub superseded: u64,
+    /// Samples without an answer that no answered sample followed: lost on the way (or
+    /// rejected), or answered only by frames this client missed.
     pub dropped: u64,
 }
 
@@ -85,7 +92,7 @@ pub struct SoakReport {
     pub tracker: StreamCount,
     /// The glove stream.
     pub glove: StreamCount,
-    /// Samples of both streams without an answer.
+    /// Samples of both streams without an answer that no answered sample followed.
     pub dropped: u64,
     /// Hand frames the server published but this client never read (gaps in the frame
     /// numbers): its buffer overflowed while it was descheduled. A sample whose only answer
@@ -283,8 +290,8 @@ fn render(report: &SoakReport) -> String {
     let memory = &report.memory;
     let stream = |name: &str, count: &StreamCount| {
         format!(
-            "{name:<7}  sent {:>9}  answered {:>9}  dropped {:>7}\n",
-            count.sent, count.answered, count.dropped
+            "{name:<7}  sent {:>9}  answered {:>9}  superseded {:>7}  dropped {:>7}\n",
+            count.sent, count.answered, count.superseded, count.dropped
         )
     };
     let latency = report
@@ -426,10 +433,19 @@ impl AnswerBook {
 
     /// The counts once `sent` samples were sent.
     fn count(&self, sent: u64) -> StreamCount {
+        let sent_flags = &self.answered[..(sent as usize).min(self.answered.len())];
+        // The unanswered samples after the last answered one.
+        let trailing = sent_flags
+            .iter()
+            .rev()
+            .take_while(|&&answered| !answered)
+            .count() as u64;
+        let unanswered = sent.saturating_sub(self.answered_count);
         StreamCount {
             sent,
             answered: self.answered_count,
-            dropped: sent.saturating_sub(self.answered_count),
+            superseded: unanswered.saturating_sub(trailing),
+            dropped: trailing.min(unanswered),
         }
     }
 }
@@ -499,12 +515,25 @@ mod tests {
         assert!(!book.answer(stamp(5, 105), &sent.tracker), "not sent yet");
         assert!(!book.answer(stamp(9, 109), &sent.tracker), "beyond the run");
         assert!(book.answer(stamp(4, 104), &sent.tracker));
+        // 1 and 3 were followed by answered samples.
         assert_eq!(
             book.count(4),
             StreamCount {
                 sent: 4,
                 answered: 2,
-                dropped: 2
+                superseded: 2,
+                dropped: 0
+            }
+        );
+        // 5 was sent but never answered, nor anything after it.
+        sent.record(&sent.tracker, 5, 105);
+        assert_eq!(
+            book.count(5),
+            StreamCount {
+                sent: 5,
+                answered: 2,
+                superseded: 2,
+                dropped: 1
             }
         );
     }
