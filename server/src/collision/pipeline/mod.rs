@@ -531,10 +531,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
     }
 
     fn live(&self, index: u32) -> &Object<C> {
-        self.slots[index as usize]
-            .object
-            .as_ref()
-            .expect("pairs name live objects")
+        live(&self.slots, index)
     }
 
     fn enqueue(&mut self, index: u32) {
@@ -726,8 +723,8 @@ impl<C: ExactTest> CollisionPipeline<C> {
     }
 }
 
-/// The bounding-box stage of a frame, with what it reads: the half of [`CollisionPipeline::run_frame`]
-/// that runs beside the back end's carried pairs.
+/// The bounding-box stage of a frame, with what it reads: the half of
+/// [`CollisionPipeline::run_frame`] that runs beside the back end's carried pairs.
 struct BoxStage<'a, C> {
     broad_phase: &'a mut SweepAndPrune,
     slots: &'a [Slot<C>],
@@ -756,8 +753,11 @@ impl<C: ExactTest> BoxStage<'_, C> {
     /// whose overlap ended and tests those whose overlap started: here rather than after the
     /// join, so that this work too runs beside the carried pairs instead of after them.
     ///
-    /// A started pair has no kept state (a pair's state is dropped when its overlap ends), so
-    /// the interest matrix only filters it.
+    /// A started pair has no kept state to drop when it is not of interest: a pair's state is
+    /// dropped when its overlap ends, so the interest matrix only filters it. A pair whose
+    /// overlap ended and started again within this update still has its old state during the
+    /// join (it is dropped after), and its test may start from it: that changes how much work
+    /// the test does, not its answer, and the result is kept as a new state.
     fn update(self, back_end: &BackEnd<'_, C>) -> BoxUpdate {
         let start = Instant::now();
         let updates: Vec<(u32, Aabb)> = self
@@ -789,13 +789,7 @@ impl<C: ExactTest> BoxStage<'_, C> {
         started.retain(|&(a, b)| self.broad_phase.overlaps(a).contains(&b));
 
         let interest_start = Instant::now();
-        let key = |index: u32| {
-            &self.slots[index as usize]
-                .object
-                .as_ref()
-                .expect("pairs name live objects")
-                .key
-        };
+        let key = |index: u32| &live(self.slots, index).key;
         let mut started_work: Vec<PairWork> = started
             .iter()
             .filter(|&&(a, b)| self.interest.is_interesting(key(a), key(b)))
@@ -827,22 +821,20 @@ fn wake_pool() {
     }
 }
 
-fn models<C>(slots: &[Slot<C>], (a, b): PairKey) -> [&CollisionModel<C>; 2] {
-    [a, b].map(|index| {
-        &*slots[index as usize]
-            .object
-            .as_ref()
-            .expect("pairs name live objects")
-            .model
-    })
-}
-
-fn pose<C>(slots: &[Slot<C>], index: u32) -> Isometry3<f64> {
+/// The object in slot `index`, which a pair names: pairs name only live objects.
+fn live<C>(slots: &[Slot<C>], index: u32) -> &Object<C> {
     slots[index as usize]
         .object
         .as_ref()
         .expect("pairs name live objects")
-        .pose
+}
+
+fn models<C>(slots: &[Slot<C>], (a, b): PairKey) -> [&CollisionModel<C>; 2] {
+    [a, b].map(|index| &*live(slots, index).model)
+}
+
+fn pose<C>(slots: &[Slot<C>], index: u32) -> Isometry3<f64> {
+    live(slots, index).pose
 }
 
 fn ordered(a: u32, b: u32) -> PairKey {
