@@ -286,8 +286,8 @@ impl Io {
             .collect();
     }
 
-    /// Publishes the frames the collision loop verified since the last call; while the collision loop is verifying one it announced,
-    /// waits for it awake (briefly: see `FramesInFlight`).
+    /// Publishes the frames the collision loop verified since the last call; while the collision
+    /// loop is verifying one it announced, waits for it awake (briefly: see `FramesInFlight`).
     fn publish_verified_frames(&mut self) {
         let verifying = Arc::clone(&self.verifying);
         verifying.wait_awake(|| self.take_verified_frames());

@@ -53,14 +53,18 @@ impl FramesInFlight {
     /// Calls `take` (which takes the frames handed over so far) until no frame is in flight any
     /// more, yielding the processor in between, for at most [`ANNOUNCED_WAIT`].
     pub fn wait_awake(&self, mut take: impl FnMut()) {
-        let awake_until = Instant::now() + ANNOUNCED_WAIT;
-        loop {
+        wait_awake_until(Instant::now() + ANNOUNCED_WAIT, || {
             take();
-            if self.0.load(Ordering::Acquire) == 0 || Instant::now() >= awake_until {
-                return;
-            }
-            std::thread::yield_now();
-        }
+            self.0.load(Ordering::Acquire) == 0
+        });
+    }
+}
+
+/// Calls `done` until it says true or `until` passes, yielding the processor in between: how a
+/// receiver waits awake for an announced frame.
+fn wait_awake_until(until: Instant, mut done: impl FnMut() -> bool) {
+    while !done() && Instant::now() < until {
+        std::thread::yield_now();
     }
 }
 
@@ -185,9 +189,7 @@ impl<F: Coalesce, C> Handoff<F, C> {
                 let awake_until = Instant::now() + ANNOUNCED_WAIT;
                 let awake_until =
                     deadline.map_or(awake_until, |deadline| deadline.min(awake_until));
-                while !self.pending.load(Ordering::Acquire) && Instant::now() < awake_until {
-                    std::thread::yield_now();
-                }
+                wait_awake_until(awake_until, || self.pending.load(Ordering::Acquire));
                 queue = self.lock();
                 continue;
             }
