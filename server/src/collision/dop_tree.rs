@@ -12,6 +12,11 @@
 //! completely redundant half-space, the condition of the affine re-alignment).
 //!
 //! Query, in B's pose in A's frame:
+//! 0. the bounding spheres are tested (far pairs end here, in about 10 ns); a first-hit query
+//!    then uses what the previous query of the same two trees on this thread left (temporal
+//!    coherence, [`PairMemory`]): the pair of leaves that was in contact is tested again, then the
+//!    subtrees around it; a traversal starts from the previous one's front (the node pairs where
+//!    it ended), taking up again only the pairs whose gap the motion since may have closed;
 //! 1. a few of A's root slabs nearest the direction from A to B are tested against B's bounding
 //!    sphere and B's root re-aligned along that slab only: far pairs end here, in tens of ns;
 //! 2. otherwise the support cone of each of A's k directions in B's orientation set is found
@@ -25,7 +30,7 @@
 //! The traversal is compiled twice, portable and with AVX2/FMA, chosen at run time.
 
 use std::cell::RefCell;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
@@ -62,9 +67,13 @@ impl Node {
 /// A DOP-tree over one mesh: built once, shared read-only (it is `Send + Sync`).
 #[derive(Debug, Clone)]
 pub struct DopTree {
+    /// Identifies the tree for the per-thread witness cache (a clone shares it: same content).
+    id: u64,
     set: OrientationSet,
     k: usize,
     nodes: Vec<Node>,
+    /// Parent of each node (the root is its own parent).
+    parents: Vec<u32>,
     /// `k` offsets per node: `offsets[node * k + i] >= max over the node's triangles of n_i . x`.
     offsets: Vec<f32>,
     /// Triangles in leaf order.
@@ -107,7 +116,7 @@ impl DopTree {
 
     /// Heap bytes used by the tree (nodes, offsets, triangles and their ids).
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Node>()
+        self.nodes.len() * (size_of::<Node>() + size_of::<u32>())
             + self.offsets.len() * size_of::<f32>()
             + self.triangles.len() * (size_of::<Triangle>() + size_of::<u32>())
     }
@@ -115,6 +124,19 @@ impl DopTree {
     /// The `k` offsets of node `index`.
     pub(crate) fn node_offsets(&self, index: usize) -> &[f32] {
         &self.offsets[index * self.k..(index + 1) * self.k]
+    }
+
+    /// The triangles of a leaf (none if `leaf` is an inner node).
+    fn leaf_triangles(&self, leaf: &Node) -> &[Triangle] {
+        &self.triangles[leaf.first as usize..(leaf.first + leaf.count) as usize]
+    }
+
+    /// The ancestor `levels` above `node` (or the root, if nearer).
+    fn ancestor(&self, mut node: u32, levels: u32) -> u32 {
+        for _ in 0..levels {
+            node = self.parents[node as usize];
+        }
+        node
     }
 
     /// Largest absolute offset of any node.
@@ -185,21 +207,33 @@ fn with_affine<const ALL: bool>(
         out: &mut Vec<[u32; 2]>,
         parallel: bool,
     ) -> bool {
-        let mut hints = CONE_HINTS.get();
-        let separated = roots_separated_along_offset(a, b, b_to_a, &mut hints);
-        let pair = (!separated).then(|| {
-            TreePair::new(a, b, b_to_a, |rotation, translation| {
-                AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
-            })
-        });
-        CONE_HINTS.set(hints);
-        match pair {
-            Some(pair) => pair.run::<ALL, K>(stats, out, parallel),
-            None => {
-                stats.bv_tests += 1;
-                false
-            }
+        let centre_b = b_to_a * b.bounding_centre;
+        let reach = a.bounding_radius + b.bounding_radius;
+        if (centre_b - a.bounding_centre).norm_squared() > reach * reach {
+            stats.bv_tests += 1;
+            return false;
         }
+        if ALL || parallel {
+            let mut hints = CONE_HINTS.get();
+            let separated = roots_separated_along_offset(a, b, b_to_a, &centre_b, &mut hints);
+            let pair = (!separated).then(|| {
+                TreePair::new(a, b, b_to_a, |rotation, translation| {
+                    AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
+                })
+            });
+            CONE_HINTS.set(hints);
+            return match pair {
+                Some(pair) => pair.run::<ALL, K>(stats, out, parallel).is_some(),
+                None => {
+                    stats.bv_tests += 1;
+                    false
+                }
+            };
+        }
+        let mut memory = PairMemory::take(a, b);
+        let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats);
+        PairMemory::put_back(memory);
+        hit
     }
     match a.k {
         6 => run::<6, ALL>(a, b, b_to_a, stats, out, parallel),
@@ -211,16 +245,304 @@ fn with_affine<const ALL: bool>(
     }
 }
 
-/// Cheap start of a query: along the few orientations of A closest to the direction from A's
-/// centre to B's, B's bounding sphere and then B's root re-aligned along that orientation only
-/// (one support cone instead of k) are tested against A's root. Pairs far apart end here.
+/// What the last first-hit query between a pair of trees on this thread leaves to the next one.
+/// Poses change little between frames (temporal coherence): a pair in contact usually stays in
+/// contact through the same or nearby triangles, and a pair proved apart stays apart at most of
+/// the node pairs where the proof ended, by a margin that only the motion since can use up.
+#[derive(Default)]
+struct PairMemory {
+    /// A's and B's ids; 0 marks an empty slot.
+    ids: (u64, u64),
+    /// The pair of leaves whose triangles intersected, when the last query found contact.
+    witness: Option<[u32; 2]>,
+    /// B's pose in A's frame at the last traversal that recorded a front, and that front: every
+    /// pair of leaves lies under one of its node pairs, proved apart or to be tested again.
+    front_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
+    front: Front,
+    /// Buffers reused across queries: the pairs to test again, and where their tests ended.
+    retest: Vec<(u32, u32)>,
+    ended: Vec<FrontPair>,
+}
+
+/// The node pairs at which the traversals since the last one from the roots ended. A separated
+/// pair's certificate expires once the motion accumulated since it was found may have closed its
+/// gap; a query takes out only the expired ones (a scan of packed expiries: the fronts hold
+/// hundreds to a few thousand pairs, where a scan beats a priority queue's scattered accesses).
+#[derive(Default)]
+struct Front {
+    /// Separated pairs, per frame of the separating axis (A's, B's).
+    separated: [Certificates; 2],
+    /// Motion bound accumulated since the last traversal from the roots, per frame.
+    motion: [f64; 2],
+    /// Pairs of leaves whose DOPs overlapped: tested again every time.
+    leaves: Vec<(u32, u32)>,
+    /// Pairs right after the last traversal from the roots; a carried front that grows well
+    /// beyond (the contact region wandered) is dropped for a fresh one.
+    fresh_len: usize,
+}
+
+/// Separated node pairs and when their certificates expire, in parallel arrays.
+#[derive(Default)]
+struct Certificates {
+    /// Accumulated motion at which each pair's gap may be closed: the gap plus the motion
+    /// accumulated when the pair was found.
+    expiry: Vec<f64>,
+    pairs: Vec<(u32, u32)>,
+}
+
+impl Certificates {
+    fn clear(&mut self) {
+        self.expiry.clear();
+        self.pairs.clear();
+    }
+
+    /// Moves the pairs whose certificates expire at accumulated motion `reached` into `out`.
+    fn take_expired(&mut self, reached: f64, out: &mut Vec<(u32, u32)>) {
+        let mut i = 0;
+        while i < self.expiry.len() {
+            if self.expiry[i] <= reached {
+                self.expiry.swap_remove(i);
+                out.push(self.pairs.swap_remove(i));
+            } else {
+                i += 1;
+            }
+        }
+    }
+}
+
+impl Front {
+    fn len(&self) -> usize {
+        self.separated[0].pairs.len() + self.separated[1].pairs.len() + self.leaves.len()
+    }
+
+    /// Empties the front for a traversal from the roots.
+    fn restart(&mut self) {
+        self.separated.iter_mut().for_each(Certificates::clear);
+        self.motion = [0.0; 2];
+        self.leaves.clear();
+    }
+
+    /// Adds where a traversal ended.
+    fn add(&mut self, ended: &[FrontPair]) {
+        for &FrontPair { pair, slack } in ended {
+            if slack.value < 0.0 {
+                let frame = slack.along_b as usize;
+                let certificates = &mut self.separated[frame];
+                certificates
+                    .expiry
+                    .push(self.motion[frame] - slack.value as f64);
+                certificates.pairs.push(pair);
+            } else {
+                self.leaves.push(pair);
+            }
+        }
+    }
+
+    /// Accounts for a motion bound per frame, and moves into `retest` every pair whose
+    /// certificate it may have expired, and the pairs of leaves.
+    fn advance(&mut self, motion: [f64; 2], retest: &mut Vec<(u32, u32)>) {
+        retest.clear();
+        retest.append(&mut self.leaves);
+        for (frame, certificates) in self.separated.iter_mut().enumerate() {
+            self.motion[frame] += motion[frame];
+            // A relative guard against rounding in the accumulated sums.
+            let reached = self.motion[frame] * (1.0 + 1e-12) + 1e-12;
+            certificates.take_expired(reached, retest);
+        }
+    }
+}
+
+/// Tree pairs remembered per thread (a power of two).
+const MEMORY_SLOTS: usize = 64;
+
+/// Levels above the old witness's leaves at which a first-hit query searches first when the
+/// witness no longer intersects (subtrees of up to 2^levels triangles each).
+const WITNESS_SEARCH_LEVELS: u32 = 4;
+
+/// A carried front is used while B moved by at most this fraction of the smaller bounding radius
+/// since the previous query; beyond, most of it would be tested again and the roots are cheaper.
+const FRONT_MAX_MOTION: f64 = 0.05;
+
+/// A carried front is dropped when it holds more than this many times the pairs of a fresh one
+/// (plus [`FRONT_SLACK_PAIRS`]).
+const FRONT_MAX_GROWTH: usize = 2;
+
+/// Pairs a carried front may exceed its growth bound by (small fronts grow fast in relative terms).
+const FRONT_SLACK_PAIRS: usize = 64;
+
+thread_local! {
+    static PAIR_MEMORIES: RefCell<Vec<PairMemory>> = const { RefCell::new(Vec::new()) };
+}
+
+impl PairMemory {
+    /// The slot of the tree pair with ids `(a, b)`.
+    fn slot((a, b): (u64, u64)) -> usize {
+        (a.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ b) as usize % MEMORY_SLOTS
+    }
+
+    /// Takes this thread's memory of the pair `(a, b)` out of its slot (a blank one, keeping the
+    /// slot's buffers, if the slot remembers another pair).
+    fn take(a: &DopTree, b: &DopTree) -> PairMemory {
+        PAIR_MEMORIES.with_borrow_mut(|memories| {
+            if memories.is_empty() {
+                memories.resize_with(MEMORY_SLOTS, PairMemory::default);
+            }
+            let mut memory = std::mem::take(&mut memories[Self::slot((a.id, b.id))]);
+            if memory.ids != (a.id, b.id) {
+                memory.ids = (a.id, b.id);
+                memory.witness = None;
+                memory.front_pose = None;
+            }
+            memory
+        })
+    }
+
+    /// Puts the memory back in its slot.
+    fn put_back(memory: PairMemory) {
+        PAIR_MEMORIES.with_borrow_mut(|memories| {
+            let slot = Self::slot(memory.ids);
+            memories[slot] = memory;
+        });
+    }
+
+    /// A first-hit query that starts from what the previous ones left: the old witness, the
+    /// subtrees around it, the old front where the motion may have closed its gaps; the roots
+    /// only when there is nothing usable. Remembers what this query found.
+    fn first_hit<const K: usize>(
+        &mut self,
+        a: &DopTree,
+        b: &DopTree,
+        b_to_a: &Isometry3<f64>,
+        centre_b: &Point3<f64>,
+        stats: &mut QueryStats,
+    ) -> bool {
+        if let Some(leaves) = self.witness
+            && witness_still_intersects(a, b, b_to_a, leaves, stats)
+        {
+            return true;
+        }
+        let mut hints = CONE_HINTS.get();
+        let separated = roots_separated_along_offset(a, b, b_to_a, centre_b, &mut hints);
+        let pair = (!separated).then(|| {
+            TreePair::new(a, b, b_to_a, |rotation, translation| {
+                AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
+            })
+        });
+        CONE_HINTS.set(hints);
+        let Some(pair) = pair else {
+            stats.bv_tests += 1;
+            // The front, if any, stays valid: its pose is kept with it.
+            self.witness = None;
+            return false;
+        };
+        // The contact usually moved only a few triangles along: search the subtrees around the
+        // old witness before the whole trees.
+        let near = self.witness.and_then(|[leaf_a, leaf_b]| {
+            let start = (
+                a.ancestor(leaf_a, WITNESS_SEARCH_LEVELS),
+                b.ancestor(leaf_b, WITNESS_SEARCH_LEVELS),
+            );
+            pair.run_from::<K>(start, stats)
+        });
+        let hit = near.or_else(|| {
+            let carried = self.advance_front(a, b, &pair.rotation, &pair.translation);
+            if !carried {
+                self.front.restart();
+            }
+            self.ended.clear();
+            let walk = Walk {
+                starts: if carried { &self.retest } else { &[(0, 0)] },
+                stop: None,
+                front: Some(&mut self.ended),
+            };
+            let hit = pair.run_walk::<K>(walk, stats);
+            self.front.add(&self.ended);
+            if !carried {
+                self.front.fresh_len = self.front.len();
+            }
+            hit
+        });
+        self.witness = hit;
+        if near.is_none() {
+            self.front_pose = Some((pair.rotation, pair.translation));
+        }
+        hit.is_some()
+    }
+
+    /// Advances the old front, if usable at B's pose `(rotation, translation)`, by the motion
+    /// since its pose: the pairs whose gaps the motion may have closed go to `retest`. False
+    /// when there is no front, B moved too far, or the front grew too large: the query then
+    /// starts from the roots.
+    fn advance_front(
+        &mut self,
+        a: &DopTree,
+        b: &DopTree,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+    ) -> bool {
+        let Some((old_rotation, old_translation)) = &self.front_pose else {
+            return false;
+        };
+        if self.front.len() > FRONT_MAX_GROWTH * self.front.fresh_len + FRONT_SLACK_PAIRS {
+            return false;
+        }
+        // How far any point of B moved in A's frame, and any point of A in B's frame (for
+        // slacks along B's axes). For rotations, |R' - R| in the spectral norm is the Frobenius
+        // norm over sqrt 2 (twice the sine of half the angle between them); the small term
+        // covers matrices that are orthogonal only to rounding.
+        let turn = (rotation - old_rotation).norm() * std::f64::consts::FRAC_1_SQRT_2 + 1e-12;
+        let shift = (translation - old_translation).norm();
+        let reach_b = b.bounding_centre.coords.norm() + b.bounding_radius;
+        let reach_a = a.bounding_centre.coords.norm() + a.bounding_radius + old_translation.norm();
+        let motion = [turn * reach_b + shift, turn * reach_a + shift];
+        if motion[0] > FRONT_MAX_MOTION * a.bounding_radius.min(b.bounding_radius) {
+            return false;
+        }
+        self.front.advance(motion, &mut self.retest);
+        true
+    }
+}
+
+/// True when the pair of leaves that proved two trees in contact at the previous query still has
+/// intersecting triangles at `b_to_a`.
+fn witness_still_intersects(
+    a: &DopTree,
+    b: &DopTree,
+    b_to_a: &Isometry3<f64>,
+    [leaf_a, leaf_b]: [u32; 2],
+    stats: &mut QueryStats,
+) -> bool {
+    let (Some(leaf_a), Some(leaf_b)) = (a.nodes.get(leaf_a as usize), b.nodes.get(leaf_b as usize))
+    else {
+        return false;
+    };
+    // Moved exactly as the traversal moves B's triangles, so both give the same answer.
+    let rotation = b_to_a.rotation.to_rotation_matrix();
+    let translation = b_to_a.translation.vector;
+    let (triangles_a, triangles_b) = (a.leaf_triangles(leaf_a), b.leaf_triangles(leaf_b));
+    triangles_b.iter().any(|tb| {
+        let tb = tb.map(|p| Point3::from(rotation.matrix() * p.coords + translation));
+        triangles_a.iter().any(|ta| {
+            stats.tri_tests += 1;
+            triangles_intersect(ta, &tb)
+        })
+    })
+}
+
+/// Source of tree ids (0 is never given out: it marks an empty witness slot).
+static NEXT_TREE_ID: AtomicU64 = AtomicU64::new(1);
+
+/// Cheap start of a query, once the bounding spheres overlap: along the few orientations of A
+/// closest to the direction from A's centre to B's (`centre_b`, in A's frame), B's bounding
+/// sphere and then B's root re-aligned along that orientation only (one support cone instead of
+/// k) are tested against A's root. Pairs far apart end here.
 fn roots_separated_along_offset(
     a: &DopTree,
     b: &DopTree,
     b_to_a: &Isometry3<f64>,
+    centre_b: &Point3<f64>,
     hints: &mut ConeHints,
 ) -> bool {
-    let centre_b = b_to_a * b.bounding_centre;
     let offset = centre_b - a.bounding_centre;
     // Slot i compares A's maximum along n_i with B's minimum along n_i: promising when B lies
     // far along n_i.
@@ -289,6 +611,7 @@ struct TreeBuilder<'a> {
     centroids: Vec<Point3<f64>>,
     order: Vec<u32>,
     nodes: Vec<Node>,
+    parents: Vec<u32>,
     offsets: Vec<f32>,
 }
 
@@ -318,12 +641,13 @@ impl<'a> TreeBuilder<'a> {
             triangle_dops,
             centroids,
             nodes: Vec::new(),
+            parents: Vec::new(),
             offsets: Vec::new(),
         }
     }
 
     fn build(mut self) -> DopTree {
-        self.push_nodes(1);
+        self.push_nodes(1, 0);
         self.build_node(0, 0, self.triangles.len());
         let max_abs_offset = self.offsets[..self.k]
             .iter()
@@ -340,11 +664,13 @@ impl<'a> TreeBuilder<'a> {
             .map(|p| (p - bounding_centre).norm())
             .fold(0.0, f64::max);
         DopTree {
+            id: NEXT_TREE_ID.fetch_add(1, Ordering::Relaxed),
             bounding_centre,
             bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
             set: self.set.clone(),
             k: self.k,
             nodes: self.nodes,
+            parents: self.parents,
             offsets: self.offsets,
             triangles: self
                 .order
@@ -356,9 +682,11 @@ impl<'a> TreeBuilder<'a> {
         }
     }
 
-    fn push_nodes(&mut self, count: usize) -> usize {
+    /// Appends `count` nodes, children of `parent`; returns the index of the first.
+    fn push_nodes(&mut self, count: usize, parent: usize) -> usize {
         let first = self.nodes.len();
         for _ in 0..count {
+            self.parents.push(parent as u32);
             self.nodes.push(Node {
                 first: 0,
                 count: 0,
@@ -389,7 +717,7 @@ impl<'a> TreeBuilder<'a> {
             return;
         }
         let mid = self.partition(start, end);
-        let children = self.push_nodes(2);
+        let children = self.push_nodes(2, index);
         self.nodes[index] = Node {
             first: children as u32,
             count: 0,
@@ -814,12 +1142,51 @@ pub(crate) struct TreePair<'a, R> {
     realigner: R,
 }
 
+/// Where a sequential traversal starts and what it records besides its answer.
+struct Walk<'w> {
+    /// Node pairs to test first (the root pair for a whole query).
+    starts: &'w [(u32, u32)],
+    /// Set by the first task of a parallel query that finds a hit; stops the others.
+    stop: Option<&'w AtomicBool>,
+    /// Receives every node pair at which the traversal ended without a hit, with its slack: a
+    /// complete traversal's front covers every pair of leaves exactly once.
+    front: Option<&'w mut Vec<FrontPair>>,
+}
+
+impl<'w> Walk<'w> {
+    /// A traversal from `starts` that records nothing.
+    fn from(starts: &'w [(u32, u32)]) -> Self {
+        Walk {
+            starts,
+            stop: None,
+            front: None,
+        }
+    }
+}
+
+/// A node pair at which a traversal ended: separated, or a pair of leaves tested (slack 0).
+#[derive(Debug, Clone, Copy)]
+struct FrontPair {
+    pair: (u32, u32),
+    slack: Slack,
+}
+
+/// How deeply two nodes' DOPs overlap along their tightest axis: negative when they are
+/// disjoint, and then the subtrees' triangles are at least `-value` apart along that axis.
+#[derive(Debug, Clone, Copy, Default)]
+struct Slack {
+    value: f32,
+    /// The axis is one of B's (A's node re-aligned into B's frame), not one of A's.
+    along_b: bool,
+}
+
 /// What a traversal found.
 #[derive(Default)]
 struct Found {
     stats: QueryStats,
     pairs: Vec<[u32; 2]>,
-    hit: bool,
+    /// The first pair of leaves found with intersecting triangles (node indices of A and B).
+    hit: Option<[u32; 2]>,
 }
 
 impl<'a, R> TreePair<'a, R> {
@@ -887,13 +1254,14 @@ impl<'a, R> TreePair<'a, R> {
 }
 
 impl<R> TreePair<'_, R> {
-    /// Runs the query from the root pair, sequentially or split across threads.
+    /// Runs the query from the root pair, sequentially or split across threads. Returns the
+    /// first pair of leaves found with intersecting triangles (node indices of A and B), if any.
     pub(crate) fn run<const ALL: bool, const K: usize>(
         &self,
         stats: &mut QueryStats,
         out: &mut Vec<[u32; 2]>,
         parallel: bool,
-    ) -> bool
+    ) -> Option<[u32; 2]>
     where
         R: Realign<K>,
     {
@@ -902,7 +1270,11 @@ impl<R> TreePair<'_, R> {
             self.parallel::<ALL, K>(0, 0, PARALLEL_DEPTH, &stop)
         } else {
             let mut found = Found::default();
-            found.hit = self.sequential::<ALL, K>((0, 0), &mut found.stats, &mut found.pairs, None);
+            found.hit = self.sequential::<ALL, K>(
+                Walk::from(&[(0, 0)]),
+                &mut found.stats,
+                &mut found.pairs,
+            );
             found
         };
         *stats += found.stats;
@@ -910,16 +1282,37 @@ impl<R> TreePair<'_, R> {
         found.hit
     }
 
+    /// A first-hit traversal as `walk` says; returns the pair of leaves found with intersecting
+    /// triangles, if any.
+    fn run_walk<const K: usize>(&self, walk: Walk<'_>, stats: &mut QueryStats) -> Option<[u32; 2]>
+    where
+        R: Realign<K>,
+    {
+        self.sequential::<false, K>(walk, stats, &mut Vec::new())
+    }
+
+    /// A first-hit traversal of the subtrees under one node pair only; returns the pair of
+    /// leaves found with intersecting triangles, if any.
+    pub(crate) fn run_from<const K: usize>(
+        &self,
+        start: (u32, u32),
+        stats: &mut QueryStats,
+    ) -> Option<[u32; 2]>
+    where
+        R: Realign<K>,
+    {
+        self.sequential::<false, K>(Walk::from(&[start]), stats, &mut Vec::new())
+    }
+
     /// Depth-first traversal from one node pair with this thread's re-alignment cache, compiled
     /// for AVX2 and FMA where the CPU has them (the interval tests and re-alignments are vector
     /// code).
     fn sequential<const ALL: bool, const K: usize>(
         &self,
-        start: (u32, u32),
+        walk: Walk<'_>,
         stats: &mut QueryStats,
         out: &mut Vec<[u32; 2]>,
-        stop: Option<&AtomicBool>,
-    ) -> bool
+    ) -> Option<[u32; 2]>
     where
         R: Realign<K>,
     {
@@ -929,9 +1322,9 @@ impl<R> TreePair<'_, R> {
                 && std::arch::is_x86_feature_detected!("fma")
             {
                 // SAFETY: the CPU supports AVX2 and FMA, checked just above.
-                return unsafe { self.traverse_avx2::<ALL, K>(scratch, start, stats, out, stop) };
+                return unsafe { self.traverse_avx2::<ALL, K>(scratch, walk, stats, out) };
             }
-            self.traverse::<ALL, K, false>(scratch, start, stats, out, stop)
+            self.traverse::<ALL, K, false>(scratch, walk, stats, out)
         })
     }
 
@@ -941,15 +1334,14 @@ impl<R> TreePair<'_, R> {
     fn traverse_avx2<const ALL: bool, const K: usize>(
         &self,
         scratch: &mut Scratch,
-        start: (u32, u32),
+        walk: Walk<'_>,
         stats: &mut QueryStats,
         out: &mut Vec<[u32; 2]>,
-        stop: Option<&AtomicBool>,
-    ) -> bool
+    ) -> Option<[u32; 2]>
     where
         R: Realign<K>,
     {
-        self.traverse::<ALL, K, true>(scratch, start, stats, out, stop)
+        self.traverse::<ALL, K, true>(scratch, walk, stats, out)
     }
 
     /// The traversal itself: a stack of node pairs, B's nodes re-aligned once per query.
@@ -957,11 +1349,10 @@ impl<R> TreePair<'_, R> {
     fn traverse<const ALL: bool, const K: usize, const FUSED: bool>(
         &self,
         scratch: &mut Scratch,
-        start: (u32, u32),
+        walk: Walk<'_>,
         stats: &mut QueryStats,
         out: &mut Vec<[u32; 2]>,
-        stop: Option<&AtomicBool>,
-    ) -> bool
+    ) -> Option<[u32; 2]>
     where
         R: Realign<K>,
     {
@@ -985,14 +1376,28 @@ impl<R> TreePair<'_, R> {
             tags: reverse_tags,
             realigned: reverse_realigned,
         };
-        let mut hit = false;
-        if self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, start, stats) < 0.0 {
-            return false;
-        }
+        let Walk {
+            starts,
+            stop,
+            mut front,
+        } = walk;
+        let mut ended = |pair: (u32, u32), slack: Slack| {
+            if let Some(front) = front.as_deref_mut() {
+                front.push(FrontPair { pair, slack });
+            }
+        };
+        let mut hit = None;
         // The stack holds node pairs already known to overlap. Children pairs are tested when
         // generated and the one overlapping more deeply is visited first: a first hit is found
         // sooner.
-        stack.push(start);
+        for &start in starts.iter().rev() {
+            let slack = self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, start, stats);
+            if slack.value < 0.0 {
+                ended(start, slack);
+            } else {
+                stack.push(start);
+            }
+        }
         while let Some((ia, ib)) = stack.pop() {
             if let Some(stop) = stop
                 && stop.load(Ordering::Relaxed)
@@ -1002,11 +1407,18 @@ impl<R> TreePair<'_, R> {
             stats.nodes_visited += 1;
             let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
             if na.is_leaf() && nb.is_leaf() {
-                if self.leaf_pair::<ALL>(na, nb, stats, out) {
-                    hit = true;
+                let found = self.leaf_pair::<ALL>(na, nb, stats, out);
+                // Tested again next time, as is every pair left unexplored by a first hit: the
+                // front then still covers every pair of leaves.
+                ended((ia, ib), Slack::default());
+                if found {
+                    hit = hit.or(Some([ia, ib]));
                     if !ALL {
                         if let Some(stop) = stop {
                             stop.store(true, Ordering::Relaxed);
+                        }
+                        for &pair in stack.iter() {
+                            ended(pair, Slack::default());
                         }
                         break;
                     }
@@ -1025,23 +1437,24 @@ impl<R> TreePair<'_, R> {
                 slack / size.max(f32::MIN_POSITIVE)
             };
             let (deeper, shallower) =
-                if relative(first, first_slack) >= relative(second, second_slack) {
+                if relative(first, first_slack.value) >= relative(second, second_slack.value) {
                     ((first, first_slack), (second, second_slack))
                 } else {
                     ((second, second_slack), (first, first_slack))
                 };
-            if shallower.1 >= 0.0 {
-                stack.push(shallower.0);
-            }
-            if deeper.1 >= 0.0 {
-                stack.push(deeper.0);
+            for (pair, slack) in [shallower, deeper] {
+                if slack.value >= 0.0 {
+                    stack.push(pair);
+                } else {
+                    ended(pair, slack);
+                }
             }
         }
         hit
     }
 
     /// The overlap slack of a node pair: the least `a_i + e_i` over the axes, negative exactly
-    /// when some axis separates them. B's node is re-aligned unless cached for this query; when
+    /// when some axis separates them (and then minus a lower bound on their distance). B's node is re-aligned unless cached for this query; when
     /// the method tests both ways and A's axes do not separate, A's node re-aligned into B's
     /// frame is tested against B's axes too.
     #[inline(always)]
@@ -1051,31 +1464,38 @@ impl<R> TreePair<'_, R> {
         reverse_cache: &mut RealignCache<'_>,
         (ia, ib): (u32, u32),
         stats: &mut QueryStats,
-    ) -> f32
+    ) -> Slack
     where
         R: Realign<K>,
     {
+        let forward = |value| Slack {
+            value,
+            along_b: false,
+        };
         let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
         let e = cache.get::<K, FUSED, R>(&self.realigner, self.b, ib, stats);
         stats.bv_tests += 1;
-        let forward = overlap_slack(da, e);
+        let along_a = overlap_slack(da, e);
         // Only pairs that A's axes barely fail to separate are worth B's axes: deep overlaps
         // are rarely separated by them (measured).
         let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
-        if forward < 0.0 || forward > REVERSE_TEST_SLACK * (na.size + nb.size) {
-            return forward;
+        if along_a < 0.0 || along_a > REVERSE_TEST_SLACK * (na.size + nb.size) {
+            return forward(along_a);
         }
         let Some(reverse) = self.realigner.reverse(self.a, self.b) else {
-            return forward;
+            return forward(along_a);
         };
         let db: &[f32; K] = self.b.node_offsets(ib as usize).try_into().unwrap();
         let e = reverse_cache.get::<K, FUSED, R>(reverse, self.a, ia, stats);
         stats.bv_tests += 1;
-        let backward = overlap_slack(db, e);
-        if backward < forward {
-            backward
+        let along_b = overlap_slack(db, e);
+        if along_b < along_a {
+            Slack {
+                value: along_b,
+                along_b: true,
+            }
         } else {
-            forward
+            forward(along_a)
         }
     }
 
@@ -1096,8 +1516,14 @@ impl<R> TreePair<'_, R> {
         }
         let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
         if depth == 0 || (na.is_leaf() && nb.is_leaf()) {
-            found.hit =
-                self.sequential::<ALL, K>((ia, ib), &mut found.stats, &mut found.pairs, Some(stop));
+            found.hit = self.sequential::<ALL, K>(
+                Walk {
+                    stop: Some(stop),
+                    ..Walk::from(&[(ia, ib)])
+                },
+                &mut found.stats,
+                &mut found.pairs,
+            );
             return found;
         }
         let mut e = [0f32; K];
@@ -1116,7 +1542,7 @@ impl<R> TreePair<'_, R> {
         );
         found.stats += x.stats;
         found.stats += y.stats;
-        found.hit = x.hit || y.hit;
+        found.hit = x.hit.or(y.hit);
         found.pairs = x.pairs;
         found.pairs.extend_from_slice(&y.pairs);
         found

@@ -53,7 +53,7 @@ impl KdopBruteForceTree {
             let pair = TreePair::new(a, b, b_to_a, |rotation, translation| {
                 VertexRealign::<K>::new(a, b, rotation, translation)
             });
-            pair.run::<ALL, K>(stats, out, false)
+            pair.run::<ALL, K>(stats, out, false).is_some()
         }
         let (a, b) = (&self.tree, &other.tree);
         match a.orientations().k() {

@@ -262,3 +262,80 @@ fn real_mesh_agrees_with_brute_force_and_parry() {
         "{colliding} colliding poses"
     );
 }
+
+/// B's pose after a small random step from `pose`: a turn of up to `turn` radians about a random
+/// axis and a shift of up to `shift` per coordinate, pulled towards `centre` so the walk keeps
+/// crossing in and out of contact.
+fn small_step(
+    rng: &mut ChaCha8Rng,
+    pose: &Isometry3<f64>,
+    turn: f64,
+    shift: f64,
+    centre: &Vector3<f64>,
+) -> Isometry3<f64> {
+    let axis = nalgebra::Unit::new_normalize(Vector3::new(
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+        rng.random_range(0.1..1.0),
+    ));
+    let rotation = UnitQuaternion::from_axis_angle(&axis, rng.random_range(-turn..turn));
+    let jitter = Vector3::from_fn(|_, _| rng.random_range(-shift..shift));
+    let pull = (centre - pose.translation.vector) * 0.2;
+    Isometry3::from_parts(
+        Translation3::from(pose.translation.vector + jitter + pull),
+        rotation * pose.rotation,
+    )
+}
+
+#[test]
+fn coherent_pose_sequences_agree_with_brute_force() {
+    // First-hit queries carry a witness and a front of separated node pairs from one query to
+    // the next; walks of small steps, back-and-forth jumps (as bisection makes) and a second
+    // pair of trees queried in between exercise every way that memory is used or dropped.
+    let a = torus(0.35, 16, 8);
+    let b = torus(0.2, 12, 6);
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    // B's centre is pulled along x in and out of A's reach (the tori touch near x = 2.55).
+    let centre_at = |step: usize| Vector3::new(2.45 + 0.4 * (step as f64 / 25.0).sin(), 0.1, 0.0);
+    for (k, leaf_size) in [(18, 1), (24, 2), (6, 1), (14, 3), (26, 1)] {
+        let set = OrientationSet::new(k).unwrap();
+        let (da, db) = (
+            DopTree::with_options(&a, &set, leaf_size),
+            DopTree::with_options(&b, &set, leaf_size),
+        );
+        let other = DopTree::with_options(&b, &set, leaf_size);
+        let mut pose =
+            Isometry3::from_parts(Translation3::from(centre_at(0)), UnitQuaternion::identity());
+        let (mut hits, mut misses, mut switches, mut last) = (0, 0, 0, None);
+        for step in 0..400 {
+            let centre = centre_at(step);
+            pose = small_step(&mut rng, &pose, 0.03, 0.01, &centre);
+            let mut queried = vec![pose];
+            if step % 7 == 0 {
+                // A jump away and back, as bisection's trial poses go.
+                queried.push(small_step(&mut rng, &pose, 0.3, 0.2, &centre));
+                queried.push(pose);
+            }
+            for q in &queried {
+                let expected = !brute_force_pairs(&a, &b, q).is_empty();
+                let mut stats = QueryStats::default();
+                assert_eq!(
+                    da.intersects(&db, q, &mut stats),
+                    expected,
+                    "k {k} leaf {leaf_size} step {step}"
+                );
+                if step % 5 == 0 {
+                    assert_eq!(other.intersects(&da, &q.inverse(), &mut stats), expected);
+                }
+                hits += expected as usize;
+                misses += !expected as usize;
+                switches += (last.is_some_and(|l| l != expected)) as usize;
+                last = Some(expected);
+            }
+        }
+        assert!(
+            hits > 50 && misses > 50 && switches > 5,
+            "k {k}: {hits} hits, {misses} misses, {switches} switches"
+        );
+    }
+}
