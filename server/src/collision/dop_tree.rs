@@ -214,15 +214,7 @@ fn with_affine<const ALL: bool>(
             return false;
         }
         if ALL || parallel {
-            let mut hints = CONE_HINTS.get();
-            let separated = roots_separated_along_offset(a, b, b_to_a, &centre_b, &mut hints);
-            let pair = (!separated).then(|| {
-                TreePair::new(a, b, b_to_a, |rotation, translation| {
-                    AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
-                })
-            });
-            CONE_HINTS.set(hints);
-            return match pair {
+            return match affine_pair::<K>(a, b, b_to_a, &centre_b) {
                 Some(pair) => pair.run::<ALL, K>(stats, out, parallel).is_some(),
                 None => {
                     stats.bv_tests += 1;
@@ -421,15 +413,7 @@ impl PairMemory {
         {
             return true;
         }
-        let mut hints = CONE_HINTS.get();
-        let separated = roots_separated_along_offset(a, b, b_to_a, centre_b, &mut hints);
-        let pair = (!separated).then(|| {
-            TreePair::new(a, b, b_to_a, |rotation, translation| {
-                AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
-            })
-        });
-        CONE_HINTS.set(hints);
-        let Some(pair) = pair else {
+        let Some(pair) = affine_pair::<K>(a, b, b_to_a, centre_b) else {
             stats.bv_tests += 1;
             // The front, if any, stays valid: its pose is kept with it.
             self.witness = None;
@@ -442,7 +426,7 @@ impl PairMemory {
                 a.ancestor(leaf_a, WITNESS_SEARCH_LEVELS),
                 b.ancestor(leaf_b, WITNESS_SEARCH_LEVELS),
             );
-            pair.run_from::<K>(start, stats)
+            pair.run_walk::<K>(Walk::from(&[start]), stats)
         });
         let hit = near.or_else(|| {
             let carried = self.advance_front(a, b, &pair.rotation, &pair.translation);
@@ -529,8 +513,28 @@ fn witness_still_intersects(
     })
 }
 
-/// Source of tree ids (0 is never given out: it marks an empty witness slot).
+/// Source of tree ids (0 is never given out: it marks an empty memory slot).
 static NEXT_TREE_ID: AtomicU64 = AtomicU64::new(1);
+
+/// The query of `b` posed at `b_to_a` against `a` with the O(k) re-alignment, or `None` when
+/// [`roots_separated_along_offset`] already proves them apart (`centre_b`: B's centre in A's
+/// frame).
+fn affine_pair<'a, const K: usize>(
+    a: &'a DopTree,
+    b: &'a DopTree,
+    b_to_a: &Isometry3<f64>,
+    centre_b: &Point3<f64>,
+) -> Option<TreePair<'a, AffineRealign<K>>> {
+    let mut hints = CONE_HINTS.get();
+    let separated = roots_separated_along_offset(a, b, b_to_a, centre_b, &mut hints);
+    let pair = (!separated).then(|| {
+        TreePair::new(a, b, b_to_a, |rotation, translation| {
+            AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
+        })
+    });
+    CONE_HINTS.set(hints);
+    pair
+}
 
 /// Cheap start of a query, once the bounding spheres overlap: along the few orientations of A
 /// closest to the direction from A's centre to B's (`centre_b`, in A's frame), B's bounding
@@ -1289,19 +1293,6 @@ impl<R> TreePair<'_, R> {
         R: Realign<K>,
     {
         self.sequential::<false, K>(walk, stats, &mut Vec::new())
-    }
-
-    /// A first-hit traversal of the subtrees under one node pair only; returns the pair of
-    /// leaves found with intersecting triangles, if any.
-    pub(crate) fn run_from<const K: usize>(
-        &self,
-        start: (u32, u32),
-        stats: &mut QueryStats,
-    ) -> Option<[u32; 2]>
-    where
-        R: Realign<K>,
-    {
-        self.sequential::<false, K>(Walk::from(&[start]), stats, &mut Vec::new())
     }
 
     /// Depth-first traversal from one node pair with this thread's re-alignment cache, compiled
