@@ -13,10 +13,12 @@
 //!
 //! Query, in B's pose in A's frame:
 //! 0. the bounding spheres are tested (far pairs end here, in about 10 ns); a first-hit query
-//!    then uses what the previous query of the same two trees on this thread left (temporal
-//!    coherence, [`PairMemory`]): the pair of leaves that was in contact is tested again, then the
-//!    subtrees around it; a traversal starts from the previous one's front (the node pairs where
-//!    it ended), taking up again only the pairs whose gap the motion since may have closed;
+//!    then uses what the previous queries of the same two trees on this thread left (temporal
+//!    coherence, [`PairMemory`]): the pair of leaves last in contact is tested again, then the
+//!    subtrees around it; a traversal starts from the last free query's front (the node pairs
+//!    where it ended, each with a directional certificate: a DOP axis or, for leaves, a face
+//!    plane), taking up again only the pairs whose gap the motion since may have closed along
+//!    their direction;
 //! 1. a few of A's root slabs nearest the direction from A to B are tested against B's bounding
 //!    sphere and B's root re-aligned along that slab only: far pairs end here, in tens of ns;
 //! 2. otherwise the support cone of each of A's k directions in B's orientation set is found
@@ -240,64 +242,161 @@ fn with_affine<const ALL: bool>(
 /// What the last first-hit query between a pair of trees on this thread leaves to the next one.
 /// Poses change little between frames (temporal coherence): a pair in contact usually stays in
 /// contact through the same or nearby triangles, and a pair proved apart stays apart at most of
-/// the node pairs where the proof ended, by a margin that only the motion since can use up.
+/// the node pairs where the proof ended, by a margin that only motion towards each other can use
+/// up.
 #[derive(Default)]
 struct PairMemory {
     /// A's and B's ids; 0 marks an empty slot.
     ids: (u64, u64),
-    /// The pair of leaves whose triangles intersected, when the last query found contact.
+    /// The pair of leaves whose triangles intersected at the last query that found contact,
+    /// kept through one query without (a free pose between two trial poses in contact), and the
+    /// queries without contact since.
     witness: Option<[u32; 2]>,
+    misses_since_witness: u32,
     /// B's pose in A's frame at the last traversal that recorded a front, and that front: every
     /// pair of leaves lies under one of its node pairs, proved apart or to be tested again.
     front_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
     front: Front,
-    /// Buffers reused across queries: the pairs to test again, and where their tests ended.
+    /// Buffers reused across queries: the pairs to test again, the indices of the due
+    /// certificates among them, and where their tests ended.
     retest: Vec<(u32, u32)>,
+    due: [Vec<u32>; 2],
     ended: Vec<FrontPair>,
 }
 
-/// The node pairs at which the traversals since the last one from the roots ended. A separated
-/// pair's certificate expires once the motion accumulated since it was found may have closed its
-/// gap; a query takes out only the expired ones (a scan of packed expiries: the fronts hold
-/// hundreds to a few thousand pairs, where a scan beats a priority queue's scattered accesses).
+/// The node pairs at which the traversals since the last one from the roots ended.
+///
+/// A separated pair carries a certificate: a direction, fixed in A's or in B's frame, along which
+/// the other tree's triangles lay at least a gap beyond this tree's. Motion changes that gap by at
+/// most the other tree's centre moving along the direction plus the turn times its radius, so a
+/// certificate is still valid while `gap + direction . (centre now - centre then) - radius *
+/// (turn since)` stays positive: sliding along a surface (the peg down its hole) leaves the
+/// certificates across the gap intact, however far it goes. A query takes out only the expired
+/// ones (a scan of packed arrays: the fronts hold up to tens of thousands of pairs, where a scan
+/// beats a priority queue's scattered accesses).
 #[derive(Default)]
 struct Front {
-    /// Separated pairs, per frame of the separating axis (A's, B's).
+    /// Separated pairs, per frame of the certificate's direction (A's, B's).
     separated: [Certificates; 2],
-    /// Motion bound accumulated since the last traversal from the roots, per frame.
-    motion: [f64; 2],
-    /// Pairs of leaves whose DOPs overlapped: tested again every time.
+    /// Turn accumulated since the last traversal from the roots: the sum of `|R' - R|` (spectral
+    /// norm) over the poses at which the front was advanced.
+    turn: f64,
+    /// Largest coordinate scale ([`Placement::scale`]) since the last traversal from the roots:
+    /// bounds the rounding of the certificates' arithmetic.
+    scale: f64,
+    /// Pairs of leaves whose triangles no face plane separated: tested again every time.
     leaves: Vec<(u32, u32)>,
-    /// Pairs right after the last traversal from the roots; a carried front that grows well
-    /// beyond (the contact region wandered) is dropped for a fresh one.
-    fresh_len: usize,
+    /// Pairs of the first complete front (of a query without a hit) since the last traversal
+    /// from the roots; a carried front that grows well beyond (the contact region wandered) is
+    /// dropped for a fresh one.
+    fresh_len: Option<usize>,
 }
 
-/// Separated node pairs and when their certificates expire, in parallel arrays.
+/// Separated node pairs and their certificates, in parallel arrays.
 #[derive(Default)]
 struct Certificates {
-    /// Accumulated motion at which each pair's gap may be closed: the gap plus the motion
-    /// accumulated when the pair was found.
+    /// `gap - direction . centre - radius * turn` when the pair was found (rounding guard
+    /// subtracted): the certificate holds while this plus `direction . centre - radius * turn`
+    /// now stays above the guard.
     expiry: Vec<f64>,
+    /// Unit direction (to f32 rounding) beyond which the other tree lies, in this frame, by
+    /// component (so that the scan of [`Certificates::expired`] runs in vector registers).
+    directions: [Vec<f32>; 3],
     pairs: Vec<(u32, u32)>,
+}
+
+/// Where the two trees are at a query, for the certificates of a [`Front`].
+struct Placement {
+    /// B's bounding centre in A's frame, and A's in B's frame.
+    centres: [Vector3<f64>; 2],
+    /// The radius of the tree that moves in each frame: B's in A's frame, A's in B's.
+    radii: [f64; 2],
+    /// A bound on every coordinate involved: `|t| + |c_A| + |c_B| + r_A + r_B`.
+    scale: f64,
+}
+
+/// Relative rounding guard of the certificates: covers the `f32` rounding of their directions and
+/// of the DOP slacks they come from (both a few 1e-8 of the coordinates' scale).
+const CERTIFICATE_ROUNDING: f64 = 1e-6;
+
+impl Placement {
+    fn new(a: &DopTree, b: &DopTree, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Self {
+        Placement {
+            centres: [
+                rotation * b.bounding_centre.coords + translation,
+                rotation.transpose() * (a.bounding_centre.coords - translation),
+            ],
+            radii: [
+                b.bounding_radius * (1.0 + CERTIFICATE_ROUNDING),
+                a.bounding_radius * (1.0 + CERTIFICATE_ROUNDING),
+            ],
+            scale: translation.norm()
+                + a.bounding_centre.coords.norm()
+                + b.bounding_centre.coords.norm()
+                + a.bounding_radius
+                + b.bounding_radius,
+        }
+    }
 }
 
 impl Certificates {
     fn clear(&mut self) {
         self.expiry.clear();
+        self.directions.iter_mut().for_each(Vec::clear);
         self.pairs.clear();
     }
 
-    /// Moves the pairs whose certificates expire at accumulated motion `reached` into `out`.
-    fn take_expired(&mut self, reached: f64, out: &mut Vec<(u32, u32)>) {
-        let mut i = 0;
-        while i < self.expiry.len() {
-            if self.expiry[i] <= reached {
-                self.expiry.swap_remove(i);
-                out.push(self.pairs.swap_remove(i));
-            } else {
-                i += 1;
+    fn push(&mut self, expiry: f64, direction: [f32; 3], pair: (u32, u32)) {
+        self.expiry.push(expiry);
+        for (component, value) in self.directions.iter_mut().zip(direction) {
+            component.push(value);
+        }
+        self.pairs.push(pair);
+    }
+
+    /// Appends to `out` the pairs whose certificates may no longer hold with the other tree's
+    /// centre at `centre` (those whose `expiry + direction . centre` is at most `threshold`),
+    /// and their indices to `indices`.
+    fn expired(
+        &self,
+        centre: &Vector3<f64>,
+        threshold: f64,
+        out: &mut Vec<(u32, u32)>,
+        indices: &mut Vec<u32>,
+    ) {
+        // Chunks of pairs are checked into a bit mask without branches (vector code); only the
+        // expired pairs, usually few, are then visited.
+        const CHUNK: usize = 32;
+        let [dx, dy, dz] = &self.directions;
+        let bound = |i: usize| {
+            self.expiry[i]
+                + dx[i] as f64 * centre.x
+                + dy[i] as f64 * centre.y
+                + dz[i] as f64 * centre.z
+        };
+        for start in (0..self.expiry.len()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(self.expiry.len());
+            let mut mask = (start..end).fold(0u32, |mask, i| {
+                mask | (u32::from(bound(i) <= threshold) << (i - start))
+            });
+            while mask != 0 {
+                let i = start + mask.trailing_zeros() as usize;
+                out.push(self.pairs[i]);
+                indices.push(i as u32);
+                mask &= mask - 1;
             }
+        }
+    }
+
+    /// Removes the pairs at `indices` (ascending).
+    fn remove(&mut self, indices: &[u32]) {
+        // Descending, each swap brings in a pair that stays.
+        for &i in indices.iter().rev() {
+            self.expiry.swap_remove(i as usize);
+            for component in &mut self.directions {
+                component.swap_remove(i as usize);
+            }
+            self.pairs.swap_remove(i as usize);
         }
     }
 }
@@ -310,36 +409,70 @@ impl Front {
     /// Empties the front for a traversal from the roots.
     fn restart(&mut self) {
         self.separated.iter_mut().for_each(Certificates::clear);
-        self.motion = [0.0; 2];
+        self.turn = 0.0;
+        self.scale = 0.0;
         self.leaves.clear();
     }
 
-    /// Adds where a traversal ended.
-    fn add(&mut self, ended: &[FrontPair]) {
-        for &FrontPair { pair, slack } in ended {
-            if slack.value < 0.0 {
-                let frame = slack.along_b as usize;
-                let certificates = &mut self.separated[frame];
-                certificates
-                    .expiry
-                    .push(self.motion[frame] - slack.value as f64);
-                certificates.pairs.push(pair);
-            } else {
-                self.leaves.push(pair);
-            }
+    /// The pairs to test at `placement`, after a further `turn`: the pairs of leaves and every
+    /// pair whose certificate may have expired (their indices go to `due`). The front itself is
+    /// unchanged until [`Front::settle`]: a query that finds contact leaves it as it was, since
+    /// its pose (a trial pose inside an obstacle) says nothing of the next free one.
+    fn due(
+        &self,
+        turn: f64,
+        placement: &Placement,
+        retest: &mut Vec<(u32, u32)>,
+        due: &mut [Vec<u32>; 2],
+    ) {
+        retest.clear();
+        retest.extend_from_slice(&self.leaves);
+        let turn = self.turn + turn;
+        let guard = CERTIFICATE_ROUNDING * self.scale.max(placement.scale);
+        for (frame, certificates) in self.separated.iter().enumerate() {
+            due[frame].clear();
+            let threshold = guard + placement.radii[frame] * turn;
+            let centre = &placement.centres[frame];
+            certificates.expired(centre, threshold, retest, &mut due[frame]);
         }
     }
 
-    /// Accounts for a motion bound per frame, and moves into `retest` every pair whose
-    /// certificate it may have expired, and the pairs of leaves.
-    fn advance(&mut self, motion: [f64; 2], retest: &mut Vec<(u32, u32)>) {
-        retest.clear();
-        retest.append(&mut self.leaves);
-        for (frame, certificates) in self.separated.iter_mut().enumerate() {
-            self.motion[frame] += motion[frame];
-            // A relative guard against rounding in the accumulated sums.
-            let reached = self.motion[frame] * (1.0 + 1e-12) + 1e-12;
-            certificates.take_expired(reached, retest);
+    /// Replaces the pairs [`Front::due`] gave by where their new tests ended.
+    fn settle(
+        &mut self,
+        turn: f64,
+        due: &[Vec<u32>; 2],
+        ended: &[FrontPair],
+        placement: &Placement,
+    ) {
+        self.leaves.clear();
+        for (certificates, indices) in self.separated.iter_mut().zip(due) {
+            certificates.remove(indices);
+        }
+        self.turn += turn;
+        self.add(ended, placement);
+    }
+
+    /// Adds where a traversal at `placement` ended.
+    fn add(&mut self, ended: &[FrontPair], placement: &Placement) {
+        self.scale = self.scale.max(placement.scale);
+        let guard = CERTIFICATE_ROUNDING * self.scale;
+        for &FrontPair { pair, ending } in ended {
+            match ending {
+                Ending::Separated {
+                    gap,
+                    direction,
+                    along_b,
+                } => {
+                    let frame = along_b as usize;
+                    let centre = &placement.centres[frame];
+                    let [x, y, z] = direction.map(f64::from);
+                    let expiry = gap - guard - (x * centre.x + y * centre.y + z * centre.z)
+                        + placement.radii[frame] * self.turn;
+                    self.separated[frame].push(expiry, direction, pair);
+                }
+                Ending::Retest => self.leaves.push(pair),
+            }
         }
     }
 }
@@ -350,6 +483,11 @@ const MEMORY_SLOTS: usize = 64;
 /// Levels above the old witness's leaves at which a first-hit query searches first when the
 /// witness no longer intersects (subtrees of up to 2^levels triangles each).
 const WITNESS_SEARCH_LEVELS: u32 = 4;
+
+/// Queries without contact through which the last witness is kept: sliding alternates trial
+/// poses in contact with the free pose found between them, and the next trial pose usually
+/// touches where the last one did.
+const WITNESS_KEPT_MISSES: u32 = 1;
 
 /// A carried front is used while B moved by at most this fraction of the smaller bounding radius
 /// since the previous query; beyond, most of it would be tested again and the roots are cheaper.
@@ -364,6 +502,16 @@ const FRONT_SLACK_PAIRS: usize = 64;
 
 thread_local! {
     static PAIR_MEMORIES: RefCell<Vec<PairMemory>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Whether and how a query can start from the remembered front.
+enum Carry {
+    /// From the front, after a further `turn`: its due pairs are in `retest` and `due`.
+    Advanced { turn: f64 },
+    /// From the roots; with `keep_on_hit`, the old front is kept when the query finds contact
+    /// (a far excursion, such as a trial pose deep inside an obstacle, between poses near the
+    /// front's own).
+    Restart { keep_on_hit: bool },
 }
 
 impl PairMemory {
@@ -416,7 +564,7 @@ impl PairMemory {
         let Some(pair) = affine_pair::<K>(a, b, b_to_a, centre_b) else {
             stats.bv_tests += 1;
             // The front, if any, stays valid: its pose is kept with it.
-            self.witness = None;
+            self.remember_witness(None);
             return false;
         };
         // The contact usually moved only a few triangles along: search the subtrees around the
@@ -428,62 +576,97 @@ impl PairMemory {
             );
             pair.run_walk::<K>(Walk::from(&[start]), stats)
         });
-        let hit = near.or_else(|| {
-            let carried = self.advance_front(a, b, &pair.rotation, &pair.translation);
-            if !carried {
-                self.front.restart();
-            }
-            self.ended.clear();
-            let walk = Walk {
-                starts: if carried { &self.retest } else { &[(0, 0)] },
-                stop: None,
-                front: Some(&mut self.ended),
-            };
-            let hit = pair.run_walk::<K>(walk, stats);
-            self.front.add(&self.ended);
-            if !carried {
-                self.front.fresh_len = self.front.len();
-            }
-            hit
-        });
-        self.witness = hit;
-        if near.is_none() {
-            self.front_pose = Some((pair.rotation, pair.translation));
-        }
+        let hit = near.or_else(|| self.search_from_front::<K>(a, b, &pair, stats));
+        self.remember_witness(hit);
         hit.is_some()
     }
 
-    /// Advances the old front, if usable at B's pose `(rotation, translation)`, by the motion
-    /// since its pose: the pairs whose gaps the motion may have closed go to `retest`. False
-    /// when there is no front, B moved too far, or the front grew too large: the query then
-    /// starts from the roots.
-    fn advance_front(
+    /// Keeps a query's witness, or the old one through [`WITNESS_KEPT_MISSES`] queries without.
+    fn remember_witness(&mut self, hit: Option<[u32; 2]>) {
+        if hit.is_some() {
+            self.witness = hit;
+            self.misses_since_witness = 0;
+        } else {
+            self.misses_since_witness += 1;
+            if self.misses_since_witness > WITNESS_KEPT_MISSES {
+                self.witness = None;
+            }
+        }
+    }
+
+    /// The traversal of a first-hit query from the remembered front (or from the roots). A query
+    /// without a hit leaves the front where it ended; one with a hit leaves the front as it was
+    /// when it came from it.
+    fn search_from_front<const K: usize>(
         &mut self,
         a: &DopTree,
         b: &DopTree,
-        rotation: &Matrix3<f64>,
-        translation: &Vector3<f64>,
-    ) -> bool {
-        let Some((old_rotation, old_translation)) = &self.front_pose else {
-            return false;
+        pair: &TreePair<'_, AffineRealign<K>>,
+        stats: &mut QueryStats,
+    ) -> Option<[u32; 2]> {
+        let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
+        let carry = self.carry_front(b, a.bounding_radius, pair, &placement);
+        self.ended.clear();
+        let walk = Walk {
+            starts: match carry {
+                Carry::Advanced { .. } => &self.retest,
+                Carry::Restart { .. } => &[(0, 0)],
+            },
+            stop: None,
+            front: Some(&mut self.ended),
         };
-        if self.front.len() > FRONT_MAX_GROWTH * self.front.fresh_len + FRONT_SLACK_PAIRS {
-            return false;
+        let hit = pair.run_walk::<K>(walk, stats);
+        match carry {
+            Carry::Advanced { .. } | Carry::Restart { keep_on_hit: true } if hit.is_some() => {
+                return hit;
+            }
+            Carry::Advanced { turn } => self.front.settle(turn, &self.due, &self.ended, &placement),
+            Carry::Restart { .. } => {
+                self.front.restart();
+                self.front.add(&self.ended, &placement);
+                self.front.fresh_len = None;
+            }
         }
-        // How far any point of B moved in A's frame, and any point of A in B's frame (for
-        // slacks along B's axes). For rotations, |R' - R| in the spectral norm is the Frobenius
-        // norm over sqrt 2 (twice the sine of half the angle between them); the small term
-        // covers matrices that are orthogonal only to rounding.
-        let turn = (rotation - old_rotation).norm() * std::f64::consts::FRAC_1_SQRT_2 + 1e-12;
-        let shift = (translation - old_translation).norm();
+        // A first hit leaves unexplored pairs high up in the trees, so its front understates a
+        // complete one: the measure is the first front since the restart that has no hit.
+        if hit.is_none() && self.front.fresh_len.is_none() {
+            self.front.fresh_len = Some(self.front.len());
+        }
+        self.front_pose = Some((pair.rotation, pair.translation));
+        hit
+    }
+
+    /// Whether the old front is usable at `pair`'s pose (`placement`), and if so its due pairs
+    /// in `retest` and `due`. Says to restart when there is no front, B moved too far (beyond
+    /// a fraction of the smaller radius, `a_radius` or B's), or the front grew too large.
+    fn carry_front<const K: usize>(
+        &mut self,
+        b: &DopTree,
+        a_radius: f64,
+        pair: &TreePair<'_, AffineRealign<K>>,
+        placement: &Placement,
+    ) -> Carry {
+        let Some((old_rotation, old_translation)) = &self.front_pose else {
+            return Carry::Restart { keep_on_hit: false };
+        };
+        if let Some(fresh_len) = self.front.fresh_len
+            && self.front.len() > FRONT_MAX_GROWTH * fresh_len + FRONT_SLACK_PAIRS
+        {
+            return Carry::Restart { keep_on_hit: false };
+        }
+        // |R' - R| in the spectral norm is at most the Frobenius norm over sqrt 2 (twice the
+        // sine of half the angle between them); the small term covers matrices that are
+        // orthogonal only to rounding.
+        let turn = (pair.rotation - old_rotation).norm() * std::f64::consts::FRAC_1_SQRT_2 + 1e-12;
+        // How far any point of B moved in A's frame.
+        let shift = (pair.translation - old_translation).norm();
         let reach_b = b.bounding_centre.coords.norm() + b.bounding_radius;
-        let reach_a = a.bounding_centre.coords.norm() + a.bounding_radius + old_translation.norm();
-        let motion = [turn * reach_b + shift, turn * reach_a + shift];
-        if motion[0] > FRONT_MAX_MOTION * a.bounding_radius.min(b.bounding_radius) {
-            return false;
+        if turn * reach_b + shift > FRONT_MAX_MOTION * a_radius.min(b.bounding_radius) {
+            return Carry::Restart { keep_on_hit: true };
         }
-        self.front.advance(motion, &mut self.retest);
-        true
+        self.front
+            .due(turn, placement, &mut self.retest, &mut self.due);
+        Carry::Advanced { turn }
     }
 }
 
@@ -1046,6 +1229,24 @@ fn overlap_slack<const K: usize>(a: &[f32; K], e: &[f32; K]) -> f32 {
     least
 }
 
+/// The unit normal of a triangle, if it is not degenerate.
+fn face_normal(t: &Triangle) -> Option<Vector3<f64>> {
+    let normal = (t[1] - t[0]).cross(&(t[2] - t[0]));
+    let length = normal.norm();
+    (length > 0.0 && length.is_finite()).then(|| normal / length)
+}
+
+/// The least and greatest of `direction . p + offset` over the triangles' corners `p`.
+fn projection_range(triangles: &[Triangle], direction: &Vector3<f64>, offset: f64) -> (f64, f64) {
+    let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in triangles.iter().flatten() {
+        let x = direction.x * p.x + direction.y * p.y + direction.z * p.z + offset;
+        low = low.min(x);
+        high = high.max(x);
+    }
+    (low, high)
+}
+
 /// Fraction of the two nodes' sizes below which an overlap along A's axes is checked along B's.
 const REVERSE_TEST_SLACK: f32 = 0.05;
 
@@ -1168,11 +1369,26 @@ impl<'w> Walk<'w> {
     }
 }
 
-/// A node pair at which a traversal ended: separated, or a pair of leaves tested (slack 0).
+/// A node pair at which a traversal ended, and how.
 #[derive(Debug, Clone, Copy)]
 struct FrontPair {
     pair: (u32, u32),
-    slack: Slack,
+    ending: Ending,
+}
+
+/// How a traversal ended at a node pair.
+#[derive(Debug, Clone, Copy)]
+enum Ending {
+    /// Proved apart: the other tree's triangles lie at least `gap` beyond this tree's along
+    /// `direction` (unit to f32 rounding), in A's frame, or in B's when `along_b`.
+    Separated {
+        gap: f64,
+        direction: [f32; 3],
+        along_b: bool,
+    },
+    /// To be tested again: a pair of leaves that no face plane separates, or a pair left
+    /// unexplored when a first hit stopped the traversal.
+    Retest,
 }
 
 /// How deeply two nodes' DOPs overlap along their tightest axis: negative when they are
@@ -1372,76 +1588,194 @@ impl<R> TreePair<'_, R> {
             stop,
             mut front,
         } = walk;
-        let mut ended = |pair: (u32, u32), slack: Slack| {
-            if let Some(front) = front.as_deref_mut() {
-                front.push(FrontPair { pair, slack });
-            }
-        };
         let mut hit = None;
-        // The stack holds node pairs already known to overlap. Children pairs are tested when
-        // generated and the one overlapping more deeply is visited first: a first hit is found
-        // sooner.
-        for &start in starts.iter().rev() {
+        // Each start is explored to the end before the next one, so a first hit leaves the
+        // later starts untested. The stack holds node pairs already known to overlap. Children
+        // pairs are tested when generated and the one overlapping more deeply is visited first:
+        // a first hit is found sooner.
+        'starts: for (index, &start) in starts.iter().enumerate() {
             let slack = self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, start, stats);
             if slack.value < 0.0 {
-                ended(start, slack);
-            } else {
-                stack.push(start);
-            }
-        }
-        while let Some((ia, ib)) = stack.pop() {
-            if let Some(stop) = stop
-                && stop.load(Ordering::Relaxed)
-            {
-                break;
-            }
-            stats.nodes_visited += 1;
-            let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
-            if na.is_leaf() && nb.is_leaf() {
-                let found = self.leaf_pair::<ALL>(na, nb, stats, out);
-                // Tested again next time, as is every pair left unexplored by a first hit: the
-                // front then still covers every pair of leaves.
-                ended((ia, ib), Slack::default());
-                if found {
-                    hit = hit.or(Some([ia, ib]));
-                    if !ALL {
-                        if let Some(stop) = stop {
-                            stop.store(true, Ordering::Relaxed);
-                        }
-                        for &pair in stack.iter() {
-                            ended(pair, Slack::default());
-                        }
-                        break;
-                    }
+                if let Some(front) = front.as_deref_mut() {
+                    let ending =
+                        self.separation::<K, FUSED>(&mut cache, &mut reverse_cache, start, slack);
+                    front.push(FrontPair {
+                        pair: start,
+                        ending,
+                    });
                 }
                 continue;
             }
-            let [first, second] = self.children(ia, ib);
-            let first_slack = self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, first, stats);
-            let second_slack =
-                self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, second, stats);
-            // Relative depth: overlap over the size of the pair's smaller node.
-            let relative = |(ia, ib): (u32, u32), slack: f32| {
-                let size = self.a.nodes[ia as usize]
-                    .size
-                    .min(self.b.nodes[ib as usize].size);
-                slack / size.max(f32::MIN_POSITIVE)
-            };
-            let (deeper, shallower) =
-                if relative(first, first_slack.value) >= relative(second, second_slack.value) {
-                    ((first, first_slack), (second, second_slack))
-                } else {
-                    ((second, second_slack), (first, first_slack))
+            stack.push(start);
+            while let Some((ia, ib)) = stack.pop() {
+                if let Some(stop) = stop
+                    && stop.load(Ordering::Relaxed)
+                {
+                    break 'starts;
+                }
+                stats.nodes_visited += 1;
+                let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+                if na.is_leaf() && nb.is_leaf() {
+                    let found = self.leaf_pair::<ALL>(na, nb, stats, out);
+                    if let Some(front) = front.as_deref_mut() {
+                        let ending = if found {
+                            Ending::Retest
+                        } else {
+                            self.face_separation(na, nb)
+                        };
+                        front.push(FrontPair {
+                            pair: (ia, ib),
+                            ending,
+                        });
+                        if found && !ALL {
+                            // Every pair left unexplored is tested again next time: the front
+                            // then still covers every pair of leaves.
+                            let unexplored = stack.iter().chain(&starts[index + 1..]);
+                            front.extend(unexplored.map(|&pair| FrontPair {
+                                pair,
+                                ending: Ending::Retest,
+                            }));
+                        }
+                    }
+                    if found {
+                        hit = hit.or(Some([ia, ib]));
+                        if !ALL {
+                            if let Some(stop) = stop {
+                                stop.store(true, Ordering::Relaxed);
+                            }
+                            break 'starts;
+                        }
+                    }
+                    continue;
+                }
+                let [first, second] = self.children(ia, ib);
+                let first_slack =
+                    self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, first, stats);
+                let second_slack =
+                    self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, second, stats);
+                // Relative depth: overlap over the size of the pair's smaller node.
+                let relative = |(ia, ib): (u32, u32), slack: f32| {
+                    let size = self.a.nodes[ia as usize]
+                        .size
+                        .min(self.b.nodes[ib as usize].size);
+                    slack / size.max(f32::MIN_POSITIVE)
                 };
-            for (pair, slack) in [shallower, deeper] {
-                if slack.value >= 0.0 {
-                    stack.push(pair);
-                } else {
-                    ended(pair, slack);
+                let (deeper, shallower) =
+                    if relative(first, first_slack.value) >= relative(second, second_slack.value) {
+                        ((first, first_slack), (second, second_slack))
+                    } else {
+                        ((second, second_slack), (first, first_slack))
+                    };
+                for (pair, slack) in [shallower, deeper] {
+                    if slack.value >= 0.0 {
+                        stack.push(pair);
+                    } else if let Some(front) = front.as_deref_mut() {
+                        let ending = self.separation::<K, FUSED>(
+                            &mut cache,
+                            &mut reverse_cache,
+                            pair,
+                            slack,
+                        );
+                        front.push(FrontPair { pair, ending });
+                    }
                 }
             }
         }
+        stack.clear();
         hit
+    }
+
+    /// The certificate of a node pair that `slack` (negative) separates: the axis it came from
+    /// (found again among the cached offsets) and the gap along it.
+    fn separation<const K: usize, const FUSED: bool>(
+        &self,
+        cache: &mut RealignCache<'_>,
+        reverse_cache: &mut RealignCache<'_>,
+        (ia, ib): (u32, u32),
+        slack: Slack,
+    ) -> Ending
+    where
+        R: Realign<K>,
+    {
+        let mut unused = QueryStats::default();
+        let (own, moved, set) = if slack.along_b {
+            // A slack along B's axes comes from a reverse test, so there is a reverse method.
+            let Some(reverse) = self.realigner.reverse(self.a, self.b) else {
+                return Ending::Retest;
+            };
+            (
+                self.b.node_offsets(ib as usize),
+                reverse_cache.get::<K, FUSED, R>(reverse, self.a, ia, &mut unused),
+                &self.b.set,
+            )
+        } else {
+            (
+                self.a.node_offsets(ia as usize),
+                cache.get::<K, FUSED, R>(&self.realigner, self.b, ib, &mut unused),
+                &self.a.set,
+            )
+        };
+        let own: &[f32; K] = own.try_into().unwrap();
+        // The first axis whose slack is the least: the same sums as the overlap test, compared
+        // all at once (a bit mask) rather than one branch per axis.
+        let least = overlap_slack(own, moved);
+        let mut mask = 0u32;
+        for i in 0..K {
+            mask |= u32::from(own[i] + moved[i] <= least) << i;
+        }
+        let axis = (mask.trailing_zeros() as usize).min(K - 1);
+        Ending::Separated {
+            gap: -least as f64,
+            direction: set.normal(axis).cast::<f32>().into(),
+            along_b: slack.along_b,
+        }
+    }
+
+    /// The certificate of a pair of leaves whose triangles do not intersect: the plane of one of
+    /// their triangles with all of the other leaf's corners strictly beyond it, the widest gap of
+    /// them; [`Ending::Retest`] when no such plane separates them.
+    fn face_separation(&self, leaf_a: &Node, leaf_b: &Node) -> Ending {
+        let triangles_a = self.a.leaf_triangles(leaf_a);
+        let triangles_b = self.b.leaf_triangles(leaf_b);
+        let mut best = Ending::Retest;
+        let mut widest = 0.0;
+        // A's normals in A's frame, B's in B's own; each rounded to f32 (as stored) before the
+        // gap along it is measured. B's corners are projected in B's frame: n . (R q + t) =
+        // (Rᵀ n) . q + n . t.
+        let candidates = triangles_a
+            .iter()
+            .map(|t| (t, false))
+            .chain(triangles_b.iter().map(|t| (t, true)));
+        for (triangle, along_b) in candidates {
+            let Some(normal) = face_normal(triangle) else {
+                continue;
+            };
+            let direction = normal.cast::<f32>();
+            let exact = direction.cast::<f64>();
+            let (in_a, in_b) = if along_b {
+                (self.rotation * exact, exact)
+            } else {
+                (exact, self.rotation.transpose() * exact)
+            };
+            let (low_a, high_a) = projection_range(triangles_a, &in_a, 0.0);
+            let (low_b, high_b) = projection_range(triangles_b, &in_b, in_a.dot(&self.translation));
+            // In A's frame the other tree is B (beyond along +normal when B is above); in B's
+            // frame it is A.
+            let (gap, sign) = if low_b - high_a > widest {
+                (low_b - high_a, if along_b { -1.0 } else { 1.0 })
+            } else if low_a - high_b > widest {
+                (low_a - high_b, if along_b { 1.0 } else { -1.0 })
+            } else {
+                continue;
+            };
+            widest = gap;
+            best = Ending::Separated {
+                gap,
+                direction: (direction * sign).into(),
+                along_b,
+            };
+        }
+        best
     }
 
     /// The overlap slack of a node pair: the least `a_i + e_i` over the axes, negative exactly

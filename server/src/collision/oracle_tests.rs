@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::triangle::triangles_intersect;
 use super::*;
-use crate::geometry::TriMesh;
+use crate::geometry::{TriMesh, shapes};
 
 /// A soup of `n` random triangles of about `size` inside the box [-1, 1]^3.
 pub(crate) fn random_soup(rng: &mut ChaCha8Rng, n: usize, size: f64) -> TriMesh {
@@ -336,6 +336,67 @@ fn coherent_pose_sequences_agree_with_brute_force() {
         assert!(
             hits > 50 && misses > 50 && switches > 5,
             "k {k}: {hits} hits, {misses} misses, {switches} switches"
+        );
+    }
+}
+
+#[test]
+fn sliding_translations_agree_with_brute_force() {
+    // A peg slid down a hole with a few percent of radial clearance (between the polygons)
+    // while pushed sideways in and out of the wall: the front's certificates across the gap survive motion along the wall and must
+    // expire on motion towards it; trial poses deep in the wall and back (as bisection makes)
+    // and a slight turn now and then exercise the rest.
+    let peg = shapes::cylinder(0.44, 1.5, 300);
+    let block = shapes::box_with_hole(2.0, 1.0, 0.5, 400);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for (k, leaf_size) in [(26, 1), (18, 2), (14, 1)] {
+        let set = OrientationSet::new(k).unwrap();
+        let (dp, db) = (
+            DopTree::with_options(&peg, &set, leaf_size),
+            DopTree::with_options(&block, &set, leaf_size),
+        );
+        let (mut hits, mut misses) = (0, 0);
+        let mut rotation = UnitQuaternion::identity();
+        for step in 0..240 {
+            // Sideways target: up to 0.08 off the axis, turning around it.
+            let angle = step as f64 * 0.3;
+            let off = 0.08 * (0.5 + 0.5 * (step as f64 / 9.0).sin());
+            let depth = 0.6 - 0.004 * step as f64 + rng.random_range(-0.003..0.003);
+            let centre = Vector3::new(off * angle.cos(), off * angle.sin(), depth);
+            if step % 10 == 0 {
+                let axis = Vector3::new(rng.random_range(-1.0..1.0), 1.0, 0.0);
+                let turn =
+                    UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.002);
+                rotation = turn * rotation;
+            }
+            let pose = Isometry3::from_parts(Translation3::from(centre), rotation);
+            let mut queried = vec![pose];
+            if step % 7 == 0 {
+                let into_wall = Vector3::new(angle.cos(), angle.sin(), 0.0) * 0.2;
+                queried.push(Translation3::from(into_wall) * pose);
+                queried.push(pose);
+            }
+            for q in &queried {
+                // B (the peg) in A's (the block's) frame, and the other way round.
+                let expected = !brute_force_pairs(&block, &peg, q).is_empty();
+                let mut stats = QueryStats::default();
+                assert_eq!(
+                    db.intersects(&dp, q, &mut stats),
+                    expected,
+                    "k {k} leaf {leaf_size} step {step}"
+                );
+                assert_eq!(
+                    dp.intersects(&db, &q.inverse(), &mut stats),
+                    expected,
+                    "k {k} leaf {leaf_size} step {step}, reversed"
+                );
+                hits += expected as usize;
+                misses += !expected as usize;
+            }
+        }
+        assert!(
+            hits > 40 && misses > 40,
+            "k {k}: {hits} hits, {misses} misses"
         );
     }
 }
