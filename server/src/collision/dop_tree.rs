@@ -1596,14 +1596,14 @@ impl<R> TreePair<'_, R> {
         'starts: for (index, &start) in starts.iter().enumerate() {
             let slack = self.slack::<K, FUSED>(&mut cache, &mut reverse_cache, start, stats);
             if slack.value < 0.0 {
-                if let Some(front) = front.as_deref_mut() {
-                    let ending =
-                        self.separation::<K, FUSED>(&mut cache, &mut reverse_cache, start, slack);
-                    front.push(FrontPair {
-                        pair: start,
-                        ending,
-                    });
-                }
+                let front = front.as_deref_mut();
+                self.record_separation::<K, FUSED>(
+                    front,
+                    &mut cache,
+                    &mut reverse_cache,
+                    start,
+                    slack,
+                );
                 continue;
             }
             stack.push(start);
@@ -1669,14 +1669,15 @@ impl<R> TreePair<'_, R> {
                 for (pair, slack) in [shallower, deeper] {
                     if slack.value >= 0.0 {
                         stack.push(pair);
-                    } else if let Some(front) = front.as_deref_mut() {
-                        let ending = self.separation::<K, FUSED>(
+                    } else {
+                        let front = front.as_deref_mut();
+                        self.record_separation::<K, FUSED>(
+                            front,
                             &mut cache,
                             &mut reverse_cache,
                             pair,
                             slack,
                         );
-                        front.push(FrontPair { pair, ending });
                     }
                 }
             }
@@ -1685,23 +1686,31 @@ impl<R> TreePair<'_, R> {
         hit
     }
 
-    /// The certificate of a node pair that `slack` (negative) separates: the axis it came from
-    /// (found again among the cached offsets) and the gap along it.
-    fn separation<const K: usize, const FUSED: bool>(
+    /// Adds to `front`, when the traversal records one, the node pair that `slack` (negative)
+    /// separates with its certificate: the axis the slack came from (found again among the
+    /// cached offsets) and the gap along it.
+    fn record_separation<const K: usize, const FUSED: bool>(
         &self,
+        front: Option<&mut Vec<FrontPair>>,
         cache: &mut RealignCache<'_>,
         reverse_cache: &mut RealignCache<'_>,
         (ia, ib): (u32, u32),
         slack: Slack,
-    ) -> Ending
-    where
+    ) where
         R: Realign<K>,
     {
+        let Some(front) = front else {
+            return;
+        };
         let mut unused = QueryStats::default();
         let (own, moved, set) = if slack.along_b {
             // A slack along B's axes comes from a reverse test, so there is a reverse method.
             let Some(reverse) = self.realigner.reverse(self.a, self.b) else {
-                return Ending::Retest;
+                front.push(FrontPair {
+                    pair: (ia, ib),
+                    ending: Ending::Retest,
+                });
+                return;
             };
             (
                 self.b.node_offsets(ib as usize),
@@ -1715,20 +1724,21 @@ impl<R> TreePair<'_, R> {
                 &self.a.set,
             )
         };
-        let own: &[f32; K] = own.try_into().unwrap();
-        // The first axis whose slack is the least: the same sums as the overlap test, compared
-        // all at once (a bit mask) rather than one branch per axis.
-        let least = overlap_slack(own, moved);
+        // The first axis whose sum is the slack (the overlap test's own sums over the same
+        // offsets), compared all at once (a bit mask) rather than one branch per axis.
         let mut mask = 0u32;
         for i in 0..K {
-            mask |= u32::from(own[i] + moved[i] <= least) << i;
+            mask |= u32::from(own[i] + moved[i] <= slack.value) << i;
         }
         let axis = (mask.trailing_zeros() as usize).min(K - 1);
-        Ending::Separated {
-            gap: -least as f64,
-            direction: set.normal(axis).cast::<f32>().into(),
-            along_b: slack.along_b,
-        }
+        front.push(FrontPair {
+            pair: (ia, ib),
+            ending: Ending::Separated {
+                gap: -slack.value as f64,
+                direction: set.normal(axis).cast::<f32>().into(),
+                along_b: slack.along_b,
+            },
+        });
     }
 
     /// The certificate of a pair of leaves whose triangles do not intersect: the plane of one of
