@@ -101,8 +101,9 @@ pub struct RunResult {
 }
 
 /// Drives the machine along the scenario's ghost path over DOP-trees; with `check`, tests every
-/// new visible pose against every obstacle with parry (outside the timed steps).
-pub fn run(scenario: &Scenario, check: bool) -> RunResult {
+/// new visible pose against every obstacle with parry (outside the timed steps). With
+/// `split_long_queries`, long first-hit queries are split across the current rayon pool.
+pub fn run(scenario: &Scenario, check: bool, split_long_queries: bool) -> RunResult {
     let part = Arc::new(SlideBody::<DopTree>::new(scenario.part.clone()));
     let (pivot, radius) = part.pivot_and_radius();
     let obstacles = scenario
@@ -116,7 +117,7 @@ pub fn run(scenario: &Scenario, check: bool) -> RunResult {
             )
         })
         .collect();
-    let mut world = PairwiseWorld::new(part, obstacles);
+    let mut world = PairwiseWorld::new(part, obstacles).split_long_queries(split_long_queries);
     let oracle = check.then(|| PenetrationOracle::new(scenario));
     let mut machine = SlideMachine::new(
         &scenario.start,
@@ -493,6 +494,10 @@ pub struct SlideBenchArgs {
     /// Runs per scene; the table shows medians.
     #[arg(long, default_value_t = 5)]
     pub runs: usize,
+    /// Thread counts to run every scene with (comma-separated; 0 is rayon's default): on more
+    /// than one, long collision queries are split across the threads.
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2])]
+    pub threads: Vec<usize>,
     /// Write the rows as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -510,6 +515,8 @@ pub struct SlideBenchArgs {
 pub struct SlideRow {
     /// Scene name.
     pub scene: String,
+    /// Threads the collision queries could use (long ones are split across them).
+    pub threads: usize,
     /// Triangles of the grasped part.
     pub triangles: usize,
     /// Contact points handled in one run: classified ones, plus the remembered ones each new
@@ -526,15 +533,17 @@ pub struct SlideRow {
     pub penetrations: usize,
 }
 
-/// Runs `scenario` `runs` times (the first also checked by the oracle) and summarises it.
+/// Runs `scenario` `runs` times (the first also checked by the oracle) and summarises it; with
+/// more than one thread in the current rayon pool, long collision queries are split across it.
 pub fn measure(scenario: &Scenario, runs: usize) -> SlideRow {
+    let threads = rayon::current_num_threads();
     let mut excl = Vec::new();
     let mut incl = Vec::new();
     let mut rate = Vec::new();
     let mut penetrations = 0;
     let mut contact_points = 0;
     for i in 0..runs.max(1) {
-        let result = run(scenario, i == 0);
+        let result = run(scenario, i == 0, threads > 1);
         penetrations += result.penetrations;
         contact_points = result.machine.contacts_classified + result.machine.contacts_projected;
         let contact_us = result.contact_time.as_secs_f64() * 1e6;
@@ -546,6 +555,7 @@ pub fn measure(scenario: &Scenario, runs: usize) -> SlideRow {
     }
     SlideRow {
         scene: scenario.name.clone(),
+        threads,
         triangles: scenario.part.triangles().len(),
         contact_points,
         us_per_contact_excl_cd: median(&mut excl),
@@ -569,6 +579,7 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
     scenarios.extend(config_scenarios(&args.configs)?);
     let mut table = Table::new([
         "scene",
+        "threads",
         "triangles",
         "contact_points",
         "us_per_contact_excl_cd",
@@ -577,10 +588,21 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
         "penetrations",
     ]);
     let mut rows = Vec::new();
-    for scenario in &scenarios {
-        let row = measure(scenario, args.runs);
+    for &threads in &args.threads {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        rows.extend(pool.install(|| {
+            scenarios
+                .iter()
+                .map(|s| measure(s, args.runs))
+                .collect::<Vec<_>>()
+        }));
+    }
+    for row in &rows {
         table.push_row([
             row.scene.clone(),
+            row.threads.to_string(),
             row.triangles.to_string(),
             row.contact_points.to_string(),
             format_number(row.us_per_contact_excl_cd),
@@ -588,17 +610,19 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
             format_number(row.steps_per_s),
             row.penetrations.to_string(),
         ]);
-        rows.push(row);
     }
     print!("{}", table.render());
     if let Some(path) = &args.json {
         write_json(path, &rows)?;
     }
     if let Some(path) = &args.svg {
-        let peg: Vec<&SlideRow> = rows.iter().filter(|r| r.scene == "peg_in_hole").collect();
-        let series = |name: &str, value: fn(&SlideRow) -> f64| Series {
-            name: name.into(),
-            points: peg.iter().map(|r| (r.triangles as f64, value(r))).collect(),
+        let series = |threads: usize| Series {
+            name: format!("steps_per_s, {threads} thread(s)"),
+            points: rows
+                .iter()
+                .filter(|r| r.scene == "peg_in_hole" && r.threads == threads)
+                .map(|r| (r.triangles as f64, r.steps_per_s))
+                .collect(),
         };
         write_svg_line_plot(
             path,
@@ -608,7 +632,7 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
                 y_label: "frames per second (collision detection included)".into(),
                 log_x: true,
                 log_y: true,
-                series: vec![series("steps_per_s", |r| r.steps_per_s)],
+                series: args.threads.iter().map(|&t| series(t)).collect(),
             },
         )?;
     }
@@ -622,7 +646,7 @@ mod tests {
     /// Runs with the oracle and asserts that no visible pose penetrated (and that there were
     /// poses to check).
     fn run_clean(scenario: &Scenario) -> RunResult {
-        let result = run(scenario, true);
+        let result = run(scenario, true, false);
         assert!(
             result.checked_poses > 1,
             "{}: the oracle saw no motion",

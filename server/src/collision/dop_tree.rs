@@ -147,7 +147,8 @@ impl DopTree {
     }
 
     /// Like [`MeshCollider::intersects`], with the traversal split across rayon's threads
-    /// (dynamic load balancing by work stealing); worth it when one pair dominates.
+    /// (dynamic load balancing by work stealing) where it is long: from the roots, or from a
+    /// remembered front with many pairs due. Worth it when one pair dominates.
     pub fn intersects_parallel(
         &self,
         other: &DopTree,
@@ -215,7 +216,7 @@ fn with_affine<const ALL: bool>(
             stats.bv_tests += 1;
             return false;
         }
-        if ALL || parallel {
+        if ALL {
             return match affine_pair::<K>(a, b, b_to_a, &centre_b) {
                 Some(pair) => pair.run::<ALL, K>(stats, out, parallel).is_some(),
                 None => {
@@ -225,7 +226,7 @@ fn with_affine<const ALL: bool>(
             };
         }
         let mut memory = PairMemory::take(a, b);
-        let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats);
+        let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats, parallel);
         PairMemory::put_back(memory);
         hit
     }
@@ -290,6 +291,10 @@ struct Front {
     /// from the roots; a carried front that grows well beyond (the contact region wandered) is
     /// dropped for a fresh one.
     fresh_len: Option<usize>,
+    /// Whether the last query that advanced the front without a hit tested again less than
+    /// [`STEADY_DUE_SHARE`] of it: most certificates hold (sliding), so extra pairs cost little
+    /// more than their scan and the front may grow further before a fresh one pays off.
+    steady: bool,
 }
 
 /// Separated node pairs and their certificates, in parallel arrays.
@@ -412,6 +417,7 @@ impl Front {
         self.turn = 0.0;
         self.scale = 0.0;
         self.leaves.clear();
+        self.steady = false;
     }
 
     /// The pairs to test at `placement`, after a further `turn`: the pairs of leaves and every
@@ -497,8 +503,55 @@ const FRONT_MAX_MOTION: f64 = 0.05;
 /// (plus [`FRONT_SLACK_PAIRS`]).
 const FRONT_MAX_GROWTH: usize = 2;
 
+/// The growth bound of a steady front ([`Front::steady`]).
+const FRONT_MAX_GROWTH_STEADY: usize = 4;
+
+/// Share of a front re-tested by a query below which the front is steady.
+const STEADY_DUE_SHARE: f64 = 0.1;
+
 /// Pairs a carried front may exceed its growth bound by (small fronts grow fast in relative terms).
 const FRONT_SLACK_PAIRS: usize = 64;
+
+/// A split query walks the remembered front in parallel only from this many due pairs: below,
+/// handing the work to other threads costs more than it saves.
+const PARALLEL_MIN_STARTS: usize = 256;
+
+/// Pairs a split walk of a remembered front tests on the calling thread before it splits: the
+/// pairs of leaves that no plane separated come first, a query that finds contact usually finds
+/// it among them, and then it never pays for the split.
+const SEQUENTIAL_PREFIX_STARTS: usize = 64;
+
+/// Chunks per thread of a split walk: several, so that threads that finish early steal work.
+const PARALLEL_CHUNKS_PER_THREAD: usize = 4;
+
+/// Depth of the cut through the larger tree where a split query from the roots starts: up to
+/// 2^depth pairs, enough for work stealing to balance two to eight threads.
+const PARALLEL_CUT_DEPTH: u32 = 5;
+
+/// The starts of a split query from the roots: the nodes of the larger tree at
+/// [`PARALLEL_CUT_DEPTH`] (or leaves above it), each paired with the other tree's root. Like the
+/// root pair, they cover every pair of leaves exactly once.
+fn top_starts(a: &DopTree, b: &DopTree) -> Vec<(u32, u32)> {
+    let cut_a = a.nodes.len() >= b.nodes.len();
+    let tree = if cut_a { a } else { b };
+    let mut cut = vec![0u32];
+    for _ in 0..PARALLEL_CUT_DEPTH {
+        cut = cut
+            .iter()
+            .flat_map(|&node| {
+                let n = tree.nodes[node as usize];
+                if n.is_leaf() {
+                    vec![node]
+                } else {
+                    vec![n.first, n.first + 1]
+                }
+            })
+            .collect();
+    }
+    cut.into_iter()
+        .map(|node| if cut_a { (node, 0) } else { (0, node) })
+        .collect()
+}
 
 thread_local! {
     static PAIR_MEMORIES: RefCell<Vec<PairMemory>> = const { RefCell::new(Vec::new()) };
@@ -555,6 +608,7 @@ impl PairMemory {
         b_to_a: &Isometry3<f64>,
         centre_b: &Point3<f64>,
         stats: &mut QueryStats,
+        parallel: bool,
     ) -> bool {
         if let Some(leaves) = self.witness
             && witness_still_intersects(a, b, b_to_a, leaves, stats)
@@ -576,7 +630,7 @@ impl PairMemory {
             );
             pair.run_walk::<K>(Walk::from(&[start]), stats)
         });
-        let hit = near.or_else(|| self.search_from_front::<K>(a, b, &pair, stats));
+        let hit = near.or_else(|| self.search_from_front::<K>(a, b, &pair, stats, parallel));
         self.remember_witness(hit);
         hit.is_some()
     }
@@ -594,33 +648,62 @@ impl PairMemory {
         }
     }
 
-    /// The traversal of a first-hit query from the remembered front (or from the roots). A query
-    /// without a hit leaves the front where it ended; one with a hit leaves the front as it was
-    /// when it came from it.
+    /// The traversal of a first-hit query from the remembered front (or from the roots), split
+    /// across rayon's threads when `parallel` and long. A query without a hit leaves the front
+    /// where it ended; one with a hit leaves the front as it was when it came from it.
     fn search_from_front<const K: usize>(
         &mut self,
         a: &DopTree,
         b: &DopTree,
         pair: &TreePair<'_, AffineRealign<K>>,
         stats: &mut QueryStats,
+        parallel: bool,
     ) -> Option<[u32; 2]> {
         let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
         let carry = self.carry_front(b, a.bounding_radius, pair, &placement);
         self.ended.clear();
-        let walk = Walk {
-            starts: match carry {
-                Carry::Advanced { .. } => &self.retest,
-                Carry::Restart { .. } => &[(0, 0)],
-            },
-            stop: None,
-            front: Some(&mut self.ended),
+        let threads = parallel && rayon::current_num_threads() > 1;
+        // A restart costs about as much as the last complete front was large.
+        let split = threads
+            && match carry {
+                Carry::Advanced { .. } => self.retest.len() >= PARALLEL_MIN_STARTS,
+                Carry::Restart { .. } => self.front.fresh_len.unwrap_or(0) >= PARALLEL_MIN_STARTS,
+            };
+        let hit = match carry {
+            Carry::Advanced { .. } if split => {
+                let sequential = SEQUENTIAL_PREFIX_STARTS;
+                pair.run_walk_parallel::<K>(&self.retest, sequential, &mut self.ended, stats)
+            }
+            Carry::Restart { .. } if split => {
+                let starts = top_starts(a, b);
+                pair.run_walk_parallel::<K>(&starts, 0, &mut self.ended, stats)
+            }
+            Carry::Advanced { .. } | Carry::Restart { .. } => {
+                let walk = Walk {
+                    starts: match carry {
+                        Carry::Advanced { .. } => &self.retest,
+                        Carry::Restart { .. } => &[(0, 0)],
+                    },
+                    stop: None,
+                    front: Some(&mut self.ended),
+                };
+                pair.run_walk::<K>(walk, stats)
+            }
         };
-        let hit = pair.run_walk::<K>(walk, stats);
         match carry {
             Carry::Advanced { .. } | Carry::Restart { keep_on_hit: true } if hit.is_some() => {
                 return hit;
             }
-            Carry::Advanced { turn } => self.front.settle(turn, &self.due, &self.ended, &placement),
+            // A split walk stopped by a hit leaves no complete front: the next query restarts.
+            Carry::Restart { .. } if split && hit.is_some() => {
+                self.front_pose = None;
+                return hit;
+            }
+            Carry::Advanced { turn } => {
+                self.front.steady =
+                    (self.retest.len() as f64) < STEADY_DUE_SHARE * self.front.len() as f64;
+                self.front.settle(turn, &self.due, &self.ended, &placement);
+            }
             Carry::Restart { .. } => {
                 self.front.restart();
                 self.front.add(&self.ended, &placement);
@@ -649,8 +732,13 @@ impl PairMemory {
         let Some((old_rotation, old_translation)) = &self.front_pose else {
             return Carry::Restart { keep_on_hit: false };
         };
+        let growth = if self.front.steady {
+            FRONT_MAX_GROWTH_STEADY
+        } else {
+            FRONT_MAX_GROWTH
+        };
         if let Some(fresh_len) = self.front.fresh_len
-            && self.front.len() > FRONT_MAX_GROWTH * fresh_len + FRONT_SLACK_PAIRS
+            && self.front.len() > growth * fresh_len + FRONT_SLACK_PAIRS
         {
             return Carry::Restart { keep_on_hit: false };
         }
@@ -1509,6 +1597,58 @@ impl<R> TreePair<'_, R> {
         R: Realign<K>,
     {
         self.sequential::<false, K>(walk, stats, &mut Vec::new())
+    }
+
+    /// A first-hit traversal from `starts` that records its front in `front`: the first
+    /// `sequential` starts on this thread, the rest split into chunks across rayon's threads.
+    /// Without a hit, the front comes out complete, in the order of `starts`; a hit stops the
+    /// other chunks, and the front they leave is incomplete (callers drop it).
+    fn run_walk_parallel<const K: usize>(
+        &self,
+        starts: &[(u32, u32)],
+        sequential: usize,
+        front: &mut Vec<FrontPair>,
+        stats: &mut QueryStats,
+    ) -> Option<[u32; 2]>
+    where
+        R: Realign<K>,
+    {
+        use rayon::prelude::*;
+        let (prefix, starts) = starts.split_at(sequential.min(starts.len()));
+        let walk = Walk {
+            starts: prefix,
+            stop: None,
+            front: Some(front),
+        };
+        if let Some(hit) = self.run_walk::<K>(walk, stats) {
+            return Some(hit);
+        }
+        let chunk = starts
+            .len()
+            .div_ceil(PARALLEL_CHUNKS_PER_THREAD * rayon::current_num_threads())
+            .max(1);
+        let stop = AtomicBool::new(false);
+        let walks: Vec<(Option<[u32; 2]>, Vec<FrontPair>, QueryStats)> = starts
+            .par_chunks(chunk)
+            .map(|chunk| {
+                let (mut ended, mut chunk_stats) = (Vec::new(), QueryStats::default());
+                let walk = Walk {
+                    starts: chunk,
+                    stop: Some(&stop),
+                    front: Some(&mut ended),
+                };
+                let hit = self.run_walk::<K>(walk, &mut chunk_stats);
+                (hit, ended, chunk_stats)
+            })
+            .collect();
+        stats.split_walks += 1;
+        let mut hit = None;
+        for (chunk_hit, ended, chunk_stats) in walks {
+            hit = hit.or(chunk_hit);
+            front.extend_from_slice(&ended);
+            *stats += chunk_stats;
+        }
+        hit
     }
 
     /// Depth-first traversal from one node pair with this thread's re-alignment cache, compiled

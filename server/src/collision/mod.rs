@@ -40,6 +40,8 @@ pub struct QueryStats {
     pub nodes_visited: u64,
     /// Exact triangle-triangle tests.
     pub tri_tests: u64,
+    /// Traversals split across threads (long DOP-tree queries asked to split).
+    pub split_walks: u64,
 }
 
 impl AddAssign for QueryStats {
@@ -48,6 +50,7 @@ impl AddAssign for QueryStats {
         self.realignments += other.realignments;
         self.nodes_visited += other.nodes_visited;
         self.tri_tests += other.tri_tests;
+        self.split_walks += other.split_walks;
     }
 }
 

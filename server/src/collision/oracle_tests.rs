@@ -343,12 +343,12 @@ fn coherent_pose_sequences_agree_with_brute_force() {
 #[test]
 fn sliding_translations_agree_with_brute_force() {
     // A peg slid down a hole with a few percent of radial clearance (between the polygons)
-    // while pushed sideways in and out of the wall: the front's certificates across the gap survive motion along the wall and must
-    // expire on motion towards it; trial poses deep in the wall and back (as bisection makes)
-    // and a slight turn now and then exercise the rest.
+    // while pushed sideways in and out of the wall: the front's certificates across the gap
+    // survive motion along the wall and must expire on motion towards it; trial poses deep in
+    // the wall and back (as bisection makes) and a slight turn now and then exercise the rest.
     let peg = shapes::cylinder(0.44, 1.5, 300);
     let block = shapes::box_with_hole(2.0, 1.0, 0.5, 400);
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let poses = peg_sliding_down_a_hole(240, 5);
     for (k, leaf_size) in [(26, 1), (18, 2), (14, 1)] {
         let set = OrientationSet::new(k).unwrap();
         let (dp, db) = (
@@ -356,47 +356,106 @@ fn sliding_translations_agree_with_brute_force() {
             DopTree::with_options(&block, &set, leaf_size),
         );
         let (mut hits, mut misses) = (0, 0);
-        let mut rotation = UnitQuaternion::identity();
-        for step in 0..240 {
-            // Sideways target: up to 0.08 off the axis, turning around it.
-            let angle = step as f64 * 0.3;
-            let off = 0.08 * (0.5 + 0.5 * (step as f64 / 9.0).sin());
-            let depth = 0.6 - 0.004 * step as f64 + rng.random_range(-0.003..0.003);
-            let centre = Vector3::new(off * angle.cos(), off * angle.sin(), depth);
-            if step % 10 == 0 {
-                let axis = Vector3::new(rng.random_range(-1.0..1.0), 1.0, 0.0);
-                let turn =
-                    UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.002);
-                rotation = turn * rotation;
-            }
-            let pose = Isometry3::from_parts(Translation3::from(centre), rotation);
-            let mut queried = vec![pose];
-            if step % 7 == 0 {
-                let into_wall = Vector3::new(angle.cos(), angle.sin(), 0.0) * 0.2;
-                queried.push(Translation3::from(into_wall) * pose);
-                queried.push(pose);
-            }
-            for q in &queried {
-                // B (the peg) in A's (the block's) frame, and the other way round.
-                let expected = !brute_force_pairs(&block, &peg, q).is_empty();
-                let mut stats = QueryStats::default();
-                assert_eq!(
-                    db.intersects(&dp, q, &mut stats),
-                    expected,
-                    "k {k} leaf {leaf_size} step {step}"
-                );
-                assert_eq!(
-                    dp.intersects(&db, &q.inverse(), &mut stats),
-                    expected,
-                    "k {k} leaf {leaf_size} step {step}, reversed"
-                );
-                hits += expected as usize;
-                misses += !expected as usize;
-            }
+        for (step, q) in &poses {
+            // B (the peg) in A's (the block's) frame, and the other way round.
+            let expected = !brute_force_pairs(&block, &peg, q).is_empty();
+            let mut stats = QueryStats::default();
+            assert_eq!(
+                db.intersects(&dp, q, &mut stats),
+                expected,
+                "k {k} leaf {leaf_size} step {step}"
+            );
+            assert_eq!(
+                dp.intersects(&db, &q.inverse(), &mut stats),
+                expected,
+                "k {k} leaf {leaf_size} step {step}, reversed"
+            );
+            hits += expected as usize;
+            misses += !expected as usize;
         }
         assert!(
             hits > 40 && misses > 40,
             "k {k}: {hits} hits, {misses} misses"
         );
     }
+}
+
+/// The poses of `steps` steps of a peg (B) sliding down a hole in a block (A), with the step each
+/// belongs to: pushed sideways in and out of the wall while the push turns around the axis,
+/// with a trial pose 0.2 into the wall and back every 7 steps and a slight turn every 10.
+fn peg_sliding_down_a_hole(steps: usize, seed: u64) -> Vec<(usize, Isometry3<f64>)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut rotation = UnitQuaternion::identity();
+    let mut poses = Vec::new();
+    for step in 0..steps {
+        // Sideways target: up to 0.08 off the axis, turning around it.
+        let angle = step as f64 * 0.3;
+        let off = 0.08 * (0.5 + 0.5 * (step as f64 / 9.0).sin());
+        let depth = 0.6 - 0.004 * step as f64 + rng.random_range(-0.003..0.003);
+        let centre = Vector3::new(off * angle.cos(), off * angle.sin(), depth);
+        if step % 10 == 0 {
+            let axis = Vector3::new(rng.random_range(-1.0..1.0), 1.0, 0.0);
+            let turn = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.002);
+            rotation = turn * rotation;
+        }
+        let pose = Isometry3::from_parts(Translation3::from(centre), rotation);
+        poses.push((step, pose));
+        if step % 7 == 0 {
+            let into_wall = Vector3::new(angle.cos(), angle.sin(), 0.0) * 0.2;
+            poses.push((step, Translation3::from(into_wall) * pose));
+            poses.push((step, pose));
+        }
+    }
+    poses
+}
+
+#[test]
+fn split_sliding_queries_agree_with_the_obb_tree() {
+    // A peg rocked slowly from one side of its hole to the other while it goes down: each step
+    // is small enough for the query to carry the front, and the contact switches sides, far
+    // from the last witness, so only a complete front finds it. The meshes are large enough for
+    // hundreds of the front's pairs to be due, so that the queries split their walks across
+    // two threads (from the front and from the roots). An OBB-tree, which shares nothing with
+    // them but the triangle test, is the oracle.
+    let peg = shapes::cylinder(0.44, 1.5, 6_000);
+    let block = shapes::box_with_hole(2.0, 1.0, 0.5, 3_000);
+    let (dp, db) = (DopTree::build(&peg), DopTree::build(&block));
+    let (op, ob) = (ObbTree::build(&peg), ObbTree::build(&block));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let mut stats = QueryStats::default();
+    let (mut hits, mut misses) = (0, 0);
+    pool.install(|| {
+        let mut rotation = UnitQuaternion::identity();
+        for step in 0..300 {
+            if step % 10 == 0 {
+                let axis = nalgebra::Unit::new_normalize(Vector3::new(1.0, step as f64, 0.0));
+                rotation = UnitQuaternion::from_axis_angle(&axis, 0.002) * rotation;
+            }
+            let off = 0.07 * (step as f64 * 0.15).sin();
+            let centre = Vector3::new(off, 0.3 * off, 0.6 - 0.002 * step as f64);
+            let q = Isometry3::from_parts(Translation3::from(centre), rotation);
+            let expected = ob.intersects(&op, &q, &mut QueryStats::default());
+            assert_eq!(
+                db.intersects_parallel(&dp, &q, &mut stats),
+                expected,
+                "step {step}"
+            );
+            assert_eq!(
+                dp.intersects_parallel(&db, &q.inverse(), &mut stats),
+                expected,
+                "step {step}, reversed"
+            );
+            hits += expected as usize;
+            misses += !expected as usize;
+        }
+    });
+    assert!(hits > 20 && misses > 20, "{hits} hits, {misses} misses");
+    assert!(
+        stats.split_walks > 20,
+        "only {} split walks",
+        stats.split_walks
+    );
 }

@@ -18,6 +18,7 @@ use super::allowance::triangle_pair_depth;
 use super::contact::{Contact, ContactSide, TouchingPair, classify_pairs};
 use super::machine::SlideWorld;
 use super::motion::{Motion, Pose};
+use crate::collision::pipeline::ExactTest;
 use crate::collision::{MeshCollider, QueryStats};
 use crate::geometry::{EdgeAdjacency, Point, TriMesh};
 
@@ -123,6 +124,9 @@ pub struct PairwiseWorld<C> {
     obstacles: Vec<Obstacle<C>>,
     pairs: Vec<TouchingPair>,
     stats: WorldStats,
+    /// Whether a first-hit query may split a long traversal across the current rayon pool
+    /// ([`ExactTest::intersects_split`]).
+    split_long_queries: bool,
 }
 
 impl<C: MeshCollider> PairwiseWorld<C> {
@@ -136,7 +140,16 @@ impl<C: MeshCollider> PairwiseWorld<C> {
             obstacles,
             pairs: Vec::new(),
             stats: WorldStats::default(),
+            split_long_queries: false,
         }
+    }
+
+    /// Lets first-hit queries split a long traversal across the current rayon pool: a part of
+    /// tens of thousands of triangles sliding along a close fit spends most of its frame in one
+    /// such query. Off by default: the runtime's loops already share the cores.
+    pub fn split_long_queries(mut self, split: bool) -> Self {
+        self.split_long_queries = split;
+        self
     }
 
     /// The obstacles, in the order contacts name them.
@@ -173,7 +186,7 @@ impl<C: MeshCollider> PairwiseWorld<C> {
     }
 }
 
-impl<C: MeshCollider> SlideWorld for PairwiseWorld<C> {
+impl<C: ExactTest> SlideWorld for PairwiseWorld<C> {
     fn collides(&mut self, part_pose: &Pose) -> bool {
         let start = Instant::now();
         self.stats.collision_queries += 1;
@@ -190,11 +203,12 @@ impl<C: MeshCollider> SlideWorld for PairwiseWorld<C> {
                 !self.pairs.is_empty()
             } else {
                 let b_to_a = part_pose.inverse() * obstacle.pose;
-                self.part.collider.intersects(
-                    &obstacle.body.collider,
-                    &b_to_a,
-                    &mut self.stats.query_stats,
-                )
+                let (other, stats) = (&obstacle.body.collider, &mut self.stats.query_stats);
+                if self.split_long_queries {
+                    self.part.collider.intersects_split(other, &b_to_a, stats)
+                } else {
+                    self.part.collider.intersects(other, &b_to_a, stats)
+                }
             };
             if hit {
                 break;

@@ -8,8 +8,8 @@ use nalgebra::Isometry3;
 /// across threads for a pair whose last test was long (see
 /// [`PipelineConfig::split_min_bv_tests`](super::PipelineConfig::split_min_bv_tests)).
 pub trait ExactTest: MeshCollider {
-    /// Like [`MeshCollider::intersects`], but free to split the work across the current rayon
-    /// pool. Tests without a parallel traversal run serially.
+    /// Like [`MeshCollider::intersects`], but free to split a long traversal across the current
+    /// rayon pool. Tests without a parallel traversal run serially.
     fn intersects_split(
         &self,
         other: &Self,
