@@ -662,33 +662,31 @@ impl PairMemory {
         let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
         let carry = self.carry_front(b, a.bounding_radius, pair, &placement);
         self.ended.clear();
-        let threads = parallel && rayon::current_num_threads() > 1;
         // A restart costs about as much as the last complete front was large.
-        let split = threads
+        let split = parallel
+            && rayon::current_num_threads() > 1
             && match carry {
                 Carry::Advanced { .. } => self.retest.len() >= PARALLEL_MIN_STARTS,
                 Carry::Restart { .. } => self.front.fresh_len.unwrap_or(0) >= PARALLEL_MIN_STARTS,
             };
-        let hit = match carry {
-            Carry::Advanced { .. } if split => {
-                let sequential = SEQUENTIAL_PREFIX_STARTS;
-                pair.run_walk_parallel::<K>(&self.retest, sequential, &mut self.ended, stats)
-            }
+        let top_cut;
+        let (starts, sequential): (&[(u32, u32)], usize) = match carry {
+            Carry::Advanced { .. } => (&self.retest, SEQUENTIAL_PREFIX_STARTS),
             Carry::Restart { .. } if split => {
-                let starts = top_starts(a, b);
-                pair.run_walk_parallel::<K>(&starts, 0, &mut self.ended, stats)
+                top_cut = top_starts(a, b);
+                (&top_cut, 0)
             }
-            Carry::Advanced { .. } | Carry::Restart { .. } => {
-                let walk = Walk {
-                    starts: match carry {
-                        Carry::Advanced { .. } => &self.retest,
-                        Carry::Restart { .. } => &[(0, 0)],
-                    },
-                    stop: None,
-                    front: Some(&mut self.ended),
-                };
-                pair.run_walk::<K>(walk, stats)
-            }
+            Carry::Restart { .. } => (&[(0, 0)], 0),
+        };
+        let hit = if split {
+            pair.run_walk_parallel::<K>(starts, sequential, &mut self.ended, stats)
+        } else {
+            let walk = Walk {
+                starts,
+                stop: None,
+                front: Some(&mut self.ended),
+            };
+            pair.run_walk::<K>(walk, stats)
         };
         match carry {
             Carry::Advanced { .. } | Carry::Restart { keep_on_hit: true } if hit.is_some() => {

@@ -359,16 +359,13 @@ fn sliding_translations_agree_with_brute_force() {
         for (step, q) in &poses {
             // B (the peg) in A's (the block's) frame, and the other way round.
             let expected = !brute_force_pairs(&block, &peg, q).is_empty();
-            let mut stats = QueryStats::default();
-            assert_eq!(
-                db.intersects(&dp, q, &mut stats),
+            assert_both_ways(
+                <DopTree as MeshCollider>::intersects,
+                (&db, &dp),
+                q,
                 expected,
-                "k {k} leaf {leaf_size} step {step}"
-            );
-            assert_eq!(
-                dp.intersects(&db, &q.inverse(), &mut stats),
-                expected,
-                "k {k} leaf {leaf_size} step {step}, reversed"
+                &mut QueryStats::default(),
+                &format!("k {k} leaf {leaf_size} step {step}"),
             );
             hits += expected as usize;
             misses += !expected as usize;
@@ -378,6 +375,29 @@ fn sliding_translations_agree_with_brute_force() {
             "k {k}: {hits} hits, {misses} misses"
         );
     }
+}
+
+/// Asserts that `query` gives `expected` for the peg posed at `peg_in_block` in the block's
+/// frame, and for the block in the peg's frame.
+fn assert_both_ways(
+    query: impl Fn(&DopTree, &DopTree, &Isometry3<f64>, &mut QueryStats) -> bool,
+    (block, peg): (&DopTree, &DopTree),
+    peg_in_block: &Isometry3<f64>,
+    expected: bool,
+    stats: &mut QueryStats,
+    context: &str,
+) {
+    assert_eq!(
+        query(block, peg, peg_in_block, stats),
+        expected,
+        "{context}"
+    );
+    let block_in_peg = peg_in_block.inverse();
+    assert_eq!(
+        query(peg, block, &block_in_peg, stats),
+        expected,
+        "{context}, reversed"
+    );
 }
 
 /// The poses of `steps` steps of a peg (B) sliding down a hole in a block (A), with the step each
@@ -438,15 +458,13 @@ fn split_sliding_queries_agree_with_the_obb_tree() {
             let centre = Vector3::new(off, 0.3 * off, 0.6 - 0.002 * step as f64);
             let q = Isometry3::from_parts(Translation3::from(centre), rotation);
             let expected = ob.intersects(&op, &q, &mut QueryStats::default());
-            assert_eq!(
-                db.intersects_parallel(&dp, &q, &mut stats),
+            assert_both_ways(
+                DopTree::intersects_parallel,
+                (&db, &dp),
+                &q,
                 expected,
-                "step {step}"
-            );
-            assert_eq!(
-                dp.intersects_parallel(&db, &q.inverse(), &mut stats),
-                expected,
-                "step {step}, reversed"
+                &mut stats,
+                &format!("step {step}"),
             );
             hits += expected as usize;
             misses += !expected as usize;
