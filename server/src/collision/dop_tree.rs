@@ -14,11 +14,11 @@
 //! Query, in B's pose in A's frame:
 //! 0. the bounding spheres are tested (far pairs end here, in about 10 ns); a first-hit query
 //!    then uses what the previous queries of the same two trees on this thread left (temporal
-//!    coherence, [`PairMemory`]): the pair of leaves last in contact is tested again, then the
+//!    coherence, `PairMemory`): the pair of leaves last in contact is tested again, then the
 //!    subtrees around it; a traversal starts from the last free query's front (the node pairs
-//!    where it ended, each with a directional certificate: a DOP axis or, for leaves, a face
-//!    plane), taking up again only the pairs whose gap the motion since may have closed along
-//!    their direction;
+//!    where it ended, each with a directional certificate: a DOP axis or, for a leaf against a
+//!    leaf or a small subtree, a face plane of the leaf), taking up again only the pairs whose
+//!    gap the motion since may have closed along their direction;
 //! 1. a few of A's root slabs nearest the direction from A to B are tested against B's bounding
 //!    sphere and B's root re-aligned along that slab only: far pairs end here, in tens of ns;
 //! 2. otherwise the support cone of each of A's k directions in B's orientation set is found
@@ -27,7 +27,9 @@
 //! 3. depth-first traversal: B's nodes are re-aligned lazily, once per query (a small
 //!    direct-mapped cache), leaves exactly from their corners; children pairs are tested when
 //!    generated and the deeper overlap is visited first; pairs that A's axes barely fail to
-//!    separate are also tested along B's axes (A's node re-aligned into B's frame).
+//!    separate are also tested along B's axes (A's node re-aligned into B's frame); a query
+//!    that records a front tries a leaf's face planes against an overlapping subtree of up to
+//!    `PLANE_TEST_MAX_TRIANGLES` before it splits the subtree.
 //!
 //! The traversal is compiled twice, portable and with AVX2/FMA, chosen at run time.
 
@@ -76,6 +78,8 @@ pub struct DopTree {
     nodes: Vec<Node>,
     /// Parent of each node (the root is its own parent).
     parents: Vec<u32>,
+    /// The triangles under each node, `start..end` in leaf order (a subtree's are contiguous).
+    triangle_ranges: Vec<[u32; 2]>,
     /// `k` offsets per node: `offsets[node * k + i] >= max over the node's triangles of n_i . x`.
     offsets: Vec<f32>,
     /// Triangles in leaf order.
@@ -118,7 +122,7 @@ impl DopTree {
 
     /// Heap bytes used by the tree (nodes, offsets, triangles and their ids).
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * (size_of::<Node>() + size_of::<u32>())
+        self.nodes.len() * (size_of::<Node>() + size_of::<u32>() + size_of::<[u32; 2]>())
             + self.offsets.len() * size_of::<f32>()
             + self.triangles.len() * (size_of::<Triangle>() + size_of::<u32>())
     }
@@ -131,6 +135,12 @@ impl DopTree {
     /// The triangles of a leaf (none if `leaf` is an inner node).
     fn leaf_triangles(&self, leaf: &Node) -> &[Triangle] {
         &self.triangles[leaf.first as usize..(leaf.first + leaf.count) as usize]
+    }
+
+    /// Every triangle under node `index`.
+    fn node_triangles(&self, index: u32) -> &[Triangle] {
+        let [start, end] = self.triangle_ranges[index as usize];
+        &self.triangles[start as usize..end as usize]
     }
 
     /// The ancestor `levels` above `node` (or the root, if nearer).
@@ -524,6 +534,10 @@ const SEQUENTIAL_PREFIX_STARTS: usize = 64;
 /// Chunks per thread of a split walk: several, so that threads that finish early steal work.
 const PARALLEL_CHUNKS_PER_THREAD: usize = 4;
 
+/// Largest subtree, in triangles, whose pair with a leaf of the other tree is tested against the
+/// leaf's face planes before it is split (a test costs a projection of the subtree's corners).
+const PLANE_TEST_MAX_TRIANGLES: u32 = 16;
+
 /// Depth of the cut through the larger tree where a split query from the roots starts: up to
 /// 2^depth pairs, enough for work stealing to balance two to eight threads.
 const PARALLEL_CUT_DEPTH: u32 = 5;
@@ -885,6 +899,7 @@ struct TreeBuilder<'a> {
     order: Vec<u32>,
     nodes: Vec<Node>,
     parents: Vec<u32>,
+    triangle_ranges: Vec<[u32; 2]>,
     offsets: Vec<f32>,
 }
 
@@ -915,6 +930,7 @@ impl<'a> TreeBuilder<'a> {
             centroids,
             nodes: Vec::new(),
             parents: Vec::new(),
+            triangle_ranges: Vec::new(),
             offsets: Vec::new(),
         }
     }
@@ -944,6 +960,7 @@ impl<'a> TreeBuilder<'a> {
             k: self.k,
             nodes: self.nodes,
             parents: self.parents,
+            triangle_ranges: self.triangle_ranges,
             offsets: self.offsets,
             triangles: self
                 .order
@@ -960,6 +977,7 @@ impl<'a> TreeBuilder<'a> {
         let first = self.nodes.len();
         for _ in 0..count {
             self.parents.push(parent as u32);
+            self.triangle_ranges.push([0, 0]);
             self.nodes.push(Node {
                 first: 0,
                 count: 0,
@@ -979,6 +997,7 @@ impl<'a> TreeBuilder<'a> {
             merge_max(&mut dop, support);
         }
         self.offsets[index * k..(index + 1) * k].copy_from_slice(&dop);
+        self.triangle_ranges[index] = [start as u32, end as u32];
         let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max);
         let count = end - start;
         if count <= self.leaf_size {
@@ -1759,7 +1778,7 @@ impl<R> TreePair<'_, R> {
                         let ending = if found {
                             Ending::Retest
                         } else {
-                            self.face_separation(na, nb)
+                            self.face_separation(ia, ib)
                         };
                         front.push(FrontPair {
                             pair: (ia, ib),
@@ -1785,6 +1804,23 @@ impl<R> TreePair<'_, R> {
                         }
                     }
                     continue;
+                }
+                // A small subtree against one triangle: the triangle's plane often separates
+                // them where their DOPs overlap, and it stays a valid certificate along motion
+                // in that plane (a peg sliding down its hole's wall), where the DOP axis that
+                // would separate their descendants is often the direction of motion.
+                if let Some(front) = front.as_deref_mut()
+                    && self.worth_a_plane_test(na, nb, ia, ib)
+                {
+                    stats.bv_tests += 1;
+                    let ending = self.face_separation(ia, ib);
+                    if let Ending::Separated { .. } = ending {
+                        front.push(FrontPair {
+                            pair: (ia, ib),
+                            ending,
+                        });
+                        continue;
+                    }
                 }
                 let [first, second] = self.children(ia, ib);
                 let first_slack =
@@ -1879,21 +1915,38 @@ impl<R> TreePair<'_, R> {
         });
     }
 
-    /// The certificate of a pair of leaves whose triangles do not intersect: the plane of one of
-    /// their triangles with all of the other leaf's corners strictly beyond it, the widest gap of
-    /// them; [`Ending::Retest`] when no such plane separates them.
-    fn face_separation(&self, leaf_a: &Node, leaf_b: &Node) -> Ending {
-        let triangles_a = self.a.leaf_triangles(leaf_a);
-        let triangles_b = self.b.leaf_triangles(leaf_b);
+    /// Whether the pair of a leaf and an inner node of at most [`PLANE_TEST_MAX_TRIANGLES`]
+    /// triangles, one in each tree, gets the leaf's face planes tried before it is split.
+    fn worth_a_plane_test(&self, na: &Node, nb: &Node, ia: u32, ib: u32) -> bool {
+        let small = |tree: &DopTree, index: u32| {
+            let [start, end] = tree.triangle_ranges[index as usize];
+            end - start <= PLANE_TEST_MAX_TRIANGLES
+        };
+        match (na.is_leaf(), nb.is_leaf()) {
+            (true, false) => small(self.b, ib),
+            (false, true) => small(self.a, ia),
+            _ => false,
+        }
+    }
+
+    /// The certificate of node pair `(ia, ib)` where at least one is a leaf: the plane of one
+    /// of the leaves' triangles with all of the other node's corners strictly beyond it, the
+    /// widest gap of them; [`Ending::Retest`] when no such plane separates them.
+    fn face_separation(&self, ia: u32, ib: u32) -> Ending {
+        let triangles_a = self.a.node_triangles(ia);
+        let triangles_b = self.b.node_triangles(ib);
+        let planes = |node: &Node, triangles| if node.is_leaf() { triangles } else { &[][..] };
+        let planes_a = planes(&self.a.nodes[ia as usize], triangles_a);
+        let planes_b = planes(&self.b.nodes[ib as usize], triangles_b);
         let mut best = Ending::Retest;
         let mut widest = 0.0;
         // A's normals in A's frame, B's in B's own; each rounded to f32 (as stored) before the
         // gap along it is measured. B's corners are projected in B's frame: n . (R q + t) =
         // (Rᵀ n) . q + n . t.
-        let candidates = triangles_a
+        let candidates = planes_a
             .iter()
             .map(|t| (t, false))
-            .chain(triangles_b.iter().map(|t| (t, true)));
+            .chain(planes_b.iter().map(|t| (t, true)));
         for (triangle, along_b) in candidates {
             let Some(normal) = face_normal(triangle) else {
                 continue;

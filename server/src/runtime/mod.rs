@@ -1,6 +1,6 @@
 //! The runtime: the iceoryx2 ports, the three loops and their rendezvous, clean start and stop.
 //!
-//! This is the only module that knows about threads and IPC. The interaction manager ([`io`])
+//! This is the only module that knows about threads and IPC. The interaction manager (`io`)
 //! owns every port on the main thread: it validates input, hands targets to the grasping loop,
 //! publishes what the collision loop verified and answers control requests. The grasping,
 //! sliding and collision loops ([`loops`]) each run on their own thread and meet only at the
