@@ -18,7 +18,8 @@
 //!    subtrees around it; a traversal starts from the last free query's front (the node pairs
 //!    where it ended, each with a directional certificate: a DOP axis or, for a leaf against a
 //!    leaf or a small subtree, a face plane of the leaf), taking up again only the pairs whose
-//!    gap the motion since may have closed along their direction;
+//!    gap the motion since may have closed along their direction; an all-pairs query (not
+//!    split) walks from the same front and leaves its own, which is complete whatever it finds;
 //! 1. a few of A's root slabs nearest the direction from A to B are tested against B's bounding
 //!    sphere and B's root re-aligned along that slab only: far pairs end here, in tens of ns;
 //! 2. otherwise the support cone of each of A's k directions in B's orientation set is found
@@ -169,8 +170,8 @@ impl DopTree {
         with_affine::<false>(self, other, b_to_a, stats, &mut unused, true)
     }
 
-    /// Like [`MeshCollider::intersecting_pairs`], split across rayon's threads; the pairs come
-    /// out in no particular order.
+    /// Like [`MeshCollider::intersecting_pairs`], split across rayon's threads from the roots
+    /// (without the remembered front); the pairs come out in no particular order.
     pub fn intersecting_pairs_parallel(
         &self,
         other: &DopTree,
@@ -227,13 +228,17 @@ fn with_affine<const ALL: bool>(
             return false;
         }
         if ALL {
-            return match affine_pair::<K>(a, b, b_to_a, &centre_b) {
-                Some(pair) => pair.run::<ALL, K>(stats, out, parallel).is_some(),
-                None => {
-                    stats.bv_tests += 1;
-                    false
-                }
+            let Some(pair) = affine_pair::<K>(a, b, b_to_a, &centre_b) else {
+                stats.bv_tests += 1;
+                return false;
             };
+            if parallel {
+                return pair.run::<ALL, K>(stats, out, true).is_some();
+            }
+            let mut memory = PairMemory::take(a, b);
+            let hit = memory.all_pairs::<K>(a, b, &pair, stats, out);
+            PairMemory::put_back(memory);
+            return hit;
         }
         let mut memory = PairMemory::take(a, b);
         let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats, parallel);
@@ -250,7 +255,8 @@ fn with_affine<const ALL: bool>(
     }
 }
 
-/// What the last first-hit query between a pair of trees on this thread leaves to the next one.
+/// What the last first-hit or all-pairs query between a pair of trees on this thread leaves to
+/// the next one.
 /// Poses change little between frames (temporal coherence): a pair in contact usually stays in
 /// contact through the same or nearby triangles, and a pair proved apart stays apart at most of
 /// the node pairs where the proof ended, by a margin that only motion towards each other can use
@@ -711,24 +717,70 @@ impl PairMemory {
                 self.front_pose = None;
                 return hit;
             }
+            // A first hit leaves unexplored pairs high up in the trees, so its front
+            // understates a complete one: the measure is the first front since the restart
+            // that has no hit.
+            _ => self.keep_front(&carry, &placement, hit.is_none(), pair),
+        }
+        hit
+    }
+
+    /// An all-pairs query from the remembered front (or from the roots): every pair of leaves
+    /// the front holds without a certificate, or whose certificate the motion may have expired,
+    /// is walked again; the pairs of intersecting triangles go to `out`. The walk is complete
+    /// whatever it finds, so its front is kept. Returns whether any pair intersects.
+    fn all_pairs<const K: usize>(
+        &mut self,
+        a: &DopTree,
+        b: &DopTree,
+        pair: &TreePair<'_, AffineRealign<K>>,
+        stats: &mut QueryStats,
+        out: &mut Vec<[u32; 2]>,
+    ) -> bool {
+        let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
+        let carry = self.carry_front(b, a.bounding_radius, pair, &placement);
+        self.ended.clear();
+        let starts: &[(u32, u32)] = match carry {
+            Carry::Advanced { .. } => &self.retest,
+            Carry::Restart { .. } => &[(0, 0)],
+        };
+        let walk = Walk {
+            starts,
+            stop: None,
+            front: Some(&mut self.ended),
+        };
+        let found = out.len();
+        pair.sequential::<true, K>(walk, stats, out);
+        self.keep_front(&carry, &placement, true, pair);
+        out.len() > found
+    }
+
+    /// Makes the front where this query's walk ended (`ended`): settled into the old one when
+    /// the walk came from it, a new one after a restart. `complete`: the walk covered every pair
+    /// of leaves, so its front measures the fresh size if none is known since the restart.
+    fn keep_front<const K: usize>(
+        &mut self,
+        carry: &Carry,
+        placement: &Placement,
+        complete: bool,
+        pair: &TreePair<'_, AffineRealign<K>>,
+    ) {
+        match *carry {
             Carry::Advanced { turn } => {
                 self.front.steady =
                     (self.retest.len() as f64) < STEADY_DUE_SHARE * self.front.len() as f64;
-                self.front.settle(turn, &self.due, &self.ended, &placement);
+                self.front.settle(turn, &self.due, &self.ended, placement);
             }
             Carry::Restart { .. } => {
                 self.front.restart();
-                self.front.add(&self.ended, &placement);
+                self.front.add(&self.ended, placement);
                 self.front.fresh_len = None;
             }
         }
-        // A first hit leaves unexplored pairs high up in the trees, so its front understates a
-        // complete one: the measure is the first front since the restart that has no hit.
-        if hit.is_none() && self.front.fresh_len.is_none() {
+        if complete && self.front.fresh_len.is_none() {
             self.front.fresh_len = Some(self.front.len());
         }
         self.front_pose = Some((pair.rotation, pair.translation));
-        hit
     }
 
     /// Whether the old front is usable at `pair`'s pose (`placement`), and if so its due pairs

@@ -377,6 +377,56 @@ fn sliding_translations_agree_with_brute_force() {
     }
 }
 
+#[test]
+fn coherent_all_pairs_queries_agree_with_brute_force() {
+    // All-pairs queries carry the front as first-hit queries do, and share it with them: along
+    // a peg sliding down its hole (in and out of the wall, with trial poses deep in it and
+    // back), each must give exactly brute force's triangle pairs, both ways, with a first-hit
+    // query of the same trees every third step. Carrying the front must also save work: the
+    // same queries from the roots (the memoryless split query) test at least twice as many
+    // bounding volumes.
+    let peg = shapes::cylinder(0.44, 1.5, 300);
+    let block = shapes::box_with_hole(2.0, 1.0, 0.5, 400);
+    let poses = peg_sliding_down_a_hole(240, 9);
+    for (k, leaf_size) in [(18, 1), (24, 2), (6, 1)] {
+        let set = OrientationSet::new(k).unwrap();
+        let (dp, db) = (
+            DopTree::with_options(&peg, &set, leaf_size),
+            DopTree::with_options(&block, &set, leaf_size),
+        );
+        let (mut coherent, mut from_roots) = (QueryStats::default(), QueryStats::default());
+        let (mut hits, mut misses) = (0, 0);
+        for (step, q) in &poses {
+            let context = format!("k {k} leaf {leaf_size} step {step}");
+            let expected = brute_force_pairs(&block, &peg, q);
+            let mut pairs = Vec::new();
+            db.intersecting_pairs(&dp, q, &mut pairs, &mut coherent);
+            assert_eq!(sorted(pairs), expected, "{context}");
+            let mut reversed = Vec::new();
+            dp.intersecting_pairs(&db, &q.inverse(), &mut reversed, &mut coherent);
+            let reversed = reversed.into_iter().map(|[p, b]| [b, p]).collect();
+            assert_eq!(sorted(reversed), expected, "{context}, reversed");
+            if step % 3 == 0 {
+                let hit = db.intersects(&dp, q, &mut QueryStats::default());
+                assert_eq!(hit, !expected.is_empty(), "{context}, first hit");
+            }
+            db.intersecting_pairs_parallel(&dp, q, &mut Vec::new(), &mut from_roots);
+            hits += !expected.is_empty() as usize;
+            misses += expected.is_empty() as usize;
+        }
+        assert!(
+            hits > 40 && misses > 40,
+            "k {k}: {hits} hits, {misses} misses"
+        );
+        assert!(
+            coherent.bv_tests < from_roots.bv_tests,
+            "k {k}: {} bounding-volume tests carried both ways, {} from the roots one way",
+            coherent.bv_tests,
+            from_roots.bv_tests
+        );
+    }
+}
+
 /// Asserts that `query` gives `expected` for the peg posed at `peg_in_block` in the block's
 /// frame, and for the block in the peg's frame.
 fn assert_both_ways(
