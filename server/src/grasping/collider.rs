@@ -16,6 +16,10 @@ pub type PartId = u32;
 /// Most contact points kept per segment and part: enough to outline a contact region.
 const MAX_CONTACT_POINTS: usize = 48;
 
+/// Most triangle pairs of a contact whose edge crossings are computed (four times the points
+/// kept, so that thinning still picks from an even spread).
+const CROSSING_PAIRS: usize = 4 * MAX_CONTACT_POINTS;
+
 /// The most objects a collider handles at once (bits of an [`ObjectSet`]).
 pub const MAX_OBJECTS: usize = 64;
 
@@ -259,10 +263,12 @@ impl<'a> SceneCollider<'a> {
         if self.pairs.is_empty() {
             return None;
         }
+        // The points come from at most CROSSING_PAIRS pairs spread evenly over the list (a
+        // probe pressed onto a fine mesh cuts hundreds of triangles, and only MAX_CONTACT_POINTS
+        // points are kept); the normal from every probe triangle that touches.
         let mut points = Vec::new();
-        let mut normal = Vector3::zeros();
-        let mut seen = Vec::new();
-        for &[part_triangle, probe_triangle] in &self.pairs {
+        let stride = self.pairs.len().div_ceil(CROSSING_PAIRS);
+        for &[part_triangle, probe_triangle] in self.pairs.iter().step_by(stride) {
             let probe_corners = geometry
                 .probe
                 .triangle(probe_triangle as usize)
@@ -270,11 +276,14 @@ impl<'a> SceneCollider<'a> {
             let part_corners = part.mesh.triangle(part_triangle as usize);
             triangle_crossings(&probe_corners, &part_corners, &mut points);
             triangle_crossings(&part_corners, &probe_corners, &mut points);
-            if !seen.contains(&probe_triangle) {
-                seen.push(probe_triangle);
-                normal += geometry.probe_normals[probe_triangle as usize];
-            }
         }
+        let mut seen: Vec<u32> = self.pairs.iter().map(|&[_, probe]| probe).collect();
+        seen.sort_unstable();
+        seen.dedup();
+        let normal: Vector3<f64> = seen
+            .iter()
+            .map(|&t| geometry.probe_normals[t as usize])
+            .sum();
         if points.is_empty() {
             // Only coplanar pairs: fall back to the touching probe triangles' centroids.
             points = seen
@@ -352,7 +361,8 @@ fn segment_triangle(p: &Point3<f64>, q: &Point3<f64>, t: &[Point3<f64>; 3]) -> O
     let e2 = t[2] - t[0];
     let h = d.cross(&e2);
     let det = e1.dot(&h);
-    if det.abs() <= 1e-14 * e1.norm() * e2.norm() * d.norm() {
+    // |det| <= 1e-14 |e1| |e2| |d|, squared (no square roots).
+    if det * det <= 1e-28 * e1.norm_squared() * e2.norm_squared() * d.norm_squared() {
         return None;
     }
     let s = p - t[0];
@@ -380,4 +390,98 @@ fn mean_vertex(mesh: &TriMesh) -> Point3<f64> {
         .iter()
         .fold(Vector3::zeros(), |acc, v| acc + v.coords);
     Point3::from(sum / mesh.vertices().len() as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::f64::consts::FRAC_PI_2;
+
+    use nalgebra::{Translation3, UnitQuaternion};
+
+    use super::*;
+    use crate::geometry::shapes;
+    use crate::grasping::model::tests::right_hand;
+
+    #[test]
+    fn a_probe_sunk_into_a_fine_mesh_keeps_an_even_spread_of_its_crossings() {
+        // The palm's probe sunk 4 mm into the outer side of a finely tessellated torus (a tube
+        // of 5 cm radius, 72,000 triangles) cuts hundreds of triangle pairs. The contact's points
+        // must be crossings of those pairs (all of them computed here), spread over the whole
+        // patch, and its normal must point from the palm towards the torus.
+        let (margin, sink) = (0.008, 0.004);
+        let model = right_hand();
+        let hand = HandGeometry::new(&model, margin).unwrap();
+        let palm = 0;
+        let geometry = &hand.segments[palm];
+        let lowest = geometry
+            .probe
+            .vertices()
+            .iter()
+            .map(|v| v.z)
+            .fold(f64::MAX, f64::min);
+        let centre = geometry.bound.0;
+        let (major, minor) = (0.3, 0.05);
+        let part = PartGeometry::new(shapes::torus(major, minor, 600, 60));
+        // The palm's -z faces the torus's axis (object -x); the probe's lowest point is `sink`
+        // inside the tube's outermost circle.
+        let to_object = Isometry3::from_parts(
+            Translation3::new(major + minor - sink - lowest, -centre.y, centre.x),
+            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), FRAC_PI_2),
+        );
+        let obstacles = [Obstacle {
+            part: 0,
+            geometry: &part,
+            pose: Isometry3::identity(),
+        }];
+        let mut collider = SceneCollider::new(&hand, &obstacles, None);
+        let contact = collider
+            .contact(palm, model.segments()[palm].level, 0, &to_object)
+            .expect("the probe cuts the torus");
+
+        let mut pairs = Vec::new();
+        part.tree.intersecting_pairs(
+            &geometry.probe_tree,
+            &to_object,
+            &mut pairs,
+            &mut QueryStats::default(),
+        );
+        assert!(pairs.len() > CROSSING_PAIRS, "{} pairs", pairs.len());
+        let mut every = Vec::new();
+        for &[part_triangle, probe_triangle] in &pairs {
+            let probe = geometry
+                .probe
+                .triangle(probe_triangle as usize)
+                .map(|p| to_object * p);
+            let part = part.mesh.triangle(part_triangle as usize);
+            triangle_crossings(&probe, &part, &mut every);
+            triangle_crossings(&part, &probe, &mut every);
+        }
+        assert_eq!(contact.points.len(), MAX_CONTACT_POINTS);
+        assert!(contact.points.iter().all(|p| every.contains(p)));
+        // Spread: the patch's extent across the tube's side (y and z; x is the depth) cut into
+        // 6 x 6 cells; the kept points must reach nine in ten of the cells that any crossing reaches.
+        let (lo, hi) = every.iter().fold(
+            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
+            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+        );
+        let cell = |p: &Point3<f64>| {
+            let at = |axis: usize| {
+                let t = (p[axis] - lo[axis]) / (hi[axis] - lo[axis]).max(f64::MIN_POSITIVE);
+                ((t * 6.0) as usize).min(5)
+            };
+            (at(1), at(2))
+        };
+        let cells = |points: &[Point3<f64>]| {
+            let mut cells: Vec<_> = points.iter().map(cell).collect();
+            cells.sort_unstable();
+            cells.dedup();
+            cells.len()
+        };
+        let (reached, all) = (cells(&contact.points), cells(&every));
+        assert!(
+            reached * 10 >= all * 9,
+            "the points reach {reached} of the {all} cells the crossings reach"
+        );
+        assert!(contact.normal.x < -0.5, "normal {:?}", contact.normal);
+    }
 }
