@@ -133,11 +133,6 @@ impl DopTree {
         &self.offsets[index * self.k..(index + 1) * self.k]
     }
 
-    /// The triangles of a leaf (none if `leaf` is an inner node).
-    fn leaf_triangles(&self, leaf: &Node) -> &[Triangle] {
-        &self.triangles[leaf.first as usize..(leaf.first + leaf.count) as usize]
-    }
-
     /// Every triangle under node `index`.
     fn node_triangles(&self, index: u32) -> &[Triangle] {
         let [start, end] = self.triangle_ranges[index as usize];
@@ -679,9 +674,7 @@ impl PairMemory {
         stats: &mut QueryStats,
         parallel: bool,
     ) -> Option<[u32; 2]> {
-        let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
-        let carry = self.carry_front(b, a.bounding_radius, pair, &placement);
-        self.ended.clear();
+        let (carry, placement) = self.carry_front(a, b, pair);
         // A restart costs about as much as the last complete front was large.
         let split = parallel
             && rayon::current_num_threads() > 1
@@ -737,9 +730,7 @@ impl PairMemory {
         stats: &mut QueryStats,
         out: &mut Vec<[u32; 2]>,
     ) -> bool {
-        let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
-        let carry = self.carry_front(b, a.bounding_radius, pair, &placement);
-        self.ended.clear();
+        let (carry, placement) = self.carry_front(a, b, pair);
         let starts: &[(u32, u32)] = match carry {
             Carry::Advanced { .. } => &self.retest,
             Carry::Restart { .. } => &[(0, 0)],
@@ -783,18 +774,20 @@ impl PairMemory {
         self.front_pose = Some((pair.rotation, pair.translation));
     }
 
-    /// Whether the old front is usable at `pair`'s pose (`placement`), and if so its due pairs
-    /// in `retest` and `due`. Says to restart when there is no front, B moved too far (beyond
-    /// a fraction of the smaller radius, `a_radius` or B's), or the front grew too large.
+    /// Whether the old front is usable at `pair`'s pose, and if so its due pairs in `retest`
+    /// and `due`; also where the trees are for the certificates, and `ended` emptied for the
+    /// walk. Says to restart when there is no front, B moved too far (beyond a fraction of the
+    /// smaller radius), or the front grew too large.
     fn carry_front<const K: usize>(
         &mut self,
+        a: &DopTree,
         b: &DopTree,
-        a_radius: f64,
         pair: &TreePair<'_, AffineRealign<K>>,
-        placement: &Placement,
-    ) -> Carry {
+    ) -> (Carry, Placement) {
+        let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
+        self.ended.clear();
         let Some((old_rotation, old_translation)) = &self.front_pose else {
-            return Carry::Restart { keep_on_hit: false };
+            return (Carry::Restart { keep_on_hit: false }, placement);
         };
         let growth = if self.front.steady {
             FRONT_MAX_GROWTH_STEADY
@@ -804,7 +797,7 @@ impl PairMemory {
         if let Some(fresh_len) = self.front.fresh_len
             && self.front.len() > growth * fresh_len + FRONT_SLACK_PAIRS
         {
-            return Carry::Restart { keep_on_hit: false };
+            return (Carry::Restart { keep_on_hit: false }, placement);
         }
         // |R' - R| in the spectral norm is at most the Frobenius norm over sqrt 2 (twice the
         // sine of half the angle between them); the small term covers matrices that are
@@ -813,12 +806,12 @@ impl PairMemory {
         // How far any point of B moved in A's frame.
         let shift = (pair.translation - old_translation).norm();
         let reach_b = b.bounding_centre.coords.norm() + b.bounding_radius;
-        if turn * reach_b + shift > FRONT_MAX_MOTION * a_radius.min(b.bounding_radius) {
-            return Carry::Restart { keep_on_hit: true };
+        if turn * reach_b + shift > FRONT_MAX_MOTION * a.bounding_radius.min(b.bounding_radius) {
+            return (Carry::Restart { keep_on_hit: true }, placement);
         }
         self.front
-            .due(turn, placement, &mut self.retest, &mut self.due);
-        Carry::Advanced { turn }
+            .due(turn, &placement, &mut self.retest, &mut self.due);
+        (Carry::Advanced { turn }, placement)
     }
 }
 
@@ -831,14 +824,13 @@ fn witness_still_intersects(
     [leaf_a, leaf_b]: [u32; 2],
     stats: &mut QueryStats,
 ) -> bool {
-    let (Some(leaf_a), Some(leaf_b)) = (a.nodes.get(leaf_a as usize), b.nodes.get(leaf_b as usize))
-    else {
+    if leaf_a as usize >= a.nodes.len() || leaf_b as usize >= b.nodes.len() {
         return false;
-    };
+    }
     // Moved exactly as the traversal moves B's triangles, so both give the same answer.
     let rotation = b_to_a.rotation.to_rotation_matrix();
     let translation = b_to_a.translation.vector;
-    let (triangles_a, triangles_b) = (a.leaf_triangles(leaf_a), b.leaf_triangles(leaf_b));
+    let (triangles_a, triangles_b) = (a.node_triangles(leaf_a), b.node_triangles(leaf_b));
     triangles_b.iter().any(|tb| {
         let tb = tb.map(|p| Point3::from(rotation.matrix() * p.coords + translation));
         triangles_a.iter().any(|ta| {

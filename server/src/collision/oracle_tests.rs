@@ -298,12 +298,7 @@ fn coherent_pose_sequences_agree_with_brute_force() {
     // B's centre is pulled along x in and out of A's reach (the tori touch near x = 2.55).
     let centre_at = |step: usize| Vector3::new(2.45 + 0.4 * (step as f64 / 25.0).sin(), 0.1, 0.0);
     for (k, leaf_size) in [(18, 1), (24, 2), (6, 1), (14, 3), (26, 1)] {
-        let set = OrientationSet::new(k).unwrap();
-        let (da, db) = (
-            DopTree::with_options(&a, &set, leaf_size),
-            DopTree::with_options(&b, &set, leaf_size),
-        );
-        let other = DopTree::with_options(&b, &set, leaf_size);
+        let [da, db, other] = dop_trees([&a, &b, &b], k, leaf_size);
         let mut pose =
             Isometry3::from_parts(Translation3::from(centre_at(0)), UnitQuaternion::identity());
         let (mut hits, mut misses, mut switches, mut last) = (0, 0, 0, None);
@@ -346,15 +341,10 @@ fn sliding_translations_agree_with_brute_force() {
     // while pushed sideways in and out of the wall: the front's certificates across the gap
     // survive motion along the wall and must expire on motion towards it; trial poses deep in
     // the wall and back (as bisection makes) and a slight turn now and then exercise the rest.
-    let peg = shapes::cylinder(0.44, 1.5, 300);
-    let block = shapes::box_with_hole(2.0, 1.0, 0.5, 400);
+    let (peg, block) = small_peg_and_block();
     let poses = peg_sliding_down_a_hole(240, 5);
     for (k, leaf_size) in [(26, 1), (18, 2), (14, 1)] {
-        let set = OrientationSet::new(k).unwrap();
-        let (dp, db) = (
-            DopTree::with_options(&peg, &set, leaf_size),
-            DopTree::with_options(&block, &set, leaf_size),
-        );
+        let [dp, db] = dop_trees([&peg, &block], k, leaf_size);
         let (mut hits, mut misses) = (0, 0);
         for (step, q) in &poses {
             // B (the peg) in A's (the block's) frame, and the other way round.
@@ -385,15 +375,10 @@ fn coherent_all_pairs_queries_agree_with_brute_force() {
     // query of the same trees every third step. Carrying the front must also save work: the
     // same queries from the roots (the memoryless split query) test at least twice as many
     // bounding volumes.
-    let peg = shapes::cylinder(0.44, 1.5, 300);
-    let block = shapes::box_with_hole(2.0, 1.0, 0.5, 400);
+    let (peg, block) = small_peg_and_block();
     let poses = peg_sliding_down_a_hole(240, 9);
     for (k, leaf_size) in [(18, 1), (24, 2), (6, 1)] {
-        let set = OrientationSet::new(k).unwrap();
-        let (dp, db) = (
-            DopTree::with_options(&peg, &set, leaf_size),
-            DopTree::with_options(&block, &set, leaf_size),
-        );
+        let [dp, db] = dop_trees([&peg, &block], k, leaf_size);
         let (mut coherent, mut from_roots) = (QueryStats::default(), QueryStats::default());
         let (mut hits, mut misses) = (0, 0);
         for (step, q) in &poses {
@@ -448,6 +433,21 @@ fn assert_both_ways(
         expected,
         "{context}, reversed"
     );
+}
+
+/// A peg of 300 triangles and a block of 400 with a hole a few percent wider than it, for the
+/// poses of [`peg_sliding_down_a_hole`].
+fn small_peg_and_block() -> (TriMesh, TriMesh) {
+    (
+        shapes::cylinder(0.44, 1.5, 300),
+        shapes::box_with_hole(2.0, 1.0, 0.5, 400),
+    )
+}
+
+/// DOP-trees over `meshes` with `k` orientations and leaves of `leaf_size` triangles.
+fn dop_trees<const N: usize>(meshes: [&TriMesh; N], k: usize, leaf_size: usize) -> [DopTree; N] {
+    let set = OrientationSet::new(k).unwrap();
+    meshes.map(|mesh| DopTree::with_options(mesh, &set, leaf_size))
 }
 
 /// The poses of `steps` steps of a peg (B) sliding down a hole in a block (A), with the step each

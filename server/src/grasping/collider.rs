@@ -268,14 +268,8 @@ impl<'a> SceneCollider<'a> {
         // points are kept); the normal from every probe triangle that touches.
         let mut points = Vec::new();
         let stride = self.pairs.len().div_ceil(CROSSING_PAIRS);
-        for &[part_triangle, probe_triangle] in self.pairs.iter().step_by(stride) {
-            let probe_corners = geometry
-                .probe
-                .triangle(probe_triangle as usize)
-                .map(|p| to_object * p);
-            let part_corners = part.mesh.triangle(part_triangle as usize);
-            triangle_crossings(&probe_corners, &part_corners, &mut points);
-            triangle_crossings(&part_corners, &probe_corners, &mut points);
+        for &pair in self.pairs.iter().step_by(stride) {
+            pair_crossings(&geometry.probe, &part.mesh, to_object, pair, &mut points);
         }
         let mut seen: Vec<u32> = self.pairs.iter().map(|&[_, probe]| probe).collect();
         seen.sort_unstable();
@@ -342,6 +336,23 @@ fn side_of(normal: &Vector3<f64>, level: JointLevel) -> ContactSide {
     } else {
         ContactSide::Lateral
     }
+}
+
+/// Appends the points where the edges of a cut pair of triangles, `[part, probe]`, cross the
+/// other triangle, in the object's frame (the probe placed there by `to_object`).
+fn pair_crossings(
+    probe: &TriMesh,
+    part: &TriMesh,
+    to_object: &Isometry3<f64>,
+    [part_triangle, probe_triangle]: [u32; 2],
+    out: &mut Vec<Point3<f64>>,
+) {
+    let probe_corners = probe
+        .triangle(probe_triangle as usize)
+        .map(|p| to_object * p);
+    let part_corners = part.triangle(part_triangle as usize);
+    triangle_crossings(&probe_corners, &part_corners, out);
+    triangle_crossings(&part_corners, &probe_corners, out);
 }
 
 /// Appends the points where the edges of triangle `a` cross triangle `b`.
@@ -447,14 +458,8 @@ mod tests {
         );
         assert!(pairs.len() > CROSSING_PAIRS, "{} pairs", pairs.len());
         let mut every = Vec::new();
-        for &[part_triangle, probe_triangle] in &pairs {
-            let probe = geometry
-                .probe
-                .triangle(probe_triangle as usize)
-                .map(|p| to_object * p);
-            let part = part.mesh.triangle(part_triangle as usize);
-            triangle_crossings(&probe, &part, &mut every);
-            triangle_crossings(&part, &probe, &mut every);
+        for &pair in &pairs {
+            pair_crossings(&geometry.probe, &part.mesh, &to_object, pair, &mut every);
         }
         assert_eq!(contact.points.len(), MAX_CONTACT_POINTS);
         assert!(contact.points.iter().all(|p| every.contains(p)));
