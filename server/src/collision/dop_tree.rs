@@ -18,13 +18,17 @@
 //!    subtrees around it; a traversal starts from the last free query's front (the node pairs
 //!    where it ended, each with a directional certificate: a DOP axis or, for a leaf against a
 //!    leaf or a small subtree, a face plane of the leaf), taking up again only the pairs whose
-//!    gap the motion since may have closed along their direction; an all-pairs query (not
-//!    split) walks from the same front and leaves its own, which is complete whatever it finds;
-//! 1. a few of A's root slabs nearest the direction from A to B are tested against B's bounding
-//!    sphere and B's root re-aligned along that slab only: far pairs end here, in tens of ns;
+//!    gap the motion since may have closed along their direction (bounded with the tree's
+//!    sphere, then with the node's own); an all-pairs query (not split) walks from the same
+//!    front and leaves its own, which is complete whatever it finds;
+//! 1. the last proof that the roots are apart is checked against the motion since; failing
+//!    that, a few of A's root slabs nearest the direction from A to B are tested against B's
+//!    bounding sphere and B's root re-aligned along that slab only: far pairs end here, in tens
+//!    of ns;
 //! 2. otherwise the support cone of each of A's k directions in B's orientation set is found
-//!    (first trying last query's vertex: temporal coherence), giving the affine map from B's
-//!    offsets to re-aligned ones, stored densely for vector multiply-adds;
+//!    (first trying last query's vertex: temporal coherence; the opposite direction takes the
+//!    opposite normals), giving the affine map from B's offsets to re-aligned ones, stored
+//!    densely for vector multiply-adds; a query that the front answers without a test skips it;
 //! 3. depth-first traversal: B's nodes are re-aligned lazily, once per query (a small
 //!    direct-mapped cache), leaves exactly from their corners; children pairs are tested when
 //!    generated and the deeper overlap is visited first; pairs that A's axes barely fail to
@@ -37,7 +41,7 @@
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
 
 use super::orientation::OrientationSet;
 use super::triangle::{Triangle, triangles_intersect};
@@ -83,6 +87,9 @@ pub struct DopTree {
     triangle_ranges: Vec<[u32; 2]>,
     /// `k` offsets per node: `offsets[node * k + i] >= max over the node's triangles of n_i . x`.
     offsets: Vec<f32>,
+    /// A sphere around each node's triangles (centre, radius): how far a node's points can move
+    /// when the tree turns about another point, for the certificates of a [`Front`].
+    spheres: Vec<NodeSphere>,
     /// Triangles in leaf order.
     triangles: Vec<Triangle>,
     /// Original index (in the mesh) of each triangle in leaf order.
@@ -123,7 +130,11 @@ impl DopTree {
 
     /// Heap bytes used by the tree (nodes, offsets, triangles and their ids).
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * (size_of::<Node>() + size_of::<u32>() + size_of::<[u32; 2]>())
+        self.nodes.len()
+            * (size_of::<Node>()
+                + size_of::<u32>()
+                + size_of::<[u32; 2]>()
+                + size_of::<NodeSphere>())
             + self.offsets.len() * size_of::<f32>()
             + self.triangles.len() * (size_of::<Triangle>() + size_of::<u32>())
     }
@@ -223,15 +234,15 @@ fn with_affine<const ALL: bool>(
             return false;
         }
         if ALL {
-            let Some(pair) = affine_pair::<K>(a, b, b_to_a, &centre_b) else {
-                stats.bv_tests += 1;
-                return false;
-            };
-            if parallel {
-                return pair.run::<ALL, K>(stats, out, true).is_some();
-            }
             let mut memory = PairMemory::take(a, b);
-            let hit = memory.all_pairs::<K>(a, b, &pair, stats, out);
+            let hit = match affine_pair::<K>(a, b, b_to_a, &centre_b, &mut memory.root_separation) {
+                None => {
+                    stats.bv_tests += 1;
+                    false
+                }
+                Some(pair) if parallel => pair.get().run::<ALL, K>(stats, out, true).is_some(),
+                Some(pair) => memory.all_pairs::<K>(&pair, stats, out),
+            };
             PairMemory::put_back(memory);
             return hit;
         }
@@ -265,6 +276,8 @@ struct PairMemory {
     /// queries without contact since.
     witness: Option<[u32; 2]>,
     misses_since_witness: u32,
+    /// How [`roots_separated_along_offset`] last proved the roots apart: checked first next time.
+    root_separation: Option<RootSeparation>,
     /// B's pose in A's frame at the last traversal that recorded a front, and that front: every
     /// pair of leaves lies under one of its node pairs, proved apart or to be tested again.
     front_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
@@ -283,9 +296,12 @@ struct PairMemory {
 /// most the other tree's centre moving along the direction plus the turn times its radius, so a
 /// certificate is still valid while `gap + direction . (centre now - centre then) - radius *
 /// (turn since)` stays positive: sliding along a surface (the peg down its hole) leaves the
-/// certificates across the gap intact, however far it goes. A query takes out only the expired
-/// ones (a scan of packed arrays: the fronts hold up to tens of thousands of pairs, where a scan
-/// beats a priority queue's scattered accesses).
+/// certificates across the gap intact, however far it goes. The same holds with the moving
+/// node's own centre and radius instead of its tree's: that bound costs more to evaluate but
+/// survives turning (the tree's radius times even a small turn soon exceeds a small gap), so it
+/// is checked wherever the tree's bound fails. A query takes out only the pairs both bounds
+/// may have expired (a scan of packed arrays: the fronts hold up to tens of thousands of pairs,
+/// where a scan beats a priority queue's scattered accesses).
 #[derive(Default)]
 struct Front {
     /// Separated pairs, per frame of the certificate's direction (A's, B's).
@@ -316,8 +332,17 @@ struct Certificates {
     /// now stays above the guard.
     expiry: Vec<f64>,
     /// Unit direction (to f32 rounding) beyond which the other tree lies, in this frame, by
-    /// component (so that the scan of [`Certificates::expired`] runs in vector registers).
+    /// component (so that the scan of [`Certificates::flagged`] runs in vector registers).
     directions: [Vec<f32>; 3],
+    /// The same bound for the moving node alone (B's in A's frame, A's in B's), fixed when the
+    /// pair was found: `gap - guard - direction . centre - radius * turn` with the node's own
+    /// sphere. A node turns with its tree about the tree's centre, but only its own radius
+    /// widens the bound: when the tree's bound has expired (a turning tree), this one often
+    /// still holds.
+    anchors: Vec<f64>,
+    /// The moving node's sphere: its centre in its own tree's frame, by component, and radius.
+    node_centres: [Vec<f32>; 3],
+    node_radii: Vec<f32>,
     pairs: Vec<(u32, u32)>,
 }
 
@@ -329,6 +354,18 @@ struct Placement {
     radii: [f64; 2],
     /// A bound on every coordinate involved: `|t| + |c_A| + |c_B| + r_A + r_B`.
     scale: f64,
+    /// B's pose in A's frame.
+    rotation: Matrix3<f64>,
+    translation: Vector3<f64>,
+}
+
+/// The node bound of a [`Front`]'s certificates in one frame: the moving tree's pose there, the
+/// turn accumulated since the front's restart, and the rounding guard.
+struct NodeBound {
+    rotation: Matrix3<f64>,
+    translation: Vector3<f64>,
+    turn: f64,
+    guard: f64,
 }
 
 /// Relative rounding guard of the certificates: covers the `f32` rounding of their directions and
@@ -351,6 +388,18 @@ impl Placement {
                 + b.bounding_centre.coords.norm()
                 + a.bounding_radius
                 + b.bounding_radius,
+            rotation: *rotation,
+            translation: *translation,
+        }
+    }
+
+    /// The pose of the tree that moves in `frame` (B in A's frame, A in B's).
+    fn motion(&self, frame: usize) -> (Matrix3<f64>, Vector3<f64>) {
+        if frame == 0 {
+            (self.rotation, self.translation)
+        } else {
+            let inverse = self.rotation.transpose();
+            (inverse, -(inverse * self.translation))
         }
     }
 }
@@ -359,46 +408,130 @@ impl Certificates {
     fn clear(&mut self) {
         self.expiry.clear();
         self.directions.iter_mut().for_each(Vec::clear);
+        self.anchors.clear();
+        self.node_centres.iter_mut().for_each(Vec::clear);
+        self.node_radii.clear();
         self.pairs.clear();
     }
 
-    fn push(&mut self, expiry: f64, direction: [f32; 3], pair: (u32, u32)) {
+    fn push(
+        &mut self,
+        (expiry, anchor): (f64, f64),
+        direction: [f32; 3],
+        sphere: &NodeSphere,
+        pair: (u32, u32),
+    ) {
         self.expiry.push(expiry);
+        self.anchors.push(anchor);
         for (component, value) in self.directions.iter_mut().zip(direction) {
             component.push(value);
         }
+        for (component, value) in self.node_centres.iter_mut().zip(sphere.centre) {
+            component.push(value);
+        }
+        self.node_radii.push(sphere.radius);
         self.pairs.push(pair);
     }
 
-    /// Appends to `out` the pairs whose certificates may no longer hold with the other tree's
-    /// centre at `centre` (those whose `expiry + direction . centre` is at most `threshold`),
-    /// and their indices to `indices`.
-    fn expired(
+    /// Appends to `indices` the certificates that may no longer hold: those whose tree bound
+    /// (`expiry + direction . centre`, with the other tree's centre at `centre`) is at most
+    /// `threshold` and whose node bound (`anchor + direction . (rotation c + translation) -
+    /// radius * turn`, with the moving node's sphere) is at most `guard`.
+    fn flagged(
         &self,
         centre: &Vector3<f64>,
         threshold: f64,
-        out: &mut Vec<(u32, u32)>,
+        nodes: &NodeBound,
         indices: &mut Vec<u32>,
     ) {
-        // Chunks of pairs are checked into a bit mask without branches (vector code); only the
-        // expired pairs, usually few, are then visited.
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports AVX2 and FMA, checked just above.
+            return unsafe { self.flagged_avx2(centre, threshold, nodes, indices) };
+        }
+        self.flagged_chunks(centre, threshold, nodes, indices);
+    }
+
+    /// [`Self::flagged_chunks`] compiled with AVX2 and FMA enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn flagged_avx2(
+        &self,
+        centre: &Vector3<f64>,
+        threshold: f64,
+        nodes: &NodeBound,
+        indices: &mut Vec<u32>,
+    ) {
+        self.flagged_chunks(centre, threshold, nodes, indices);
+    }
+
+    /// The scan of [`Self::flagged`]: chunks of pairs are checked into bit masks without
+    /// branches (vector code), the node bound only in chunks where some tree bound failed; only
+    /// the flagged pairs, usually few, are then visited.
+    #[inline(always)]
+    fn flagged_chunks(
+        &self,
+        centre: &Vector3<f64>,
+        threshold: f64,
+        nodes: &NodeBound,
+        indices: &mut Vec<u32>,
+    ) {
         const CHUNK: usize = 32;
         let [dx, dy, dz] = &self.directions;
-        let bound = |i: usize| {
-            self.expiry[i]
-                + dx[i] as f64 * centre.x
-                + dy[i] as f64 * centre.y
-                + dz[i] as f64 * centre.z
+        let [cx, cy, cz] = &self.node_centres;
+        let (m, v) = (&nodes.rotation, &nodes.translation);
+        // Bounds are computed into an array, then compared into a mask: two simple loops that
+        // compile to vector code.
+        let mut bounds = [0.0f64; CHUNK];
+        let mask_at_most = |bounds: &[f64; CHUNK], limit: f64, n: usize| {
+            let mut mask = 0u32;
+            for (j, &bound) in bounds.iter().enumerate() {
+                mask |= u32::from(bound <= limit) << j;
+            }
+            mask & (u32::MAX >> (CHUNK - n))
         };
         for start in (0..self.expiry.len()).step_by(CHUNK) {
-            let end = (start + CHUNK).min(self.expiry.len());
-            let mut mask = (start..end).fold(0u32, |mask, i| {
-                mask | (u32::from(bound(i) <= threshold) << (i - start))
-            });
+            let n = CHUNK.min(self.expiry.len() - start);
+            let range = start..start + n;
+            let (expiry, dx, dy, dz) = (
+                &self.expiry[range.clone()],
+                &dx[range.clone()],
+                &dy[range.clone()],
+                &dz[range.clone()],
+            );
+            for j in 0..n {
+                bounds[j] = expiry[j]
+                    + dx[j] as f64 * centre.x
+                    + dy[j] as f64 * centre.y
+                    + dz[j] as f64 * centre.z;
+            }
+            let tree_mask = mask_at_most(&bounds, threshold, n);
+            if tree_mask == 0 {
+                continue;
+            }
+            let (anchors, radii, cx, cy, cz) = (
+                &self.anchors[range.clone()],
+                &self.node_radii[range.clone()],
+                &cx[range.clone()],
+                &cy[range.clone()],
+                &cz[range],
+            );
+            for j in 0..n {
+                let c = [cx[j] as f64, cy[j] as f64, cz[j] as f64];
+                let moved = |row: usize| {
+                    m[(row, 0)] * c[0] + m[(row, 1)] * c[1] + m[(row, 2)] * c[2] + v[row]
+                };
+                bounds[j] = anchors[j]
+                    + dx[j] as f64 * moved(0)
+                    + dy[j] as f64 * moved(1)
+                    + dz[j] as f64 * moved(2)
+                    - radii[j] as f64 * nodes.turn;
+            }
+            let node_mask = mask_at_most(&bounds, nodes.guard, n);
+            let mut mask = tree_mask & node_mask;
             while mask != 0 {
-                let i = start + mask.trailing_zeros() as usize;
-                out.push(self.pairs[i]);
-                indices.push(i as u32);
+                indices.push(start as u32 + mask.trailing_zeros());
                 mask &= mask - 1;
             }
         }
@@ -412,6 +545,11 @@ impl Certificates {
             for component in &mut self.directions {
                 component.swap_remove(i as usize);
             }
+            self.anchors.swap_remove(i as usize);
+            for component in &mut self.node_centres {
+                component.swap_remove(i as usize);
+            }
+            self.node_radii.swap_remove(i as usize);
             self.pairs.swap_remove(i as usize);
         }
     }
@@ -450,13 +588,22 @@ impl Front {
             due[frame].clear();
             let threshold = guard + placement.radii[frame] * turn;
             let centre = &placement.centres[frame];
-            certificates.expired(centre, threshold, retest, &mut due[frame]);
+            let (rotation, translation) = placement.motion(frame);
+            let nodes = NodeBound {
+                rotation,
+                translation,
+                turn,
+                guard,
+            };
+            certificates.flagged(centre, threshold, &nodes, &mut due[frame]);
+            retest.extend(due[frame].iter().map(|&i| certificates.pairs[i as usize]));
         }
     }
 
     /// Replaces the pairs [`Front::due`] gave by where their new tests ended.
     fn settle(
         &mut self,
+        trees: [&DopTree; 2],
         turn: f64,
         due: &[Vec<u32>; 2],
         ended: &[FrontPair],
@@ -467,11 +614,11 @@ impl Front {
             certificates.remove(indices);
         }
         self.turn += turn;
-        self.add(ended, placement);
+        self.add(trees, ended, placement);
     }
 
     /// Adds where a traversal at `placement` ended.
-    fn add(&mut self, ended: &[FrontPair], placement: &Placement) {
+    fn add(&mut self, trees: [&DopTree; 2], ended: &[FrontPair], placement: &Placement) {
         self.scale = self.scale.max(placement.scale);
         let guard = CERTIFICATE_ROUNDING * self.scale;
         for &FrontPair { pair, ending } in ended {
@@ -482,11 +629,17 @@ impl Front {
                     along_b,
                 } => {
                     let frame = along_b as usize;
-                    let centre = &placement.centres[frame];
                     let [x, y, z] = direction.map(f64::from);
+                    let centre = &placement.centres[frame];
                     let expiry = gap - guard - (x * centre.x + y * centre.y + z * centre.z)
                         + placement.radii[frame] * self.turn;
-                    self.separated[frame].push(expiry, direction, pair);
+                    let node = if along_b { pair.0 } else { pair.1 };
+                    let sphere = &trees[1 - frame].spheres[node as usize];
+                    let (rotation, translation) = placement.motion(frame);
+                    let centre = rotation * sphere.centre() + translation;
+                    let anchor = gap - guard - (x * centre.x + y * centre.y + z * centre.z)
+                        + f64::from(sphere.radius) * self.turn;
+                    self.separated[frame].push((expiry, anchor), direction, sphere, pair);
                 }
                 Ending::Retest => self.leaves.push(pair),
             }
@@ -569,7 +722,10 @@ fn top_starts(a: &DopTree, b: &DopTree) -> Vec<(u32, u32)> {
 }
 
 thread_local! {
-    static PAIR_MEMORIES: RefCell<Vec<PairMemory>> = const { RefCell::new(Vec::new()) };
+    /// Boxed, so that taking a memory out of its slot and putting it back moves a pointer, not
+    /// the memory's few hundred bytes (a query far apart costs tens of nanoseconds in all).
+    static PAIR_MEMORIES: RefCell<Vec<Option<Box<PairMemory>>>> =
+        const { RefCell::new(Vec::new()) };
 }
 
 /// Whether and how a query can start from the remembered front.
@@ -589,16 +745,20 @@ impl PairMemory {
     }
 
     /// Takes this thread's memory of the pair `(a, b)` out of its slot (a blank one, keeping the
-    /// slot's buffers, if the slot remembers another pair).
-    fn take(a: &DopTree, b: &DopTree) -> PairMemory {
+    /// slot's buffers, if the slot remembers another pair; a new one if a query of this thread
+    /// already holds it).
+    fn take(a: &DopTree, b: &DopTree) -> Box<PairMemory> {
         PAIR_MEMORIES.with_borrow_mut(|memories| {
             if memories.is_empty() {
-                memories.resize_with(MEMORY_SLOTS, PairMemory::default);
+                memories.resize_with(MEMORY_SLOTS, || Some(Box::default()));
             }
-            let mut memory = std::mem::take(&mut memories[Self::slot((a.id, b.id))]);
+            let mut memory = memories[Self::slot((a.id, b.id))]
+                .take()
+                .unwrap_or_default();
             if memory.ids != (a.id, b.id) {
                 memory.ids = (a.id, b.id);
                 memory.witness = None;
+                memory.root_separation = None;
                 memory.front_pose = None;
             }
             memory
@@ -606,10 +766,10 @@ impl PairMemory {
     }
 
     /// Puts the memory back in its slot.
-    fn put_back(memory: PairMemory) {
+    fn put_back(memory: Box<PairMemory>) {
         PAIR_MEMORIES.with_borrow_mut(|memories| {
             let slot = Self::slot(memory.ids);
-            memories[slot] = memory;
+            memories[slot] = Some(memory);
         });
     }
 
@@ -630,7 +790,7 @@ impl PairMemory {
         {
             return true;
         }
-        let Some(pair) = affine_pair::<K>(a, b, b_to_a, centre_b) else {
+        let Some(pair) = affine_pair::<K>(a, b, b_to_a, centre_b, &mut self.root_separation) else {
             stats.bv_tests += 1;
             // The front, if any, stays valid: its pose is kept with it.
             self.remember_witness(None);
@@ -643,9 +803,9 @@ impl PairMemory {
                 a.ancestor(leaf_a, WITNESS_SEARCH_LEVELS),
                 b.ancestor(leaf_b, WITNESS_SEARCH_LEVELS),
             );
-            pair.run_walk::<K>(Walk::from(&[start]), stats)
+            pair.get().run_walk::<K>(Walk::from(&[start]), stats)
         });
-        let hit = near.or_else(|| self.search_from_front::<K>(a, b, &pair, stats, parallel));
+        let hit = near.or_else(|| self.search_from_front::<K>(&pair, stats, parallel));
         self.remember_witness(hit);
         hit.is_some()
     }
@@ -668,13 +828,12 @@ impl PairMemory {
     /// where it ended; one with a hit leaves the front as it was when it came from it.
     fn search_from_front<const K: usize>(
         &mut self,
-        a: &DopTree,
-        b: &DopTree,
-        pair: &TreePair<'_, AffineRealign<K>>,
+        pair: &LazyPair<'_, K>,
         stats: &mut QueryStats,
         parallel: bool,
     ) -> Option<[u32; 2]> {
-        let (carry, placement) = self.carry_front(a, b, pair);
+        let (a, b) = (pair.a, pair.b);
+        let (carry, placement) = self.carry_front(pair);
         // A restart costs about as much as the last complete front was large.
         let split = parallel
             && rayon::current_num_threads() > 1
@@ -691,15 +850,19 @@ impl PairMemory {
             }
             Carry::Restart { .. } => (&[(0, 0)], 0),
         };
-        let hit = if split {
-            pair.run_walk_parallel::<K>(starts, sequential, &mut self.ended, stats)
+        // Nothing due: the front proves the trees apart without a test (nor the set-up of one).
+        let hit = if starts.is_empty() {
+            None
+        } else if split {
+            pair.get()
+                .run_walk_parallel::<K>(starts, sequential, &mut self.ended, stats)
         } else {
             let walk = Walk {
                 starts,
                 stop: None,
                 front: Some(&mut self.ended),
             };
-            pair.run_walk::<K>(walk, stats)
+            pair.get().run_walk::<K>(walk, stats)
         };
         match carry {
             Carry::Advanced { .. } | Carry::Restart { keep_on_hit: true } if hit.is_some() => {
@@ -724,13 +887,11 @@ impl PairMemory {
     /// whatever it finds, so its front is kept. Returns whether any pair intersects.
     fn all_pairs<const K: usize>(
         &mut self,
-        a: &DopTree,
-        b: &DopTree,
-        pair: &TreePair<'_, AffineRealign<K>>,
+        pair: &LazyPair<'_, K>,
         stats: &mut QueryStats,
         out: &mut Vec<[u32; 2]>,
     ) -> bool {
-        let (carry, placement) = self.carry_front(a, b, pair);
+        let (carry, placement) = self.carry_front(pair);
         let starts: &[(u32, u32)] = match carry {
             Carry::Advanced { .. } => &self.retest,
             Carry::Restart { .. } => &[(0, 0)],
@@ -741,7 +902,9 @@ impl PairMemory {
             front: Some(&mut self.ended),
         };
         let found = out.len();
-        pair.sequential::<true, K>(walk, stats, out);
+        if !starts.is_empty() {
+            pair.get().sequential::<true, K>(walk, stats, out);
+        }
         self.keep_front(&carry, &placement, true, pair);
         out.len() > found
     }
@@ -754,17 +917,18 @@ impl PairMemory {
         carry: &Carry,
         placement: &Placement,
         complete: bool,
-        pair: &TreePair<'_, AffineRealign<K>>,
+        pair: &LazyPair<'_, K>,
     ) {
         match *carry {
             Carry::Advanced { turn } => {
                 self.front.steady =
                     (self.retest.len() as f64) < STEADY_DUE_SHARE * self.front.len() as f64;
-                self.front.settle(turn, &self.due, &self.ended, placement);
+                self.front
+                    .settle([pair.a, pair.b], turn, &self.due, &self.ended, placement);
             }
             Carry::Restart { .. } => {
                 self.front.restart();
-                self.front.add(&self.ended, placement);
+                self.front.add([pair.a, pair.b], &self.ended, placement);
                 self.front.fresh_len = None;
             }
         }
@@ -778,12 +942,8 @@ impl PairMemory {
     /// and `due`; also where the trees are for the certificates, and `ended` emptied for the
     /// walk. Says to restart when there is no front, B moved too far (beyond a fraction of the
     /// smaller radius), or the front grew too large.
-    fn carry_front<const K: usize>(
-        &mut self,
-        a: &DopTree,
-        b: &DopTree,
-        pair: &TreePair<'_, AffineRealign<K>>,
-    ) -> (Carry, Placement) {
+    fn carry_front<const K: usize>(&mut self, pair: &LazyPair<'_, K>) -> (Carry, Placement) {
+        let (a, b) = (pair.a, pair.b);
         let placement = Placement::new(a, b, &pair.rotation, &pair.translation);
         self.ended.clear();
         let Some((old_rotation, old_translation)) = &self.front_pose else {
@@ -845,35 +1005,164 @@ static NEXT_TREE_ID: AtomicU64 = AtomicU64::new(1);
 
 /// The query of `b` posed at `b_to_a` against `a` with the O(k) re-alignment, or `None` when
 /// [`roots_separated_along_offset`] already proves them apart (`centre_b`: B's centre in A's
-/// frame).
+/// frame; `root_separation`: how the roots were last proved apart, updated).
 fn affine_pair<'a, const K: usize>(
     a: &'a DopTree,
     b: &'a DopTree,
     b_to_a: &Isometry3<f64>,
     centre_b: &Point3<f64>,
-) -> Option<TreePair<'a, AffineRealign<K>>> {
-    let mut hints = CONE_HINTS.get();
-    let separated = roots_separated_along_offset(a, b, b_to_a, centre_b, &mut hints);
-    let pair = (!separated).then(|| {
-        TreePair::new(a, b, b_to_a, |rotation, translation| {
-            AffineRealign::<K>::new(a, b, rotation, translation, &mut hints)
-        })
-    });
-    CONE_HINTS.set(hints);
-    pair
+    root_separation: &mut Option<RootSeparation>,
+) -> Option<LazyPair<'a, K>> {
+    let separated = RootSeparation::still_holds(root_separation, a, b, b_to_a, centre_b) || {
+        let mut hints = CONE_HINTS.get();
+        let separated =
+            roots_separated_along_offset(a, b, b_to_a, centre_b, &mut hints, root_separation);
+        CONE_HINTS.set(hints);
+        separated
+    };
+    (!separated).then(|| LazyPair {
+        a,
+        b,
+        rotation: *b_to_a.rotation.to_rotation_matrix().matrix(),
+        translation: b_to_a.translation.vector,
+        pair: std::cell::OnceCell::new(),
+    })
 }
 
-/// Cheap start of a query, once the bounding spheres overlap: along the few orientations of A
-/// closest to the direction from A's centre to B's (`centre_b`, in A's frame), B's bounding
-/// sphere and then B's root re-aligned along that orientation only (one support cone instead of
-/// k) are tested against A's root. Pairs far apart end here.
+/// A query's two trees and B's pose in A's frame, with the traversal's set-up (the support cones
+/// of the O(k) re-alignment) made on first use: a query that the remembered front answers alone
+/// never pays for it.
+struct LazyPair<'a, const K: usize> {
+    a: &'a DopTree,
+    b: &'a DopTree,
+    rotation: Matrix3<f64>,
+    translation: Vector3<f64>,
+    pair: std::cell::OnceCell<TreePair<'a, AffineRealign<K>>>,
+}
+
+impl<'a, const K: usize> LazyPair<'a, K> {
+    /// The traversal's set-up, made now if not yet.
+    fn get(&self) -> &TreePair<'a, AffineRealign<K>> {
+        self.pair.get_or_init(|| {
+            let mut hints = CONE_HINTS.get();
+            let realigner = AffineRealign::<K>::new(
+                self.a,
+                self.b,
+                &self.rotation,
+                &self.translation,
+                &mut hints,
+            );
+            CONE_HINTS.set(hints);
+            TreePair {
+                a: self.a,
+                b: self.b,
+                rotation: self.rotation,
+                translation: self.translation,
+                realigner,
+            }
+        })
+    }
+}
+
+/// How two roots were proved apart: B's points lay at least `gap` beyond A's root along A's
+/// orientation `slot` (`normal`, A's frame), with B's centre at `centre` and B's rotation
+/// `rotation` (both in A's frame).
+#[derive(Debug, Clone, Copy)]
+struct RootSeparation {
+    slot: u8,
+    normal: Vector3<f64>,
+    gap: f64,
+    centre: Vector3<f64>,
+    rotation: UnitQuaternion<f64>,
+}
+
+impl RootSeparation {
+    /// Whether the last proof, if any, still holds with B at `b_to_a` (its centre at
+    /// `centre_b`): B's points moved along the normal by at least the centre's move less B's
+    /// radius times `|R - R0|`, which is `2 sin(θ / 2)` for the angle θ between the rotations, so
+    /// its square is `4 (1 - (q . q0)^2)`: compared in squares, without a square root.
+    fn still_holds(
+        proof: &Option<Self>,
+        a: &DopTree,
+        b: &DopTree,
+        b_to_a: &Isometry3<f64>,
+        centre_b: &Point3<f64>,
+    ) -> bool {
+        let Some(proof) = proof else {
+            return false;
+        };
+        let scale = root_scale(a, b_to_a) + b.bounding_radius;
+        let gap = proof.gap + proof.normal.dot(&(centre_b.coords - proof.centre))
+            - CERTIFICATE_ROUNDING * scale;
+        let cos_half = proof.rotation.coords.dot(&b_to_a.rotation.coords);
+        // The small term covers the rounding of 1 - cos² for nearly equal rotations.
+        let turn_squared = 4.0 * (1.0 - cos_half * cos_half) + 1e-15;
+        gap > 0.0 && gap * gap > b.bounding_radius * b.bounding_radius * turn_squared
+    }
+}
+
+/// A bound on the coordinates of a root test at `b_to_a`, for its rounding margins: `|t|`
+/// (bounded by its 1-norm, which needs no square root) plus A's largest offset.
+fn root_scale(a: &DopTree, b_to_a: &Isometry3<f64>) -> f64 {
+    b_to_a.translation.vector.abs().sum() + a.max_abs_offset() as f64
+}
+
+/// Cheap start of a query, once the bounding spheres overlap and the last proof that the roots
+/// are apart (`root_separation`) no longer holds: along that proof's orientation, then along
+/// the few orientations of A closest to the direction from A's centre
+/// to B's (`centre_b`, in A's frame), B's bounding sphere and then B's root re-aligned along that
+/// orientation only (one support cone instead of k) are tested against A's root. Pairs far
+/// apart end here; `root_separation` keeps the proof found.
 fn roots_separated_along_offset(
     a: &DopTree,
     b: &DopTree,
     b_to_a: &Isometry3<f64>,
     centre_b: &Point3<f64>,
     hints: &mut ConeHints,
+    root_separation: &mut Option<RootSeparation>,
 ) -> bool {
+    let translation = &b_to_a.translation.vector;
+    // The offsets are f32: the same margin as in the traversal covers their rounding.
+    let scale = root_scale(a, b_to_a);
+    let d = b.node_offsets(0);
+    // The gap by which B lies beyond A's root along orientation `slot`, if it does.
+    let gap_along = |slot: usize, hint: &mut u8| {
+        let a_max = a.node_offsets(0)[slot] as f64;
+        let normal = a.set.normal(slot);
+        let sphere_gap = normal.dot(&centre_b.coords) - b.bounding_radius - a_max;
+        if sphere_gap > 0.0 {
+            return Some(sphere_gap);
+        }
+        let cone = b
+            .set
+            .support_cone_hinted(&b_to_a.rotation.inverse_transform_vector(&-normal), hint);
+        let b_support = (0..3)
+            .map(|l| cone.lambda[l] * d[cone.planes[l] as usize] as f64)
+            .sum::<f64>()
+            - normal.dot(translation);
+        let margin =
+            rounding_margin(cone.lambda.iter().sum::<f64>() * b.max_abs_offset() as f64 + scale)
+                as f64;
+        let gap = -(a_max + b_support + margin);
+        (gap > 0.0).then_some(gap)
+    };
+    let last = root_separation.map(|proof| usize::from(proof.slot));
+    let mut prove = |slot: usize| {
+        let gap = gap_along(slot, &mut hints[slot])?;
+        *root_separation = Some(RootSeparation {
+            slot: slot as u8,
+            normal: a.set.normal(slot),
+            gap,
+            centre: centre_b.coords,
+            rotation: b_to_a.rotation,
+        });
+        Some(())
+    };
+    if let Some(last) = last
+        && prove(last).is_some()
+    {
+        return true;
+    }
     let offset = centre_b - a.bounding_centre;
     // Slot i compares A's maximum along n_i with B's minimum along n_i: promising when B lies
     // far along n_i.
@@ -885,33 +1174,9 @@ fn roots_separated_along_offset(
             probes.sort_by(|x, y| y.0.total_cmp(&x.0));
         }
     }
-    let translation = &b_to_a.translation.vector;
-    let d = b.node_offsets(0);
-    for &(_, slot) in &probes {
-        let a_max = a.node_offsets(0)[slot] as f64;
-        let direction = -a.set.normal(slot);
-        if a_max < -direction.dot(&centre_b.coords) - b.bounding_radius {
-            return true;
-        }
-        let cone = b.set.support_cone_hinted(
-            &b_to_a.rotation.inverse_transform_vector(&direction),
-            &mut hints[slot],
-        );
-        let b_support = (0..3)
-            .map(|l| cone.lambda[l] * d[cone.planes[l] as usize] as f64)
-            .sum::<f64>()
-            + direction.dot(translation);
-        // The offsets are f32: the same margin as in the traversal covers their rounding.
-        let margin = rounding_margin(
-            cone.lambda.iter().sum::<f64>() * b.max_abs_offset() as f64
-                + translation.norm()
-                + a.max_abs_offset() as f64,
-        ) as f64;
-        if a_max + b_support + margin < 0.0 {
-            return true;
-        }
-    }
-    false
+    probes
+        .iter()
+        .any(|&(_, slot)| Some(slot) != last && prove(slot).is_some())
 }
 
 /// Number of orientations tried by [`roots_separated_along_offset`] before a full query.
@@ -945,6 +1210,7 @@ struct TreeBuilder<'a> {
     parents: Vec<u32>,
     triangle_ranges: Vec<[u32; 2]>,
     offsets: Vec<f32>,
+    spheres: Vec<NodeSphere>,
 }
 
 impl<'a> TreeBuilder<'a> {
@@ -976,6 +1242,7 @@ impl<'a> TreeBuilder<'a> {
             parents: Vec::new(),
             triangle_ranges: Vec::new(),
             offsets: Vec::new(),
+            spheres: Vec::new(),
         }
     }
 
@@ -1006,6 +1273,7 @@ impl<'a> TreeBuilder<'a> {
             parents: self.parents,
             triangle_ranges: self.triangle_ranges,
             offsets: self.offsets,
+            spheres: self.spheres,
             triangles: self
                 .order
                 .iter()
@@ -1022,6 +1290,7 @@ impl<'a> TreeBuilder<'a> {
         for _ in 0..count {
             self.parents.push(parent as u32);
             self.triangle_ranges.push([0, 0]);
+            self.spheres.push(NodeSphere::default());
             self.nodes.push(Node {
                 first: 0,
                 count: 0,
@@ -1042,6 +1311,11 @@ impl<'a> TreeBuilder<'a> {
         }
         self.offsets[index * k..(index + 1) * k].copy_from_slice(&dop);
         self.triangle_ranges[index] = [start as u32, end as u32];
+        self.spheres[index] = NodeSphere::around(
+            self.order[start..end]
+                .iter()
+                .flat_map(|&t| self.triangles[t as usize]),
+        );
         let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max);
         let count = end - start;
         if count <= self.leaf_size {
@@ -1165,6 +1439,37 @@ impl<'a> TreeBuilder<'a> {
     }
 }
 
+/// A sphere enclosing a node's triangles, in its tree's frame.
+#[derive(Debug, Clone, Copy, Default)]
+struct NodeSphere {
+    centre: [f32; 3],
+    radius: f32,
+}
+
+impl NodeSphere {
+    /// The sphere centred on the bounding box of `points`, with the radius rounded up so that
+    /// every point lies within it from the `f32` centre, widened by the certificates' rounding
+    /// guard (their directions are unit only to `f32` rounding).
+    fn around(points: impl Iterator<Item = Point3<f64>> + Clone) -> Self {
+        let (lo, hi) = points.clone().fold(
+            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
+            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+        );
+        let centre = ((lo + hi) * 0.5).map(|x| x as f32);
+        let radius = points
+            .map(|p| (p.coords - centre.cast::<f64>()).norm())
+            .fold(0.0, f64::max);
+        NodeSphere {
+            centre: centre.into(),
+            radius: round_up(radius * (1.0 + CERTIFICATE_ROUNDING)),
+        }
+    }
+
+    fn centre(&self) -> Vector3<f64> {
+        Vector3::from(self.centre).cast::<f64>()
+    }
+}
+
 /// `into[i] = max(into[i], from[i])`, written so that it compiles to vector max instructions.
 fn merge_max(into: &mut [f32], from: &[f32]) {
     for (d, &s) in into.iter_mut().zip(from) {
@@ -1244,7 +1549,8 @@ impl<const K: usize> AffineRealign<K> {
         let mut base = [0f32; K];
         let mut lambda_sum_max = 0.0f64;
         let r = rotation;
-        for (i, hint) in hints.iter_mut().enumerate().take(K) {
+        let (half, half_b) = (K / 2, b.k / 2);
+        for (i, hint) in hints.iter_mut().enumerate().take(half) {
             let direction = -a.set.normal(i);
             // u = Rᵀ direction, written out: nalgebra's generic product is slower here.
             let u = Vector3::new(
@@ -1256,16 +1562,22 @@ impl<const K: usize> AffineRealign<K> {
                 .set
                 .cone_if_contains(*hint, &u)
                 .unwrap_or_else(|| b.set.support_cone_hinted(&u, hint));
+            // The opposite direction -u is the same combination of the opposite normals (normal
+            // p + k/2 is -n_p): half the cone searches.
             for l in 0..3 {
-                columns[cone.planes[l] as usize][i] = cone.lambda[l] as f32;
+                let plane = cone.planes[l] as usize;
+                let opposite = (plane + half_b) % b.k;
+                columns[plane][i] = cone.lambda[l] as f32;
+                columns[opposite][i + half] = cone.lambda[l] as f32;
             }
             lambda_sum_max = lambda_sum_max.max(cone.lambda[0] + cone.lambda[1] + cone.lambda[2]);
-            base[i] = direction.dot(translation) as f32;
+            let along = direction.dot(translation);
+            base[i] = along as f32;
+            base[i + half] = -along as f32;
         }
+        let shift = translation.norm();
         let margin = rounding_margin(
-            lambda_sum_max * b.max_abs_offset() as f64
-                + translation.norm()
-                + a.max_abs_offset() as f64,
+            lambda_sum_max * b.max_abs_offset() as f64 + shift + a.max_abs_offset() as f64,
         );
         for x in &mut base {
             *x += margin;
@@ -1273,7 +1585,7 @@ impl<const K: usize> AffineRealign<K> {
         let directions: [[f32; K]; 3] =
             std::array::from_fn(|c| std::array::from_fn(|i| -a.set.normal(i)[c] as f32));
         // A moved corner is within |t| + |centre_B| + radius_B of A's origin.
-        let reach = translation.norm() + b.bounding_centre.coords.norm() + b.bounding_radius;
+        let reach = shift + b.bounding_centre.coords.norm() + b.bounding_radius;
         AffineRealign {
             columns,
             base,
@@ -2116,5 +2428,82 @@ impl<R> TreePair<'_, R> {
         found.pairs = x.pairs;
         found.pairs.extend_from_slice(&y.pairs);
         found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Translation3, UnitQuaternion};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::collision::oracle_tests::{random_soup, torus};
+
+    /// Every corner of every node's triangles, with the node.
+    fn node_corners(tree: &DopTree) -> impl Iterator<Item = (usize, Point3<f64>)> + '_ {
+        (0..tree.node_count()).flat_map(move |node| {
+            tree.node_triangles(node as u32)
+                .iter()
+                .flatten()
+                .map(move |&corner| (node, corner))
+        })
+    }
+
+    #[test]
+    fn node_spheres_hold_their_triangles() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for mesh in [torus(0.3, 20, 10), random_soup(&mut rng, 300, 0.2)] {
+            let tree = DopTree::build(&mesh);
+            for (node, corner) in node_corners(&tree) {
+                let sphere = &tree.spheres[node];
+                let distance = (corner.coords - sphere.centre()).norm();
+                assert!(
+                    distance <= f64::from(sphere.radius),
+                    "node {node}: corner at {distance} from a sphere of radius {}",
+                    sphere.radius
+                );
+            }
+            // Not the tree's sphere everywhere: a leaf's is about its triangle's size.
+            let leaf = tree.nodes.iter().position(Node::is_leaf).unwrap();
+            assert!(f64::from(tree.spheres[leaf].radius) < 0.5 * tree.bounding_radius);
+        }
+    }
+
+    #[test]
+    fn affine_realignment_encloses_every_moved_node() {
+        // Support cones are searched for half of A's directions and mirrored for the other
+        // half: each re-aligned node must still bound its corners moved into A's frame.
+        const K: usize = 18;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let a = DopTree::build(&torus(0.3, 12, 6));
+        let b = DopTree::build(&random_soup(&mut rng, 200, 0.3));
+        for _ in 0..50 {
+            let axis =
+                nalgebra::Unit::new_normalize(Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)));
+            let pose = Isometry3::from_parts(
+                Translation3::from(Vector3::from_fn(|_, _| rng.random_range(-2.0..2.0))),
+                UnitQuaternion::from_axis_angle(&axis, rng.random_range(-3.0..3.0)),
+            );
+            let rotation = *pose.rotation.to_rotation_matrix().matrix();
+            let translation = pose.translation.vector;
+            let mut hints = [u8::MAX; MAX_K];
+            let realigner = AffineRealign::<K>::new(&a, &b, &rotation, &translation, &mut hints);
+            let mut realigned = vec![[0f32; K]; b.node_count()];
+            for (node, out) in realigned.iter_mut().enumerate() {
+                realigner.realign::<false>(&b, node, out);
+            }
+            for (node, corner) in node_corners(&b) {
+                let moved = pose * corner;
+                for (i, &offset) in realigned[node].iter().enumerate() {
+                    // Stored opposite: slot i bounds B along -n_i.
+                    let support = -a.set.normal(i).dot(&moved.coords);
+                    assert!(
+                        support <= f64::from(offset) + 1e-9,
+                        "node {node} slot {i}: {support} beyond {offset}"
+                    );
+                }
+            }
+        }
     }
 }

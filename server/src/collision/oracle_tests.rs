@@ -9,6 +9,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::triangle::triangles_intersect;
 use super::*;
+use crate::bench::tumble::tumble_pose;
 use crate::geometry::{TriMesh, shapes};
 
 /// A soup of `n` random triangles of about `size` inside the box [-1, 1]^3.
@@ -408,6 +409,88 @@ fn coherent_all_pairs_queries_agree_with_brute_force() {
             "k {k}: {} bounding-volume tests carried both ways, {} from the roots one way",
             coherent.bv_tests,
             from_roots.bv_tests
+        );
+    }
+}
+
+#[test]
+fn tumbling_queries_agree_with_brute_force() {
+    // Two tori turning about two axes at every step (the tumbling benchmark's motion, in larger
+    // steps), from apart to near-touching: a certificate whose tree-wide bound expires at every
+    // turn lives on while its node's own sphere keeps the gap, and the roots' separation proof
+    // while the gap outlasts the turn; both must expire in time. First-hit and all-pairs queries
+    // must give brute force's answers, and carrying the memory must at least halve the work of
+    // the same all-pairs queries from the roots.
+    let a = torus(0.35, 20, 10);
+    let b = torus(0.35, 20, 10);
+    // A fifth of a revolution at each distance, in steps of 0.3 degrees about each axis.
+    let (steps, taken) = (1200, 240);
+    for (k, leaf_size) in [(18, 1), (24, 1), (14, 2)] {
+        let [da, db] = dop_trees([&a, &b], k, leaf_size);
+        let (mut coherent, mut from_roots) = (QueryStats::default(), QueryStats::default());
+        let (mut hits, mut misses) = (0, 0);
+        for d in [2.8, 2.5, 2.3, 2.1] {
+            for s in 0..taken {
+                let pose = tumble_pose(d, s, steps);
+                let context = format!("k {k} leaf {leaf_size} d {d} step {s}");
+                let expected = brute_force_pairs(&a, &b, &pose);
+                let hit = da.intersects(&db, &pose, &mut QueryStats::default());
+                assert_eq!(hit, !expected.is_empty(), "{context}, first hit");
+                if s % 2 == 0 {
+                    let mut pairs = Vec::new();
+                    da.intersecting_pairs(&db, &pose, &mut pairs, &mut coherent);
+                    assert_eq!(sorted(pairs), expected, "{context}, all pairs");
+                    let mut unused = Vec::new();
+                    da.intersecting_pairs_parallel(&db, &pose, &mut unused, &mut from_roots);
+                }
+                hits += hit as usize;
+                misses += !hit as usize;
+            }
+        }
+        assert!(
+            hits > 200 && misses > 200,
+            "k {k}: {hits} hits, {misses} misses"
+        );
+        assert!(
+            2 * coherent.bv_tests < from_roots.bv_tests,
+            "k {k}: {} bounding-volume tests carried, {} from the roots",
+            coherent.bv_tests,
+            from_roots.bv_tests
+        );
+    }
+}
+
+#[test]
+fn a_spinning_rod_agrees_with_brute_force() {
+    // A rod whose centre stays put beside a torus, turning a degree a step: upright, the roots
+    // are apart by a wide gap and the proof of it is carried from step to step; as the rod
+    // swings down, its tip reaches into the ring although its centre never moved, so the proof
+    // must expire with the turn alone.
+    let torus = torus(0.35, 16, 8);
+    let rod = shapes::cylinder(0.1, 4.0, 200);
+    for (k, leaf_size) in [(18, 1), (24, 2), (6, 1)] {
+        let [dt, dr] = dop_trees([&torus, &rod], k, leaf_size);
+        let (mut hits, mut misses) = (0, 0);
+        for degree in 0..360 {
+            let pose = Isometry3::from_parts(
+                Translation3::new(2.9, 0.0, 0.0),
+                UnitQuaternion::from_axis_angle(&Vector3::y_axis(), (degree as f64).to_radians()),
+            );
+            let expected = brute_force_pairs(&torus, &rod, &pose);
+            let context = format!("k {k} leaf {leaf_size} at {degree} degrees");
+            let hit = dt.intersects(&dr, &pose, &mut QueryStats::default());
+            assert_eq!(hit, !expected.is_empty(), "{context}, first hit");
+            if degree % 3 == 0 {
+                let mut pairs = Vec::new();
+                dt.intersecting_pairs(&dr, &pose, &mut pairs, &mut QueryStats::default());
+                assert_eq!(sorted(pairs), expected, "{context}, all pairs");
+            }
+            hits += hit as usize;
+            misses += !hit as usize;
+        }
+        assert!(
+            hits > 20 && misses > 200,
+            "k {k}: {hits} hits, {misses} misses"
         );
     }
 }
