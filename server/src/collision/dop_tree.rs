@@ -65,6 +65,10 @@ pub(crate) struct Node {
     count: u32,
     /// Largest slab width of the node's DOP: the traversal descends the larger node.
     size: f32,
+    /// A sphere around the node's triangles: how far its points can move when the tree turns
+    /// about another point, for the certificates of a [`Front`]. Kept in the node, which the
+    /// traversal has just read wherever it records a certificate.
+    sphere: NodeSphere,
 }
 
 impl Node {
@@ -87,9 +91,6 @@ pub struct DopTree {
     triangle_ranges: Vec<[u32; 2]>,
     /// `k` offsets per node: `offsets[node * k + i] >= max over the node's triangles of n_i . x`.
     offsets: Vec<f32>,
-    /// A sphere around each node's triangles (centre, radius): how far a node's points can move
-    /// when the tree turns about another point, for the certificates of a [`Front`].
-    spheres: Vec<NodeSphere>,
     /// Triangles in leaf order.
     triangles: Vec<Triangle>,
     /// Original index (in the mesh) of each triangle in leaf order.
@@ -130,11 +131,7 @@ impl DopTree {
 
     /// Heap bytes used by the tree (nodes, offsets, triangles and their ids).
     pub fn bytes(&self) -> usize {
-        self.nodes.len()
-            * (size_of::<Node>()
-                + size_of::<u32>()
-                + size_of::<[u32; 2]>()
-                + size_of::<NodeSphere>())
+        self.nodes.len() * (size_of::<Node>() + size_of::<u32>() + size_of::<[u32; 2]>())
             + self.offsets.len() * size_of::<f32>()
             + self.triangles.len() * (size_of::<Triangle>() + size_of::<u32>())
     }
@@ -621,6 +618,7 @@ impl Front {
     fn add(&mut self, trees: [&DopTree; 2], ended: &[FrontPair], placement: &Placement) {
         self.scale = self.scale.max(placement.scale);
         let guard = CERTIFICATE_ROUNDING * self.scale;
+        let motions = [placement.motion(0), placement.motion(1)];
         for &FrontPair { pair, ending } in ended {
             match ending {
                 Ending::Separated {
@@ -634,8 +632,8 @@ impl Front {
                     let expiry = gap - guard - (x * centre.x + y * centre.y + z * centre.z)
                         + placement.radii[frame] * self.turn;
                     let node = if along_b { pair.0 } else { pair.1 };
-                    let sphere = &trees[1 - frame].spheres[node as usize];
-                    let (rotation, translation) = placement.motion(frame);
+                    let sphere = &trees[1 - frame].nodes[node as usize].sphere;
+                    let (rotation, translation) = &motions[frame];
                     let centre = rotation * sphere.centre() + translation;
                     let anchor = gap - guard - (x * centre.x + y * centre.y + z * centre.z)
                         + f64::from(sphere.radius) * self.turn;
@@ -1210,7 +1208,6 @@ struct TreeBuilder<'a> {
     parents: Vec<u32>,
     triangle_ranges: Vec<[u32; 2]>,
     offsets: Vec<f32>,
-    spheres: Vec<NodeSphere>,
 }
 
 impl<'a> TreeBuilder<'a> {
@@ -1242,7 +1239,6 @@ impl<'a> TreeBuilder<'a> {
             parents: Vec::new(),
             triangle_ranges: Vec::new(),
             offsets: Vec::new(),
-            spheres: Vec::new(),
         }
     }
 
@@ -1273,7 +1269,6 @@ impl<'a> TreeBuilder<'a> {
             parents: self.parents,
             triangle_ranges: self.triangle_ranges,
             offsets: self.offsets,
-            spheres: self.spheres,
             triangles: self
                 .order
                 .iter()
@@ -1290,11 +1285,11 @@ impl<'a> TreeBuilder<'a> {
         for _ in 0..count {
             self.parents.push(parent as u32);
             self.triangle_ranges.push([0, 0]);
-            self.spheres.push(NodeSphere::default());
             self.nodes.push(Node {
                 first: 0,
                 count: 0,
                 size: 0.0,
+                sphere: NodeSphere::default(),
             });
         }
         self.offsets.resize(self.nodes.len() * self.k, 0.0);
@@ -1311,7 +1306,7 @@ impl<'a> TreeBuilder<'a> {
         }
         self.offsets[index * k..(index + 1) * k].copy_from_slice(&dop);
         self.triangle_ranges[index] = [start as u32, end as u32];
-        self.spheres[index] = NodeSphere::around(
+        let sphere = NodeSphere::around(
             self.order[start..end]
                 .iter()
                 .flat_map(|&t| self.triangles[t as usize]),
@@ -1323,6 +1318,7 @@ impl<'a> TreeBuilder<'a> {
                 first: start as u32,
                 count: count as u32,
                 size,
+                sphere,
             };
             return;
         }
@@ -1332,6 +1328,7 @@ impl<'a> TreeBuilder<'a> {
             first: children as u32,
             count: 0,
             size,
+            sphere,
         };
         self.build_node(children, start, mid);
         self.build_node(children + 1, mid, end);
@@ -2456,7 +2453,7 @@ mod tests {
         for mesh in [torus(0.3, 20, 10), random_soup(&mut rng, 300, 0.2)] {
             let tree = DopTree::build(&mesh);
             for (node, corner) in node_corners(&tree) {
-                let sphere = &tree.spheres[node];
+                let sphere = &tree.nodes[node].sphere;
                 let distance = (corner.coords - sphere.centre()).norm();
                 assert!(
                     distance <= f64::from(sphere.radius),
@@ -2466,7 +2463,7 @@ mod tests {
             }
             // Not the tree's sphere everywhere: a leaf's is about its triangle's size.
             let leaf = tree.nodes.iter().position(Node::is_leaf).unwrap();
-            assert!(f64::from(tree.spheres[leaf].radius) < 0.5 * tree.bounding_radius);
+            assert!(f64::from(tree.nodes[leaf].sphere.radius) < 0.5 * tree.bounding_radius);
         }
     }
 
