@@ -46,7 +46,7 @@ use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
 use super::orientation::OrientationSet;
 use super::triangle::{Triangle, triangles_intersect};
 use super::{MeshCollider, QueryStats};
-use crate::geometry::TriMesh;
+use crate::geometry::{TriMesh, bounding_box_of, bounding_sphere_of};
 
 /// Default number of triangles per leaf (the fastest in the tumbling benchmark).
 pub const DEFAULT_LEAF_SIZE: usize = 1;
@@ -628,15 +628,20 @@ impl Front {
                 } => {
                     let frame = along_b as usize;
                     let [x, y, z] = direction.map(f64::from);
-                    let centre = &placement.centres[frame];
-                    let expiry = gap - guard - (x * centre.x + y * centre.y + z * centre.z)
-                        + placement.radii[frame] * self.turn;
+                    // `gap - guard - direction . centre + radius * turn`, for the moving tree
+                    // and for the moving node.
+                    let bound = |centre: &Vector3<f64>, radius: f64| {
+                        gap - guard - (x * centre.x + y * centre.y + z * centre.z)
+                            + radius * self.turn
+                    };
+                    let expiry = bound(&placement.centres[frame], placement.radii[frame]);
                     let node = if along_b { pair.0 } else { pair.1 };
                     let sphere = &trees[1 - frame].nodes[node as usize].sphere;
                     let (rotation, translation) = &motions[frame];
-                    let centre = rotation * sphere.centre() + translation;
-                    let anchor = gap - guard - (x * centre.x + y * centre.y + z * centre.z)
-                        + f64::from(sphere.radius) * self.turn;
+                    let anchor = bound(
+                        &(rotation * sphere.centre() + translation),
+                        f64::from(sphere.radius),
+                    );
                     self.separated[frame].push((expiry, anchor), direction, sphere, pair);
                 }
                 Ending::Retest => self.leaves.push(pair),
@@ -1012,11 +1017,9 @@ fn affine_pair<'a, const K: usize>(
     root_separation: &mut Option<RootSeparation>,
 ) -> Option<LazyPair<'a, K>> {
     let separated = RootSeparation::still_holds(root_separation, a, b, b_to_a, centre_b) || {
-        let mut hints = CONE_HINTS.get();
-        let separated =
-            roots_separated_along_offset(a, b, b_to_a, centre_b, &mut hints, root_separation);
-        CONE_HINTS.set(hints);
-        separated
+        with_cone_hints(&CONE_HINTS, |hints| {
+            roots_separated_along_offset(a, b, b_to_a, centre_b, hints, root_separation)
+        })
     };
     (!separated).then(|| LazyPair {
         a,
@@ -1042,15 +1045,9 @@ impl<'a, const K: usize> LazyPair<'a, K> {
     /// The traversal's set-up, made now if not yet.
     fn get(&self) -> &TreePair<'a, AffineRealign<K>> {
         self.pair.get_or_init(|| {
-            let mut hints = CONE_HINTS.get();
-            let realigner = AffineRealign::<K>::new(
-                self.a,
-                self.b,
-                &self.rotation,
-                &self.translation,
-                &mut hints,
-            );
-            CONE_HINTS.set(hints);
+            let realigner = with_cone_hints(&CONE_HINTS, |hints| {
+                AffineRealign::<K>::new(self.a, self.b, &self.rotation, &self.translation, hints)
+            });
             TreePair {
                 a: self.a,
                 b: self.b,
@@ -1193,6 +1190,18 @@ thread_local! {
         const { std::cell::Cell::new([u8::MAX; MAX_K]) };
 }
 
+/// Runs `f` with this thread's cone hints in `hints` (one of the two above), keeping what it
+/// leaves in them for the next query.
+fn with_cone_hints<T>(
+    hints: &'static std::thread::LocalKey<std::cell::Cell<ConeHints>>,
+    f: impl FnOnce(&mut ConeHints) -> T,
+) -> T {
+    let mut current = hints.get();
+    let result = f(&mut current);
+    hints.set(current);
+    result
+}
+
 /// Top-down construction state.
 struct TreeBuilder<'a> {
     set: &'a OrientationSet,
@@ -1248,17 +1257,7 @@ impl<'a> TreeBuilder<'a> {
         let max_abs_offset = self.offsets[..self.k]
             .iter()
             .fold(0.0f32, |m, d| m.max(d.abs()));
-        let (lo, hi) = self.triangles.iter().flatten().fold(
-            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
-            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
-        );
-        let bounding_centre = Point3::from((lo + hi) * 0.5);
-        let radius = self
-            .triangles
-            .iter()
-            .flatten()
-            .map(|p| (p - bounding_centre).norm())
-            .fold(0.0, f64::max);
+        let (bounding_centre, radius) = bounding_sphere_of(self.triangles.iter().flatten());
         DopTree {
             id: NEXT_TREE_ID.fetch_add(1, Ordering::Relaxed),
             bounding_centre,
@@ -1309,7 +1308,7 @@ impl<'a> TreeBuilder<'a> {
         let sphere = NodeSphere::around(
             self.order[start..end]
                 .iter()
-                .flat_map(|&t| self.triangles[t as usize]),
+                .flat_map(|&t| &self.triangles[t as usize]),
         );
         let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max);
         let count = end - start;
@@ -1447,12 +1446,9 @@ impl NodeSphere {
     /// The sphere centred on the bounding box of `points`, with the radius rounded up so that
     /// every point lies within it from the `f32` centre, widened by the certificates' rounding
     /// guard (their directions are unit only to `f32` rounding).
-    fn around(points: impl Iterator<Item = Point3<f64>> + Clone) -> Self {
-        let (lo, hi) = points.clone().fold(
-            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
-            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
-        );
-        let centre = ((lo + hi) * 0.5).map(|x| x as f32);
+    fn around<'a>(points: impl Iterator<Item = &'a Point3<f64>> + Clone) -> Self {
+        let (lo, hi) = bounding_box_of(points.clone());
+        let centre = nalgebra::center(&lo, &hi).coords.map(|x| x as f32);
         let radius = points
             .map(|p| (p.coords - centre.cast::<f64>()).norm())
             .fold(0.0, f64::max);
@@ -1608,11 +1604,9 @@ impl<const K: usize> Realign<K> for AffineRealign<K> {
         let reverse = self.reverse.get_or_init(|| {
             // A's nodes in B's frame: rotation Rᵀ, translation -Rᵀ t.
             let inverse = self.rotation.transpose();
-            let mut hints = REVERSE_CONE_HINTS.get();
-            let reverse =
-                AffineRealign::new(b, a, &inverse, &-(inverse * self.translation), &mut hints);
-            REVERSE_CONE_HINTS.set(hints);
-            Box::new(reverse)
+            Box::new(with_cone_hints(&REVERSE_CONE_HINTS, |hints| {
+                AffineRealign::new(b, a, &inverse, &-(inverse * self.translation), hints)
+            }))
         });
         Some(reverse)
     }

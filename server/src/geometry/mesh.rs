@@ -11,6 +11,30 @@ use thiserror::Error;
 /// A point in a mesh's own frame, in metres.
 pub type Point = Point3<f64>;
 
+/// The axis-aligned bounding box of `points` as (minimum corner, maximum corner); inverted
+/// (`f64::MAX` above `f64::MIN`) when there are none.
+pub fn bounding_box_of<'a>(points: impl IntoIterator<Item = &'a Point>) -> (Point, Point) {
+    points.into_iter().fold(
+        (
+            Point::from(Vector3::repeat(f64::MAX)),
+            Point::from(Vector3::repeat(f64::MIN)),
+        ),
+        |(lo, hi), p| (lo.inf(p), hi.sup(p)),
+    )
+}
+
+/// The centre of the bounding box of `points` and the radius of the sphere around it that holds
+/// every one of them.
+pub fn bounding_sphere_of<'a>(points: impl IntoIterator<Item = &'a Point> + Clone) -> (Point, f64) {
+    let (lo, hi) = bounding_box_of(points.clone());
+    let centre = nalgebra::center(&lo, &hi);
+    let radius = points
+        .into_iter()
+        .map(|p| (p - centre).norm())
+        .fold(0.0, f64::max);
+    (centre, radius)
+}
+
 /// Why a mesh was refused.
 #[derive(Debug, Error, PartialEq)]
 pub enum MeshError {
@@ -122,26 +146,13 @@ impl TriMesh {
 
     /// The axis-aligned bounding box as (minimum corner, maximum corner).
     pub fn bounding_box(&self) -> (Point, Point) {
-        let mut lo = self.vertices[0];
-        let mut hi = self.vertices[0];
-        for v in &self.vertices {
-            lo = lo.inf(v);
-            hi = hi.sup(v);
-        }
-        (lo, hi)
+        bounding_box_of(&self.vertices)
     }
 
     /// The centre of the bounding box and the radius of the sphere around it that holds every
     /// vertex: a cheap bound for culling, and the pivot and reach of a grasped part.
     pub fn bounding_sphere(&self) -> (Point, f64) {
-        let (lo, hi) = self.bounding_box();
-        let centre = nalgebra::center(&lo, &hi);
-        let radius = self
-            .vertices
-            .iter()
-            .map(|v| (v - centre).norm())
-            .fold(0.0, f64::max);
-        (centre, radius)
+        bounding_sphere_of(&self.vertices)
     }
 
     /// A copy with every vertex mapped by `f` (translation, rotation, scaling); triangles whose

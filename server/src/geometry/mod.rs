@@ -10,5 +10,5 @@ pub mod weld;
 pub use adjacency::EdgeAdjacency;
 pub use hull::{ConvexHull, HullSource};
 pub use io::{GeometryError, load_mesh, parse_mesh_spec, write_obj};
-pub use mesh::{CleanupReport, MeshError, Point, TriMesh};
+pub use mesh::{CleanupReport, MeshError, Point, TriMesh, bounding_box_of, bounding_sphere_of};
 pub use weld::weld;

@@ -410,7 +410,7 @@ mod tests {
     use nalgebra::{Translation3, UnitQuaternion};
 
     use super::*;
-    use crate::geometry::shapes;
+    use crate::geometry::{bounding_box_of, shapes};
     use crate::grasping::model::tests::right_hand;
 
     #[test]
@@ -465,10 +465,7 @@ mod tests {
         assert!(contact.points.iter().all(|p| every.contains(p)));
         // Spread: the patch's extent across the tube's side (y and z; x is the depth) cut into
         // 6 x 6 cells; the kept points must reach nine in ten of the cells that any crossing reaches.
-        let (lo, hi) = every.iter().fold(
-            (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)),
-            |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
-        );
+        let (lo, hi) = bounding_box_of(&every);
         let cell = |p: &Point3<f64>| {
             let at = |axis: usize| {
                 let t = (p[axis] - lo[axis]) / (hi[axis] - lo[axis]).max(f64::MIN_POSITIVE);
