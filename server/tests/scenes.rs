@@ -171,7 +171,7 @@ fn meshes_are_resolved_scaled_and_shared() {
         r#"
 name = "bunnies"
 hand = "hand.toml"
-params = { dop_orientations = 18, sliding = { metaphor = "spiral-spring" } }
+params = { dop_orientations = 26, sliding = { metaphor = "spiral-spring" } }
 rates = { publish_hz = 30 }
 groups = { not_of_interest = [["b", "a"]] }
 
@@ -216,7 +216,13 @@ movable = true
     assert!((two.pose.rotation.quaternion().norm() - 1.0).abs() < 1e-15);
     assert_eq!(three.group, "default");
     assert_eq!(scene.hand, Some(dir.join("hand.toml")));
-    assert_eq!(scene.params.dop_orientations, 18);
+    assert_eq!(scene.params.dop_orientations, 26);
+    // Parts with one mesh share one tree (built once, on first use), with the scene's
+    // orientations.
+    assert!(std::ptr::eq(one.tree(), two.tree()));
+    assert!(!std::ptr::eq(one.tree(), three.tree()));
+    assert_eq!(one.tree().orientations().k(), 26);
+    assert_eq!(three.tree().triangle_count(), original.triangles().len());
     assert_eq!(scene.params.sliding.metaphor, Metaphor::SpiralSpring);
     assert_eq!(scene.params.sliding.contact_tolerance, None, "default kept");
     assert_eq!(
@@ -232,7 +238,7 @@ movable = true
     for needle in [
         "bunnies",
         "parts: 3 (2 movable)",
-        "18-DOPs",
+        "26-DOPs",
         "spiral-spring",
         "a/b",
     ] {

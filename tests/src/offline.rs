@@ -16,7 +16,7 @@ use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh};
 use vas_client::recording::{InputSample, Recording};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
 use vas_server::collision::parry_mesh::{ORACLE_SCALE, millimetre_pose, millimetre_trimesh};
-use vas_server::grasping::{GraspEvent, GraspParams, GraspingHand, HandInput, HandModel, HandPose};
+use vas_server::grasping::{GraspEvent, GraspingHand, HandInput, HandModel, HandPose};
 use vas_server::runtime::frames::wire_grasp;
 use vas_server::runtime::interaction::Interaction;
 use vas_server::runtime::verify::HandBodies;
@@ -238,10 +238,7 @@ fn replay_inputs(
     let model =
         Arc::new(HandModel::load(hand_file).map_err(|e| OfflineError::Hand(e.to_string()))?);
     let first = inputs.first().ok_or(OfflineError::NoTracker)?;
-    let params = GraspParams {
-        clasp: scene.params.clasp,
-        ..GraspParams::default()
-    };
+    let params = scene.params.grasp();
     let hand = GraspingHand::new(
         Arc::clone(&model),
         params,
@@ -251,16 +248,7 @@ fn replay_inputs(
         },
     )
     .map_err(|e| OfflineError::Hand(e.to_string()))?;
-    let meshes = (0..hand.model().segments().len())
-        .map(|segment| hand.geometry().mesh(segment).clone())
-        .collect();
-    let oracle = Oracle::new(
-        scene,
-        &HandBodies {
-            model: Arc::clone(&model),
-            meshes,
-        },
-    );
+    let oracle = Oracle::new(scene, &HandBodies::of(Arc::clone(&model), &hand));
     let mut interaction = Interaction::new(
         hand,
         &scene.parts,

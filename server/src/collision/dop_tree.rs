@@ -39,6 +39,7 @@
 //! The traversal is compiled twice, portable and with AVX2/FMA, chosen at run time.
 
 use std::cell::RefCell;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
@@ -77,24 +78,26 @@ impl Node {
     }
 }
 
-/// A DOP-tree over one mesh: built once, shared read-only (it is `Send + Sync`).
+/// A DOP-tree over one mesh: built once, shared read-only (it is `Send + Sync`). A clone shares
+/// the built tree (its arrays are reference-counted), so every loop that needs a part's tree
+/// holds the same one.
 #[derive(Debug, Clone)]
 pub struct DopTree {
     /// Identifies the tree for the per-thread witness cache (a clone shares it: same content).
     id: u64,
     set: OrientationSet,
     k: usize,
-    nodes: Vec<Node>,
+    nodes: Arc<[Node]>,
     /// Parent of each node (the root is its own parent).
-    parents: Vec<u32>,
+    parents: Arc<[u32]>,
     /// The triangles under each node, `start..end` in leaf order (a subtree's are contiguous).
-    triangle_ranges: Vec<[u32; 2]>,
+    triangle_ranges: Arc<[[u32; 2]]>,
     /// `k` offsets per node: `offsets[node * k + i] >= max over the node's triangles of n_i . x`.
-    offsets: Vec<f32>,
+    offsets: Arc<[f32]>,
     /// Triangles in leaf order.
-    triangles: Vec<Triangle>,
+    triangles: Arc<[Triangle]>,
     /// Original index (in the mesh) of each triangle in leaf order.
-    triangle_ids: Vec<u32>,
+    triangle_ids: Arc<[u32]>,
     /// Largest absolute offset in the tree (bounds rounding errors of re-alignment).
     max_abs_offset: f32,
     /// Centre and radius of a sphere enclosing the mesh (for the cheap first test of a query).
@@ -248,6 +251,10 @@ fn with_affine<const ALL: bool>(
         PairMemory::put_back(memory);
         hit
     }
+    assert_eq!(
+        a.k, b.k,
+        "the two trees of a query must have the same orientation set"
+    );
     match a.k {
         6 => run::<6, ALL>(a, b, b_to_a, stats, out, parallel),
         14 => run::<14, ALL>(a, b, b_to_a, stats, out, parallel),
@@ -1264,16 +1271,16 @@ impl<'a> TreeBuilder<'a> {
             bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
             set: self.set.clone(),
             k: self.k,
-            nodes: self.nodes,
-            parents: self.parents,
-            triangle_ranges: self.triangle_ranges,
-            offsets: self.offsets,
+            nodes: self.nodes.into(),
+            parents: self.parents.into(),
+            triangle_ranges: self.triangle_ranges.into(),
+            offsets: self.offsets.into(),
             triangles: self
                 .order
                 .iter()
                 .map(|&i| self.triangles[i as usize])
                 .collect(),
-            triangle_ids: self.order,
+            triangle_ids: self.order.into(),
             max_abs_offset,
         }
     }

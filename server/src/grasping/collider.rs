@@ -7,7 +7,7 @@ use super::analysis::{Contact, ContactSide};
 use super::clasp::{ObjectSet, SegmentPlacement};
 use super::model::{HandModel, JointLevel, SegmentId};
 use super::segment_mesh::{SegmentMeshError, swept_hull_mesh};
-use crate::collision::{DopTree, MeshCollider, QueryStats};
+use crate::collision::{DopTree, MeshCollider, OrientationSet, QueryStats};
 use crate::geometry::TriMesh;
 
 /// The caller's name for a part (its index in the scene).
@@ -44,10 +44,15 @@ pub struct HandGeometry {
 }
 
 impl HandGeometry {
-    /// Builds every segment's mesh and DOP-tree, and those of its contact probe: the segment
-    /// grown by `probe_margin` metres, which must exceed the gap the clasp may leave at a
-    /// contact.
-    pub fn new(model: &HandModel, probe_margin: f64) -> Result<HandGeometry, SegmentMeshError> {
+    /// Builds every segment's mesh and DOP-tree (of `k` orientations, the parts' k), and those
+    /// of its contact probe: the segment grown by `probe_margin` metres, which must exceed the
+    /// gap the clasp may leave at a contact.
+    pub fn new(
+        model: &HandModel,
+        probe_margin: f64,
+        k: usize,
+    ) -> Result<HandGeometry, SegmentMeshError> {
+        let orientations = OrientationSet::new(k)?;
         let segments = model
             .segments()
             .iter()
@@ -72,8 +77,8 @@ impl HandGeometry {
                     .map(|v| (v - centre).norm())
                     .fold(0.0, f64::max);
                 Ok(SegmentGeometry {
-                    tree: DopTree::build(&mesh),
-                    probe_tree: DopTree::build(&probe),
+                    tree: DopTree::with_orientations(&mesh, &orientations),
+                    probe_tree: DopTree::with_orientations(&probe, &orientations),
                     mesh,
                     probe,
                     probe_normals,
@@ -90,6 +95,11 @@ impl HandGeometry {
     /// The collision mesh of a segment, in its frame.
     pub fn mesh(&self, segment: SegmentId) -> &TriMesh {
         &self.segments[segment].mesh
+    }
+
+    /// The DOP-tree of a segment's collision mesh (a clone shares it).
+    pub fn tree(&self, segment: SegmentId) -> &DopTree {
+        &self.segments[segment].tree
     }
 
     /// How much the contact probe is grown beyond the segment (metres).
@@ -109,11 +119,17 @@ pub struct PartGeometry {
 }
 
 impl PartGeometry {
-    /// Builds the part's DOP-tree. The centre of mass is the area-weighted centroid of the
-    /// surface: right for hollow parts and for symmetric solids, and defined for open meshes
-    /// with inconsistent winding, where a volume centroid is not.
+    /// Builds the part's DOP-tree (default orientations); see [`PartGeometry::with_tree`].
     pub fn new(mesh: TriMesh) -> PartGeometry {
         let tree = DopTree::build(&mesh);
+        PartGeometry::with_tree(mesh, tree)
+    }
+
+    /// The part with `tree`, already built over `mesh` (a scene's parts share theirs with the
+    /// other loops). The centre of mass is the area-weighted centroid of the surface: right for
+    /// hollow parts and for symmetric solids, and defined for open meshes with inconsistent
+    /// winding, where a volume centroid is not.
+    pub fn with_tree(mesh: TriMesh, tree: DopTree) -> PartGeometry {
         let (centre, radius) = mesh.bounding_sphere();
         let mut area = 0.0;
         let mut weighted = Vector3::zeros();
@@ -421,7 +437,8 @@ mod tests {
         // patch, and its normal must point from the palm towards the torus.
         let (margin, sink) = (0.008, 0.004);
         let model = right_hand();
-        let hand = HandGeometry::new(&model, margin).unwrap();
+        let hand =
+            HandGeometry::new(&model, margin, crate::collision::orientation::DEFAULT_K).unwrap();
         let palm = 0;
         let geometry = &hand.segments[palm];
         let lowest = geometry

@@ -29,6 +29,7 @@ use super::flex::{FlexReport, sanitize_flex};
 use super::model::{FLEX_COUNT, HandModel};
 use super::segment_mesh::SegmentMeshError;
 use crate::collision::QueryStats;
+use crate::collision::orientation::DEFAULT_K;
 
 /// Tuning of the grasping loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,6 +47,9 @@ pub struct GraspParams {
     pub release_frames: u32,
     /// The cart counts as moving when its pose changes by more than this (metres, or radians).
     pub cart_epsilon: f64,
+    /// k of the segments' DOP-trees: the scene's, so that they can be tested against its
+    /// parts' trees.
+    pub dop_orientations: usize,
 }
 
 impl Default for GraspParams {
@@ -57,6 +61,7 @@ impl Default for GraspParams {
             grasp_frames: 3,
             release_frames: 10,
             cart_epsilon: 1e-9,
+            dop_orientations: DEFAULT_K,
         }
     }
 }
@@ -188,7 +193,7 @@ impl GraspingHand {
     ) -> Result<GraspingHand, SegmentMeshError> {
         Ok(GraspingHand {
             plan: ClaspPlan::new(&model),
-            geometry: HandGeometry::new(&model, params.probe_margin)?,
+            geometry: HandGeometry::new(&model, params.probe_margin, params.dop_orientations)?,
             last_flex: initial.flex,
             model,
             params,

@@ -12,6 +12,7 @@ use parry3d::transformation::try_convex_hull;
 use thiserror::Error;
 
 use super::model::SweptHull;
+use crate::collision::orientation::OrientationError;
 use crate::geometry::{MeshError, TriMesh};
 
 /// Subdivisions around each sphere (longitude).
@@ -28,6 +29,9 @@ pub enum SegmentMeshError {
     /// The hull is not a valid mesh.
     #[error("segment mesh: {0}")]
     Mesh(#[from] MeshError),
+    /// The segments' DOP-trees cannot have the orientation count asked for.
+    #[error("segment DOP-trees: {0}")]
+    Orientations(#[from] OrientationError),
 }
 
 /// The closed mesh of `shape` with every sphere's radius grown by `inflate` metres (0 for the

@@ -10,8 +10,7 @@ use super::interaction::HeldPart;
 use super::rendezvous::{Coalesce, Work};
 use super::verify::HandBodies;
 use crate::grasping::{
-    GraspEvent, GraspParams, GraspType, GraspingHand, HandFrame, HandInput, HandModel, HandPose,
-    PartId,
+    GraspEvent, GraspType, GraspingHand, HandFrame, HandInput, HandModel, HandPose, PartId,
 };
 use crate::scene::Scene;
 use crate::sliding::{Metaphor, Wrench};
@@ -185,20 +184,15 @@ impl Restart {
             None => (None, None),
             Some(path) => {
                 let model = Arc::new(HandModel::load(path)?);
-                let params = GraspParams {
-                    clasp: scene.params.clasp,
-                    ..GraspParams::default()
-                };
+                let params = scene.params.grasp();
                 let parked = HandPose {
                     root: Isometry3::identity(),
                     flex: [0.0; FLEX_COUNT],
                 };
                 let hand = GraspingHand::new(Arc::clone(&model), params, parked)
                     .map_err(|error| HandSetupError::Segments(error.to_string()))?;
-                let meshes = (0..model.segments().len())
-                    .map(|segment| hand.geometry().mesh(segment).clone())
-                    .collect();
-                (Some(hand), Some(HandBodies { model, meshes }))
+                let bodies = HandBodies::of(model, &hand);
+                (Some(hand), Some(bodies))
             }
         };
         Ok(Restart {

@@ -47,7 +47,9 @@ impl GraspStage {
             hand,
             parts: parts
                 .iter()
-                .map(|part| PartGeometry::new(part.mesh.as_ref().clone()))
+                .map(|part| {
+                    PartGeometry::with_tree(part.mesh.as_ref().clone(), part.tree().clone())
+                })
                 .collect(),
             poses: parts.iter().map(|part| part.pose).collect(),
         }
@@ -151,7 +153,10 @@ impl SlideStage {
                 .map(|part| SlidePart {
                     name: part.name.clone(),
                     movable: part.movable,
-                    body: Arc::new(SlideBody::new(part.mesh.clone())),
+                    body: Arc::new(SlideBody::with_collider(
+                        part.mesh.clone(),
+                        part.tree().clone(),
+                    )),
                 })
                 .collect(),
             poses: parts.iter().map(|part| part.pose).collect(),
@@ -379,11 +384,13 @@ mod tests {
     use parry3d::query::intersection_test;
     use parry3d::shape::TriMesh as ParryTriMesh;
 
+    use crate::collision::orientation::DEFAULT_K;
     use crate::collision::parry_mesh::{millimetre_pose, millimetre_trimesh};
     use crate::geometry::{TriMesh, shapes};
     use crate::grasping::model::tests::right_hand;
     use crate::grasping::script::{Keyframe, ScriptedGrasp, open_hand, sample};
     use crate::grasping::{FLEX_COUNT, GraspParams, GraspType, HandPose};
+    use crate::scene::PartTree;
     use crate::sliding::Metaphor;
     use crate::sliding::motion::pose_distance;
 
@@ -408,6 +415,7 @@ mod tests {
             pose,
             movable,
             group: "default".into(),
+            tree: PartTree::new(DEFAULT_K),
         }
     }
 

@@ -19,13 +19,13 @@ use nalgebra::Isometry3;
 use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOUCHING};
 
 use super::frames::{CandidateFrame, Event, VerifiedFrame, VerifiedPart, wire_grasp};
+use crate::collision::DopTree;
 use crate::collision::interest::GroupId;
 use crate::collision::pipeline::{
     CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
 };
-use crate::collision::{DopTree, MeshCollider};
 use crate::geometry::{ConvexHull, TriMesh};
-use crate::grasping::{FlexVector, GraspEvent, HandModel, PartId};
+use crate::grasping::{FlexVector, GraspEvent, GraspingHand, HandModel, PartId};
 use crate::scene::Scene;
 
 /// The collision group of the hand's segments: one of their own, never tested among themselves
@@ -44,6 +44,26 @@ pub struct HandBodies {
     pub model: Arc<HandModel>,
     /// Each segment's collision mesh, in the segment's frame, in segment order.
     pub meshes: Vec<TriMesh>,
+    /// The DOP-tree over each mesh, with the scene's orientations (the grasping hand's own).
+    pub trees: Vec<DopTree>,
+}
+
+impl HandBodies {
+    /// The segments of `hand` (whose kinematics are `model`), sharing its meshes' trees.
+    pub fn of(model: Arc<HandModel>, hand: &GraspingHand) -> HandBodies {
+        let geometry = hand.geometry();
+        let segments = 0..model.segments().len();
+        HandBodies {
+            meshes: segments
+                .clone()
+                .map(|segment| geometry.mesh(segment).clone())
+                .collect(),
+            trees: segments
+                .map(|segment| geometry.tree(segment).clone())
+                .collect(),
+            model,
+        }
+    }
 }
 
 struct VerifiedHand {
@@ -72,11 +92,9 @@ impl Verifier {
     /// flat hand at the identity root.
     pub fn new(scene: &Scene, hand: Option<HandBodies>) -> Verifier {
         let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
-        let model = |mesh: &TriMesh| {
-            Arc::new(CollisionModel::new(
-                DopTree::build(mesh),
-                ConvexHull::of(mesh),
-            ))
+        // The trees are the ones the other loops use too (a clone shares a built tree).
+        let model = |mesh: &TriMesh, tree: &DopTree| {
+            Arc::new(CollisionModel::new(tree.clone(), ConvexHull::of(mesh)))
         };
         let parts: Vec<ObjectId> = scene
             .parts
@@ -85,7 +103,7 @@ impl Verifier {
             .map(|(id, part)| {
                 pipeline
                     .add(ObjectDesc {
-                        model: model(&part.mesh),
+                        model: model(&part.mesh, part.tree()),
                         pose: part.pose,
                         group: scene.group_id(id),
                         is_static: !part.movable,
@@ -100,11 +118,12 @@ impl Verifier {
             let segments = bodies
                 .meshes
                 .iter()
+                .zip(&bodies.trees)
                 .zip(poses)
-                .map(|(mesh, pose)| {
+                .map(|((mesh, tree), pose)| {
                     pipeline
                         .add(ObjectDesc {
-                            model: model(mesh),
+                            model: model(mesh, tree),
                             pose,
                             group: HAND_GROUP,
                             is_static: false,
@@ -397,7 +416,9 @@ mod tests {
     use vas_protocol::GraspType as WireGraspType;
 
     use super::*;
+    use crate::collision::orientation::DEFAULT_K;
     use crate::runtime::frames::{ProposedHand, Stamps};
+    use crate::scene::PartTree;
 
     fn peg_in_hole() -> Scene {
         let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/peg_in_hole.toml");
@@ -476,22 +497,34 @@ mod tests {
 
     #[test]
     fn the_hand_is_refused_inside_a_part_and_kept_where_it_was() {
-        let scene = peg_in_hole();
+        // The default orientations, and another count, which every tree of the scene (the
+        // parts' and the hand's) must then use.
+        for k in [DEFAULT_K, 26] {
+            let mut scene = peg_in_hole();
+            scene.params.dop_orientations = k;
+            for part in &mut scene.parts {
+                part.tree = PartTree::new(k);
+            }
+            hand_refused_inside_a_part(&scene);
+        }
+    }
+
+    fn hand_refused_inside_a_part(scene: &Scene) {
         let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/hands/right.toml");
         let model = Arc::new(HandModel::load(&file).expect("the hand loads"));
         let hand = crate::grasping::GraspingHand::new(
             Arc::clone(&model),
-            crate::grasping::GraspParams::default(),
+            scene.params.grasp(),
             crate::grasping::HandPose {
                 root: Isometry3::identity(),
                 flex: [0.0; vas_protocol::FLEX_COUNT],
             },
         )
         .expect("the segments build");
-        let meshes = (0..model.segments().len())
-            .map(|s| hand.geometry().mesh(s).clone())
-            .collect();
-        let mut verifier = Verifier::new(&scene, Some(HandBodies { model, meshes }));
+        let k = scene.params.dop_orientations;
+        assert_eq!(hand.geometry().tree(0).orientations().k(), k);
+        assert_eq!(scene.parts[0].tree().orientations().k(), k);
+        let mut verifier = Verifier::new(scene, Some(HandBodies::of(model, &hand)));
         let poses: Vec<_> = scene.parts.iter().map(|part| part.pose).collect();
         let above = Isometry3::from(Translation3::new(0.0, 0.0, 0.3));
         let mut free = candidate(poses.clone());

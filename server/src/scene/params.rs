@@ -3,7 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::grasping::ClaspParams;
+use crate::collision::orientation::DEFAULT_K;
+use crate::grasping::{ClaspParams, GraspParams};
 use crate::sliding::SlideParams;
 
 /// A config value that is out of range: the key (as written in the config) and the reason.
@@ -21,8 +22,9 @@ pub const DOP_ORIENTATION_COUNTS: [usize; 5] = [6, 14, 18, 24, 26];
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct AlgorithmParams {
-    /// k, the number of DOP orientations (one of [`DOP_ORIENTATION_COUNTS`]); 24 by default, the
-    /// paper's optimum.
+    /// k, the number of DOP orientations of every tree in the scene (one of
+    /// [`DOP_ORIENTATION_COUNTS`]); by default the fastest in the tumbling benchmark,
+    /// [`DEFAULT_K`] (the paper found 24).
     pub dop_orientations: usize,
     /// Sliding contact, the `[params.sliding]` table.
     pub sliding: SlideParams,
@@ -33,7 +35,7 @@ pub struct AlgorithmParams {
 impl Default for AlgorithmParams {
     fn default() -> Self {
         AlgorithmParams {
-            dop_orientations: 24,
+            dop_orientations: DEFAULT_K,
             sliding: SlideParams::default(),
             clasp: ClaspParams::default(),
         }
@@ -81,6 +83,16 @@ fn within(key: &str, value: f64, max: f64, unit: &str) -> Result<(), Problem> {
 }
 
 impl AlgorithmParams {
+    /// The grasping hand's tuning for this scene: its clasp parameters, and segment trees with
+    /// its parts' orientations.
+    pub fn grasp(&self) -> GraspParams {
+        GraspParams {
+            clasp: self.clasp,
+            dop_orientations: self.dop_orientations,
+            ..GraspParams::default()
+        }
+    }
+
     /// Checks every value; keys are named as in the config (`params.sliding.contact_tolerance`).
     pub(crate) fn validate(&self) -> Result<(), Problem> {
         if !DOP_ORIENTATION_COUNTS.contains(&self.dop_orientations) {
@@ -125,7 +137,7 @@ mod tests {
     fn defaults_are_valid() {
         assert_eq!(AlgorithmParams::default().validate(), Ok(()));
         assert_eq!(Rates::default().validate(), Ok(()));
-        assert_eq!(AlgorithmParams::default().dop_orientations, 24);
+        assert_eq!(AlgorithmParams::default().dop_orientations, DEFAULT_K);
     }
 
     #[test]

@@ -34,9 +34,16 @@ impl<C: MeshCollider> SlideBody<C> {
     /// Builds adjacency and collider for `mesh` (weld a soup first, so that neighbours share
     /// vertices; classification copes without, by its rim rule).
     pub fn new(mesh: Arc<TriMesh>) -> Self {
+        let collider = C::build(&mesh);
+        SlideBody::with_collider(mesh, collider)
+    }
+
+    /// Builds adjacency for `mesh`, whose `collider` is already built (a scene's parts share
+    /// their DOP-trees with the other loops).
+    pub fn with_collider(mesh: Arc<TriMesh>, collider: C) -> Self {
         SlideBody {
             adjacency: EdgeAdjacency::new(&mesh),
-            collider: C::build(&mesh),
+            collider,
             mesh,
         }
     }
