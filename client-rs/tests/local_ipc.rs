@@ -12,6 +12,15 @@ fn prefix(test: &str) -> String {
     format!("vas_c{}_{test}_", std::process::id())
 }
 
+/// Removes what the test's prefix left in shared memory.
+///
+/// # Safety
+/// Every port and node of the test on `prefix` must have been dropped.
+unsafe fn forget(prefix: &str) {
+    // SAFETY: as the caller guarantees; a failure leaves one small file behind.
+    let _ = unsafe { vas_protocol::services::remove_prefix_segment(prefix) };
+}
+
 const PATIENCE: Duration = Duration::from_secs(5);
 
 #[test]
@@ -50,11 +59,15 @@ fn samples_sent_by_a_client_reach_an_input_tap() {
         received,
         [InputSample::Tracker(tracker), InputSample::Glove(glove)]
     );
+    drop((tap, client));
+    // SAFETY: the tap and the client were the prefix's only nodes.
+    unsafe { forget(&prefix) };
 }
 
 #[test]
 fn waiting_without_frames_times_out() {
-    let mut client = Client::connect(Some(&prefix("idle"))).expect("client");
+    let prefix = prefix("idle");
+    let mut client = Client::connect(Some(&prefix)).expect("client");
     assert_eq!(
         client.wait(Duration::from_millis(50)).expect("wait"),
         Wake::Timeout
@@ -62,15 +75,22 @@ fn waiting_without_frames_times_out() {
     assert_eq!(client.poll().expect("poll"), Default::default());
     assert!(client.latest_parts().is_none());
     assert!(client.latest_hand().is_none());
+    drop(client);
+    // SAFETY: the client was the prefix's only node.
+    unsafe { forget(&prefix) };
 }
 
 #[test]
 fn control_requests_without_a_server_time_out() {
-    let client = Client::connect(Some(&prefix("noserver"))).expect("client");
+    let prefix = prefix("noserver");
+    let client = Client::connect(Some(&prefix)).expect("client");
     let error = client
         .scene_info(Duration::from_millis(100))
         .expect_err("no server answers");
     assert!(matches!(error, ClientError::Timeout { .. }), "{error}");
+    drop(client);
+    // SAFETY: the client was the prefix's only node.
+    unsafe { forget(&prefix) };
 }
 
 #[test]

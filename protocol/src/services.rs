@@ -126,6 +126,25 @@ pub fn config_with_prefix(prefix: Option<&str>) -> Result<Config, PrefixError> {
     Ok(config)
 }
 
+/// Removes the shared-memory segment iceoryx2 keeps per prefix for its nodes, which outlives
+/// them: for the private prefixes of tests and benchmark runs, which are never used again (each
+/// would otherwise leave a file in /dev/shm). Returns whether there was one to remove.
+///
+/// # Safety
+/// Every process that used `prefix` must have ended, and none may start using it while this
+/// runs.
+pub unsafe fn remove_prefix_segment(prefix: &str) -> Result<bool, PrefixError> {
+    let config = config_with_prefix(Some(prefix))?;
+    // SAFETY: the caller guarantees that no process uses the prefix's domain.
+    unsafe {
+        iceoryx2::testing::remove_global_mgmt_segment::<iceoryx2::service::ipc::Service>(&config)
+    }
+    .map_err(|error| PrefixError {
+        prefix: prefix.to_owned(),
+        reason: format!("cannot remove its segment: {error:?}"),
+    })
+}
+
 /// The tracker input service.
 pub type TrackerService<S> = publish_subscribe::PortFactory<S, TrackerSample, ()>;
 /// The glove input service.

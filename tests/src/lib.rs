@@ -172,11 +172,17 @@ impl Spawned {
 const STOP_GRACE: Duration = Duration::from_secs(5);
 
 impl Drop for Spawned {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+impl Spawned {
     /// Stops the process with SIGTERM, so that it removes its shared-memory resources, and kills
     /// it if it does not stop within [`STOP_GRACE`]. (A SIGKILLed node's resources stay until
     /// another process on its prefix cleans up dead nodes, and a test's prefix is never used
     /// again.)
-    fn drop(&mut self) {
+    pub fn stop(&mut self) {
         if self.is_running() {
             if let Ok(pid) = libc::pid_t::try_from(self.child.id()) {
                 // SAFETY: as in `signal`; the child is not reaped yet.
@@ -191,11 +197,30 @@ impl Drop for Spawned {
     }
 }
 
-/// A `vas-server run` on its own prefix.
+/// Removes what a test's private prefix leaves in shared memory once nothing uses it.
+///
+/// # Safety
+/// Every process and node of this test on `prefix` must have ended.
+pub unsafe fn forget_prefix(prefix: &str) {
+    // SAFETY: as the caller guarantees; a failure leaves one small file behind.
+    let _ = unsafe { vas_protocol::services::remove_prefix_segment(prefix) };
+}
+
+/// A `vas-server run` on its own prefix; when dropped, stopped and its prefix forgotten (drop
+/// the test's clients on it first).
 pub struct Server {
     /// The process.
     pub process: Spawned,
     prefix: String,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.process.stop();
+        // SAFETY: the server has ended, and a test drops its clients before its server (they
+        // are made from it, so declared after it).
+        unsafe { forget_prefix(&self.prefix) };
+    }
 }
 
 impl Server {

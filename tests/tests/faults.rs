@@ -8,7 +8,7 @@ use vas_client::{Client, ClientError, Frame};
 use vas_protocol::{
     ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, TrackerSample, wall_clock_ns,
 };
-use vas_tests::{PATIENCE, Server, Spawned, binary, tracker, unique_prefix};
+use vas_tests::{PATIENCE, Server, Spawned, binary, forget_prefix, tracker, unique_prefix};
 
 /// Receives frames until the hand frame answering `sample`, failing after [`PATIENCE`].
 fn answer(client: &mut Client, sample: &TrackerSample) -> HandFrame {
@@ -67,6 +67,9 @@ fn a_server_killed_mid_stream_is_replaced_by_one_on_the_same_prefix() {
     client.send_tracker(&sample).expect("send");
     assert_eq!(answer(&mut client, &sample).tracker.seq, 2);
     assert!(second.is_running());
+    drop((client, first, second));
+    // SAFETY: both servers and the client have ended.
+    unsafe { forget_prefix(&prefix) };
 }
 
 #[test]

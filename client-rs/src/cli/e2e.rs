@@ -19,6 +19,7 @@ use anyhow::{Context, bail};
 use serde::Serialize;
 use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Wake};
+use vas_protocol::services::remove_prefix_segment;
 use vas_protocol::wall_clock_ns;
 
 use super::echo::READY_LINE;
@@ -253,9 +254,11 @@ impl NumberedInputs {
     }
 }
 
-/// The echo child process; stopped with SIGTERM (by its pid) when dropped.
+/// The echo child process; stopped with SIGTERM (by its pid) when dropped, and its private
+/// prefix then removed from shared memory (drop this process's client on it first).
 struct EchoProcess {
     child: Child,
+    prefix: String,
 }
 
 impl EchoProcess {
@@ -271,7 +274,10 @@ impl EchoProcess {
             .stdout(Stdio::piped())
             .spawn()
             .with_context(|| format!("starting {} echo", exe.display()))?;
-        let mut echo = Self { child };
+        let mut echo = Self {
+            child,
+            prefix: prefix.to_owned(),
+        };
         let stdout = echo.child.stdout.take().context("the echo's stdout")?;
         let mut line = String::new();
         BufReader::new(stdout)
@@ -287,6 +293,18 @@ impl EchoProcess {
 
 impl Drop for EchoProcess {
     fn drop(&mut self) {
+        self.stop();
+        // SAFETY: the echo has ended (killed if SIGTERM did not end it), and the
+        // client on its prefix is dropped before it (declared after it in `run`).
+        if let Err(error) = unsafe { remove_prefix_segment(&self.prefix) } {
+            tracing::warn!(%error, "the echo's prefix stays in shared memory");
+        }
+    }
+}
+
+impl EchoProcess {
+    /// Stops the echo with SIGTERM, and kills it if it does not end in time.
+    fn stop(&mut self) {
         let pid = self.child.id();
         // SAFETY: kill(2) only sends a signal; `pid` is our child, which has not been reaped
         // (we own its `Child` and wait for it only below), so the id names no other process.
