@@ -246,6 +246,10 @@ fn with_affine<const ALL: bool>(
             PairMemory::put_back(memory);
             return hit;
         }
+        if PairMemory::proves_apart(a, b, b_to_a, &centre_b) {
+            stats.bv_tests += 1;
+            return false;
+        }
         let mut memory = PairMemory::take(a, b);
         let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats, parallel);
         PairMemory::put_back(memory);
@@ -772,6 +776,34 @@ impl PairMemory {
                 memory.front_pose = None;
             }
             memory
+        })
+    }
+
+    /// True when this thread's memory of the pair `(a, b)`, without a witness of contact, holds a
+    /// proof that the roots are apart that still holds at `b_to_a`: the commonest query of
+    /// parts far apart, answered where the memory lies (taking it out and putting it back costs
+    /// as much again as the proof). Such a query changes nothing in the memory.
+    fn proves_apart(
+        a: &DopTree,
+        b: &DopTree,
+        b_to_a: &Isometry3<f64>,
+        centre_b: &Point3<f64>,
+    ) -> bool {
+        PAIR_MEMORIES.with_borrow(|memories| {
+            memories
+                .get(Self::slot((a.id, b.id)))
+                .and_then(Option::as_deref)
+                .is_some_and(|memory| {
+                    memory.ids == (a.id, b.id)
+                        && memory.witness.is_none()
+                        && RootSeparation::still_holds(
+                            &memory.root_separation,
+                            a,
+                            b,
+                            b_to_a,
+                            centre_b,
+                        )
+                })
         })
     }
 
@@ -2436,6 +2468,7 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
+    use crate::collision::ObbTree;
     use crate::collision::oracle_tests::{random_soup, torus};
 
     /// Every corner of every node's triangles, with the node.
@@ -2446,6 +2479,36 @@ mod tests {
                 .flatten()
                 .map(move |&corner| (node, corner))
         })
+    }
+
+    #[test]
+    fn a_remembered_proof_answers_only_for_its_own_pair() {
+        // Thin rings, long along y: their bounding spheres overlap 1 apart along x, so the
+        // query proves their roots apart and remembers the proof.
+        let ring = torus(0.3, 24, 8)
+            .map_vertices(|v| Point3::new(0.1 * v.x, 2.0 * v.y, 0.1 * v.z))
+            .unwrap();
+        let (a, b) = (DopTree::build(&ring), DopTree::build(&ring));
+        // Whole tori, which intersect at the same pose, in a pair whose memory takes the same
+        // slot of this thread's table.
+        let whole = torus(0.3, 24, 8);
+        let c = DopTree::build(&whole);
+        let slot = PairMemory::slot((a.id, b.id));
+        let d = std::iter::repeat_with(|| DopTree::build(&whole))
+            .take(100 * MEMORY_SLOTS)
+            .find(|d| PairMemory::slot((c.id, d.id)) == slot)
+            .expect("some tree's pair with c shares the slot");
+        let pose = Isometry3::translation(1.0, 0.0, 0.0);
+        let mut stats = QueryStats::default();
+        assert!(!a.intersects(&b, &pose, &mut stats), "the rings are apart");
+        assert!(
+            ObbTree::build(&whole).intersects(&ObbTree::build(&whole), &pose, &mut stats),
+            "the oracle: the tori intersect"
+        );
+        assert!(
+            c.intersects(&d, &pose, &mut stats),
+            "the rings' proof must not answer for the tori"
+        );
     }
 
     #[test]
