@@ -246,10 +246,6 @@ fn with_affine<const ALL: bool>(
             PairMemory::put_back(memory);
             return hit;
         }
-        if PairMemory::proves_apart(a, b, b_to_a, &centre_b) {
-            stats.bv_tests += 1;
-            return false;
-        }
         let mut memory = PairMemory::take(a, b);
         let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats, parallel);
         PairMemory::put_back(memory);
@@ -776,34 +772,6 @@ impl PairMemory {
                 memory.front_pose = None;
             }
             memory
-        })
-    }
-
-    /// True when this thread's memory of the pair `(a, b)`, without a witness of contact, holds a
-    /// proof that the roots are apart that still holds at `b_to_a`: the commonest query of
-    /// parts far apart, answered where the memory lies (taking it out and putting it back costs
-    /// as much again as the proof). Such a query changes nothing in the memory.
-    fn proves_apart(
-        a: &DopTree,
-        b: &DopTree,
-        b_to_a: &Isometry3<f64>,
-        centre_b: &Point3<f64>,
-    ) -> bool {
-        PAIR_MEMORIES.with_borrow(|memories| {
-            memories
-                .get(Self::slot((a.id, b.id)))
-                .and_then(Option::as_deref)
-                .is_some_and(|memory| {
-                    memory.ids == (a.id, b.id)
-                        && memory.witness.is_none()
-                        && RootSeparation::still_holds(
-                            &memory.root_separation,
-                            a,
-                            b,
-                            b_to_a,
-                            centre_b,
-                        )
-                })
         })
     }
 
