@@ -106,6 +106,9 @@ struct Queue<F, C> {
     /// [`ANNOUNCED_WAIT`], frames are not announced to the receiver (it would only spin and then
     /// sleep anyway) until a frame comes quickly again.
     announce_lead: Duration,
+    /// The receiver sleeps on the condition variable: only then does a sender signal it (a
+    /// signal is a system call, and a receiver waiting awake polls `pending` instead).
+    sleeping: bool,
 }
 
 /// A queue from one loop to the next (see the module documentation).
@@ -127,6 +130,7 @@ impl<F: Coalesce, C> Default for Handoff<F, C> {
                 announced: false,
                 announced_at: None,
                 announce_lead: Duration::ZERO,
+                sleeping: false,
             }),
             ready: Condvar::new(),
             pending: AtomicBool::new(false),
@@ -153,8 +157,11 @@ impl<F: Coalesce, C> Handoff<F, C> {
         }
         queue.items.push_back(work);
         self.pending.store(true, Ordering::Release);
+        let sleeping = queue.sleeping;
         drop(queue);
-        self.ready.notify_one();
+        if sleeping {
+            self.ready.notify_one();
+        }
     }
 
     /// Tells the receiver that a frame is on its way: a sleeping receiver wakes now and waits for
@@ -165,8 +172,11 @@ impl<F: Coalesce, C> Handoff<F, C> {
         queue.announced_at = Some(Instant::now());
         if queue.items.is_empty() && !queue.closed && queue.announce_lead <= ANNOUNCED_WAIT {
             queue.announced = true;
+            let sleeping = queue.sleeping;
             drop(queue);
-            self.ready.notify_one();
+            if sleeping {
+                self.ready.notify_one();
+            }
         }
     }
 
@@ -193,6 +203,7 @@ impl<F: Coalesce, C> Handoff<F, C> {
                 queue = self.lock();
                 continue;
             }
+            queue.sleeping = true;
             queue = match deadline {
                 None => self
                     .ready
@@ -200,6 +211,7 @@ impl<F: Coalesce, C> Handoff<F, C> {
                     .unwrap_or_else(PoisonError::into_inner),
                 Some(deadline) => {
                     let Some(left) = deadline.checked_duration_since(Instant::now()) else {
+                        queue.sleeping = false;
                         return Received::Timeout;
                     };
                     self.ready
@@ -208,6 +220,7 @@ impl<F: Coalesce, C> Handoff<F, C> {
                         .0
                 }
             };
+            queue.sleeping = false;
         }
     }
 
@@ -337,6 +350,31 @@ mod tests {
             (0..100).collect::<Vec<_>>(),
             "nothing lost, in order"
         );
+    }
+
+    #[test]
+    fn a_receiver_asleep_on_the_condition_variable_is_woken_by_a_send() {
+        let handoff: Arc<Handoff<Frame, &'static str>> = Arc::new(Handoff::default());
+        let (woken, wake_report) = std::sync::mpsc::channel();
+        let receiver = {
+            let handoff = Arc::clone(&handoff);
+            std::thread::spawn(move || {
+                let received = handoff.receive(None);
+                let _ =
+                    woken.send(matches!(received, Received::Work(Work::Frame(f)) if f.value == 5));
+            })
+        };
+        // Senders signal only a sleeping receiver: send once it sleeps.
+        while !handoff.lock().sleeping {
+            std::thread::yield_now();
+        }
+        handoff.send(frame(5));
+        assert_eq!(
+            wake_report.recv_timeout(Duration::from_secs(30)),
+            Ok(true),
+            "the sleeping receiver is woken and takes the frame"
+        );
+        receiver.join().expect("the receiver ends");
     }
 
     #[test]
