@@ -166,18 +166,7 @@ impl Spawned {
             std::thread::sleep(Duration::from_millis(5));
         }
     }
-}
 
-/// How long a process gets to stop on SIGTERM when a test ends, before it is killed.
-const STOP_GRACE: Duration = Duration::from_secs(5);
-
-impl Drop for Spawned {
-    fn drop(&mut self) {
-        self.stop();
-    }
-}
-
-impl Spawned {
     /// Stops the process with SIGTERM, so that it removes its shared-memory resources, and kills
     /// it if it does not stop within [`STOP_GRACE`]. (A SIGKILLed node's resources stay until
     /// another process on its prefix cleans up dead nodes, and a test's prefix is never used
@@ -194,6 +183,15 @@ impl Spawned {
             }
         }
         let _ = self.child.wait();
+    }
+}
+
+/// How long a process gets to stop on SIGTERM when a test ends, before it is killed.
+const STOP_GRACE: Duration = Duration::from_secs(5);
+
+impl Drop for Spawned {
+    fn drop(&mut self) {
+        self.stop();
     }
 }
 

@@ -289,20 +289,7 @@ impl EchoProcess {
         tracing::debug!(pid = echo.child.id(), prefix, "echo ready");
         Ok(echo)
     }
-}
 
-impl Drop for EchoProcess {
-    fn drop(&mut self) {
-        self.stop();
-        // SAFETY: the echo has ended (killed if SIGTERM did not end it), and the
-        // client on its prefix is dropped before it (declared after it in `run`).
-        if let Err(error) = unsafe { remove_prefix_segment(&self.prefix) } {
-            tracing::warn!(%error, "the echo's prefix stays in shared memory");
-        }
-    }
-}
-
-impl EchoProcess {
     /// Stops the echo with SIGTERM, and kills it if it does not end in time.
     fn stop(&mut self) {
         let pid = self.child.id();
@@ -321,6 +308,17 @@ impl EchoProcess {
         tracing::warn!(pid, "the echo did not stop on SIGTERM; killing it");
         if let Err(error) = self.child.kill().and_then(|()| self.child.wait().map(drop)) {
             tracing::error!(pid, %error, "cannot kill the echo");
+        }
+    }
+}
+
+impl Drop for EchoProcess {
+    fn drop(&mut self) {
+        self.stop();
+        // SAFETY: the echo has ended (killed if SIGTERM did not end it), and the
+        // client on its prefix is dropped before it (declared after it in `run`).
+        if let Err(error) = unsafe { remove_prefix_segment(&self.prefix) } {
+            tracing::warn!(%error, "the echo's prefix stays in shared memory");
         }
     }
 }

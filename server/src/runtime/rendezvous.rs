@@ -203,17 +203,20 @@ impl<F: Coalesce, C> Handoff<F, C> {
                 queue = self.lock();
                 continue;
             }
+            let left = match deadline {
+                None => None,
+                Some(deadline) => match deadline.checked_duration_since(Instant::now()) {
+                    Some(left) => Some(left),
+                    None => return Received::Timeout,
+                },
+            };
             queue.sleeping = true;
-            queue = match deadline {
+            queue = match left {
                 None => self
                     .ready
                     .wait(queue)
                     .unwrap_or_else(PoisonError::into_inner),
-                Some(deadline) => {
-                    let Some(left) = deadline.checked_duration_since(Instant::now()) else {
-                        queue.sleeping = false;
-                        return Received::Timeout;
-                    };
+                Some(left) => {
                     self.ready
                         .wait_timeout(queue, left)
                         .unwrap_or_else(PoisonError::into_inner)

@@ -629,8 +629,8 @@ impl Loader<'_> {
         let path = self.folder.join(relative);
         let source = path.display().to_string();
         let cache_key = format!("{source} x {scale}");
-        if let Some((mesh, tree)) = self.meshes.get(&cache_key) {
-            return Ok((mesh.clone(), source, tree.clone()));
+        if let Some((mesh, tree)) = self.cached(&cache_key) {
+            return Ok((mesh, source, tree));
         }
         let mesh_error = |source| SceneError::Mesh {
             file: self.path.to_owned(),
@@ -650,8 +650,7 @@ impl Loader<'_> {
                     })
                 })?;
         }
-        let (mesh, tree) = (Arc::new(mesh), PartTree::new(self.orientations));
-        self.meshes.insert(cache_key, (mesh.clone(), tree.clone()));
+        let (mesh, tree) = self.remember(cache_key, mesh);
         Ok((mesh, source, tree))
     }
 
@@ -661,16 +660,25 @@ impl Loader<'_> {
         shape: ShapeSpec,
     ) -> Result<(Arc<TriMesh>, String, PartTree), SceneError> {
         let source = shape.to_string();
-        if let Some((mesh, tree)) = self.meshes.get(&source) {
-            return Ok((mesh.clone(), source, tree.clone()));
+        if let Some((mesh, tree)) = self.cached(&source) {
+            return Ok((mesh, source, tree));
         }
-        let mesh =
-            Arc::new(shape.build().map_err(|e| {
-                self.invalid(format!("parts[{index}].shape.{}", e.field), e.reason)
-            })?);
-        let tree = PartTree::new(self.orientations);
-        self.meshes
-            .insert(source.clone(), (mesh.clone(), tree.clone()));
+        let mesh = shape
+            .build()
+            .map_err(|e| self.invalid(format!("parts[{index}].shape.{}", e.field), e.reason))?;
+        let (mesh, tree) = self.remember(source.clone(), mesh);
         Ok((mesh, source, tree))
+    }
+
+    /// The mesh loaded or built for `key` before, with its tree.
+    fn cached(&self, key: &str) -> Option<(Arc<TriMesh>, PartTree)> {
+        self.meshes.get(key).cloned()
+    }
+
+    /// Keeps `mesh` for `key`, with a tree for it that every part using it shares.
+    fn remember(&mut self, key: String, mesh: TriMesh) -> (Arc<TriMesh>, PartTree) {
+        let entry = (Arc::new(mesh), PartTree::new(self.orientations));
+        self.meshes.insert(key, entry.clone());
+        entry
     }
 }
