@@ -22,10 +22,10 @@ use vas_protocol::{
 };
 
 use super::control::{self, Session};
-use super::frames::{Change, InputFrame, LoopWork, VerifiedFrame};
+use super::frames::{Change, InputFrame, LoopWork, Stamps, VerifiedFrame};
 use super::loops::Loops;
 use super::ports::{Ports, Wakeups};
-use super::rendezvous::{FramesInFlight, Handoff, Work};
+use super::rendezvous::{ANNOUNCED_WAIT, AwakeWatch, Handoff, Work};
 use super::{RuntimeError, publish_period};
 
 /// How often the input counters are logged, when they changed.
@@ -43,8 +43,10 @@ struct Io {
     session: Session,
     inputs: Arc<Handoff<InputFrame, Change>>,
     verified: Receiver<VerifiedFrame>,
-    /// Frames the collision loop is verifying.
-    verifying: Arc<FramesInFlight>,
+    /// Whether this thread waits awake for verified frames (then the collision loop does not
+    /// wake it).
+    watch: Arc<AwakeWatch>,
+    answer: Answer,
     lockstep: Lockstep,
     /// The latest published part states, for the periodic parts frames.
     parts: Vec<PartState>,
@@ -52,6 +54,34 @@ struct Io {
     parts_frames: u64,
     logged_stats: InputStats,
     stats_logged_at: Instant,
+}
+
+/// The latest frame handed to the loops and how long the loops took to answer one: the I/O thread
+/// waits for the answer awake, like a loop woken by an announcement, when it comes within
+/// [`ANNOUNCED_WAIT`].
+#[derive(Default)]
+struct Answer {
+    /// The stamps of the latest frame sent and when it was sent, until its answer is taken.
+    awaited: Option<(Stamps, Instant)>,
+    /// From sending a frame to taking its answer, the last time one was answered.
+    lead: Duration,
+}
+
+impl Answer {
+    /// True when an answer is awaited and the last one came quickly enough to wait awake for.
+    fn worth_waiting_awake(&self) -> bool {
+        self.awaited.is_some() && self.lead <= ANNOUNCED_WAIT
+    }
+
+    /// Notes a verified frame: the answer, if it carries the awaited stamps.
+    fn take(&mut self, stamps: Stamps) {
+        if let Some((awaited, sent_at)) = self.awaited
+            && awaited == stamps
+        {
+            self.lead = sent_at.elapsed();
+            self.awaited = None;
+        }
+    }
 }
 
 /// Work waiting for the frame in flight, in lockstep.
@@ -68,7 +98,7 @@ impl InteractionManager {
         session: Session,
         inputs: Arc<Handoff<InputFrame, Change>>,
         verified: Receiver<VerifiedFrame>,
-        verifying: Arc<FramesInFlight>,
+        watch: Arc<AwakeWatch>,
         lockstep: bool,
     ) -> Result<Self, RuntimeError> {
         let (ports, wakeups) = Ports::open(node, session.scene.parts.len())?;
@@ -78,7 +108,8 @@ impl InteractionManager {
             session,
             inputs,
             verified,
-            verifying,
+            watch,
+            answer: Answer::default(),
             lockstep: Lockstep {
                 enabled: lockstep,
                 in_flight: false,
@@ -102,16 +133,13 @@ impl InteractionManager {
             .map_err(|error| RuntimeError::ipc("create the WaitSet", error))?;
         let attach = |error| RuntimeError::ipc("attach to the WaitSet", error);
         // The guards keep the listeners attached until the loop ends.
-        let attached = [
-            &self.wakeups.tracker,
-            &self.wakeups.glove,
-            &self.wakeups.control,
-            &self.wakeups.verified,
-        ]
-        .map(|listener| waitset.attach_notification(listener))
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(attach)?;
+        let attached = self
+            .wakeups
+            .listeners()
+            .map(|listener| waitset.attach_notification(listener))
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(attach)?;
         let io = &mut self.io;
         let mut publish_hz = io.session.scene.rates.publish_hz;
         let mut publish_tick = waitset
@@ -121,15 +149,15 @@ impl InteractionManager {
         io.submit(Work::Control(start));
         io.publish_parts(None);
         tracing::info!(lockstep = io.lockstep.enabled, "serving");
-        let [tracker_attachment, glove_attachment] = [&attached[0], &attached[1]];
         loop {
             let mut publish_due = false;
-            let mut input_due = false;
+            let mut fired = [false; Wakeups::COUNT];
             let outcome = waitset
                 .wait_and_process_once(|attachment| {
                     publish_due |= attachment.has_event_from(&publish_tick);
-                    input_due |= attachment.has_event_from(tracker_attachment)
-                        || attachment.has_event_from(glove_attachment);
+                    for (fired, guard) in fired.iter_mut().zip(&attached) {
+                        *fired |= attachment.has_event_from(guard);
+                    }
                     CallbackProgression::Continue
                 })
                 .map_err(|error| RuntimeError::ipc("wait on the WaitSet", error))?;
@@ -138,11 +166,12 @@ impl InteractionManager {
             }
             // `Interrupt` means a signal cut the wait short; if it was SIGINT or SIGTERM, the
             // next wait reports the termination request.
+            let input_due = fired[Wakeups::TRACKER] || fired[Wakeups::GLOVE];
             if input_due && !(io.lockstep.enabled && io.lockstep.in_flight) {
                 // The grasping loop wakes while the samples are taken in.
                 io.inputs.announce();
             }
-            io.log_failure(self.wakeups.drain());
+            io.log_failure(self.wakeups.drain(fired));
             io.process_tracker_samples();
             io.process_glove_samples();
             io.answer_control_requests();
@@ -176,7 +205,7 @@ impl Io {
     /// Hands work to the grasping loop; in lockstep, frames wait for the one in flight.
     fn submit(&mut self, work: LoopWork<InputFrame>) {
         if !self.lockstep.enabled {
-            self.inputs.send(work);
+            self.send(work);
             return;
         }
         self.lockstep.waiting.push_back(work);
@@ -191,8 +220,16 @@ impl Io {
                 return;
             };
             self.lockstep.in_flight = matches!(work, Work::Frame(_));
-            self.inputs.send(work);
+            self.send(work);
         }
+    }
+
+    /// Hands work to the grasping loop, noting a frame as the awaited one.
+    fn send(&mut self, work: LoopWork<InputFrame>) {
+        if let Work::Frame(frame) = &work {
+            self.answer.awaited = Some((frame.stamps, Instant::now()));
+        }
+        self.inputs.send(work);
     }
 
     fn process_tracker_samples(&mut self) {
@@ -286,15 +323,23 @@ impl Io {
             .collect();
     }
 
-    /// Publishes the frames the collision loop verified since the last call; while the collision
-    /// loop is verifying one it announced, waits for it awake (briefly: see `FramesInFlight`).
+    /// Publishes the frames the collision loop verified since the last call; when the loops
+    /// usually answer quickly, first waits awake for the answer to the latest frame (see
+    /// [`AwakeWatch`]).
     fn publish_verified_frames(&mut self) {
-        let verifying = Arc::clone(&self.verifying);
-        verifying.wait_awake(|| self.take_verified_frames());
+        if !self.answer.worth_waiting_awake() {
+            return self.take_verified_frames();
+        }
+        let watch = Arc::clone(&self.watch);
+        watch.wait_awake(|| {
+            self.take_verified_frames();
+            self.answer.awaited.is_none()
+        });
     }
 
     fn take_verified_frames(&mut self) {
         while let Ok(frame) = self.verified.try_recv() {
+            self.answer.take(frame.stamps);
             // A frame of the scene before a restart still answers its sample, but its parts
             // are not the scene's any more.
             self.publish(&frame);

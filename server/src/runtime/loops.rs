@@ -25,7 +25,7 @@ use super::frames::{
     wire_grasp,
 };
 use super::interaction::{GraspStage, HeldPart, SlideStage};
-use super::rendezvous::{ANNOUNCED_WAIT, FramesInFlight, Handoff, Received, Work};
+use super::rendezvous::{AwakeWatch, Handoff, Received, Work};
 use super::verify::Verifier;
 use crate::grasping::{HandInput, PartId};
 use crate::scene::Scene;
@@ -63,8 +63,8 @@ pub struct Links {
     pub inputs: Arc<Handoff<InputFrame, Change>>,
     grasped: Arc<Handoff<GraspedFrame, Change>>,
     candidates: Arc<Handoff<CandidateFrame, Change>>,
-    /// Collision loop → I/O thread: frames being verified.
-    pub verifying: Arc<FramesInFlight>,
+    /// Whether the I/O thread waits awake for verified frames.
+    pub io_watch: Arc<AwakeWatch>,
     feedback: Arc<PoseFeedback>,
     refusals: (Sender<Refusal>, Receiver<Refusal>),
 }
@@ -75,7 +75,7 @@ impl Default for Links {
             inputs: Arc::default(),
             grasped: Arc::default(),
             candidates: Arc::default(),
-            verifying: Arc::default(),
+            io_watch: Arc::default(),
             feedback: Arc::default(),
             refusals: crossbeam_channel::unbounded(),
         }
@@ -90,7 +90,7 @@ pub struct Loops {
 impl Loops {
     /// Starts the loops; verified frames go to `verified`, and the collision loop's thread makes
     /// its waker with `wake` (iceoryx2 ports stay on the thread that made them) and calls it after
-    /// each frame, so that the I/O thread notices.
+    /// each frame the I/O thread is not waiting for awake, so that it notices.
     pub fn spawn(
         links: &Links,
         lockstep: bool,
@@ -122,7 +122,7 @@ impl Loops {
         let collision = CollisionLoop {
             inbox: Arc::clone(&links.candidates),
             verified,
-            verifying: Arc::clone(&links.verifying),
+            io_watch: Arc::clone(&links.io_watch),
             wake,
             feedback: Arc::clone(&links.feedback),
             refusals: links.refusals.0.clone(),
@@ -477,7 +477,7 @@ pub type MakeWaker = Box<dyn FnOnce() -> Box<dyn FnMut()> + Send>;
 struct CollisionLoop {
     inbox: Arc<Handoff<CandidateFrame, Change>>,
     verified: Sender<VerifiedFrame>,
-    verifying: Arc<FramesInFlight>,
+    io_watch: Arc<AwakeWatch>,
     wake: MakeWaker,
     feedback: Arc<PoseFeedback>,
     refusals: Sender<Refusal>,
@@ -490,25 +490,13 @@ impl CollisionLoop {
         let make_waker = std::mem::replace(&mut self.wake, Box::new(|| Box::new(|| {})));
         let mut wake = make_waker();
         let mut meter = LoopMeter::new("collision");
-        let mut last_frame = Duration::ZERO;
         loop {
             match self.inbox.receive(None) {
                 Received::Work(Work::Frame(candidate)) => {
                     let started = Instant::now();
-                    // Wake the I/O thread now, so that it waits for the frame awake; not when
-                    // frames take longer than it would wait (see `FramesInFlight`).
-                    let announce = last_frame <= ANNOUNCED_WAIT;
-                    if announce {
-                        self.verifying.start();
+                    if self.verify(candidate) && self.io_watch.must_wake() {
                         wake();
                     }
-                    if self.verify(candidate) {
-                        wake();
-                    }
-                    if announce {
-                        self.verifying.finish();
-                    }
-                    last_frame = started.elapsed();
                     meter.frame_done(started);
                 }
                 Received::Work(Work::Control(Change::Restart(restart))) => {

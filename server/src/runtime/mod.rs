@@ -146,7 +146,7 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         session,
         std::sync::Arc::clone(&links.inputs),
         verified_out,
-        std::sync::Arc::clone(&links.verifying),
+        std::sync::Arc::clone(&links.io_watch),
         options.lockstep,
     )?;
     let waker_config = config.clone();

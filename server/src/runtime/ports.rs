@@ -34,9 +34,25 @@ pub(super) struct Wakeups {
 pub(super) const VERIFIED: &str = "vas/internal/verified";
 
 impl Wakeups {
-    /// Clears pending notifications, so that the WaitSet sleeps until the next one.
-    pub(super) fn drain(&self) -> Result<(), RuntimeError> {
-        for listener in [&self.tracker, &self.glove, &self.control, &self.verified] {
+    /// How many listeners there are.
+    pub(super) const COUNT: usize = 4;
+    /// The tracker listener's place in [`Wakeups::listeners`].
+    pub(super) const TRACKER: usize = 0;
+    /// The glove listener's place in [`Wakeups::listeners`].
+    pub(super) const GLOVE: usize = 1;
+
+    /// Every listener, in a fixed order.
+    pub(super) fn listeners(&self) -> [&Listener<ipc::Service>; Self::COUNT] {
+        [&self.tracker, &self.glove, &self.control, &self.verified]
+    }
+
+    /// Clears the pending notifications of the listeners that `fired` (in the order of
+    /// [`Wakeups::listeners`]), so that the WaitSet sleeps until the next one. The others have
+    /// none to clear, and each clearing is a system call on the way from an input to its frame; a
+    /// notification that arrives after the wait is left for the next wait, which then returns at
+    /// once.
+    pub(super) fn drain(&self, fired: [bool; Self::COUNT]) -> Result<(), RuntimeError> {
+        for (listener, _) in self.listeners().into_iter().zip(fired).filter(|(_, f)| *f) {
             listener
                 .try_wait(|_| {})
                 .map_err(|error| RuntimeError::ipc("drain a listener", error))?;
