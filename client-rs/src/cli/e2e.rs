@@ -180,7 +180,7 @@ fn render(report: &E2eReport) -> String {
         );
     }
     text += &format!(
-        "vas sustains {:.0} samples/s in lockstep\n",
+        "vas sustains {:.0} samples/s, each sent once the one before was answered\n",
         report.vas_samples_per_s
     );
     text
