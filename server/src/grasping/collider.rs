@@ -1,6 +1,8 @@
 //! The hand against the parts near it: each segment's DOP-tree tested against each part's, and
 //! the contacts of touching segments, found with a slightly inflated copy of the segment.
 
+use std::sync::Arc;
+
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
 
 use super::analysis::{Contact, ContactSide};
@@ -112,7 +114,8 @@ impl HandGeometry {
 /// centre of mass.
 #[derive(Debug, Clone)]
 pub struct PartGeometry {
-    mesh: TriMesh,
+    /// Shared with the scene's part, which has it already.
+    mesh: Arc<TriMesh>,
     tree: DopTree,
     bound: (Point3<f64>, f64),
     centre_of_mass: Point3<f64>,
@@ -120,7 +123,8 @@ pub struct PartGeometry {
 
 impl PartGeometry {
     /// Builds the part's DOP-tree (default orientations); see [`PartGeometry::with_tree`].
-    pub fn new(mesh: TriMesh) -> PartGeometry {
+    pub fn new(mesh: impl Into<Arc<TriMesh>>) -> PartGeometry {
+        let mesh = mesh.into();
         let tree = DopTree::build(&mesh);
         PartGeometry::with_tree(mesh, tree)
     }
@@ -129,7 +133,7 @@ impl PartGeometry {
     /// other loops). The centre of mass is the area-weighted centroid of the surface: right for
     /// hollow parts and for symmetric solids, and defined for open meshes with inconsistent
     /// winding, where a volume centroid is not.
-    pub fn with_tree(mesh: TriMesh, tree: DopTree) -> PartGeometry {
+    pub fn with_tree(mesh: Arc<TriMesh>, tree: DopTree) -> PartGeometry {
         let (centre, radius) = mesh.bounding_sphere();
         let mut area = 0.0;
         let mut weighted = Vector3::zeros();

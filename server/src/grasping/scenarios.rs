@@ -518,18 +518,22 @@ fn the_grasping_scene_names_a_hand_that_grasps_its_handle() {
     let handle = scene.parts.iter().position(|p| p.name == "handle").unwrap();
     let script = ScriptedGrasp::PowerOnHandle;
     let shift = scene.parts[handle].pose * script.part_pose().inverse();
-    let geometry = PartGeometry::new((*scene.parts[handle].mesh).clone());
+    // The scene's own trees, with the scene's orientation set, as the server uses them.
+    let geometry = |part: &crate::scene::Part| {
+        PartGeometry::with_tree(Arc::clone(&part.mesh), part.tree().clone())
+    };
+    let handle_geometry = geometry(&scene.parts[handle]);
     let others: Vec<(PartId, PartGeometry, Isometry3<f64>)> = scene
         .parts
         .iter()
         .enumerate()
         .filter(|&(i, _)| i != handle)
-        .map(|(i, p)| (i as PartId, PartGeometry::new((*p.mesh).clone()), p.pose))
+        .map(|(i, p)| (i as PartId, geometry(p), p.pose))
         .collect();
     let keys = script.keyframes();
     let mut hand = GraspingHand::new(
         model,
-        GraspParams::default(),
+        scene.params.grasp(),
         HandPose {
             root: shift * keys[0].tracker,
             flex: [0.0; FLEX_COUNT],
@@ -544,7 +548,7 @@ fn the_grasping_scene_names_a_hand_that_grasps_its_handle() {
     {
         let mut obstacles = vec![Obstacle {
             part: handle as PartId,
-            geometry: &geometry,
+            geometry: &handle_geometry,
             pose: handle_pose,
         }];
         obstacles.extend(others.iter().map(|(id, g, pose)| Obstacle {

@@ -47,9 +47,7 @@ impl GraspStage {
             hand,
             parts: parts
                 .iter()
-                .map(|part| {
-                    PartGeometry::with_tree(part.mesh.as_ref().clone(), part.tree().clone())
-                })
+                .map(|part| PartGeometry::with_tree(Arc::clone(&part.mesh), part.tree().clone()))
                 .collect(),
             poses: parts.iter().map(|part| part.pose).collect(),
         }
