@@ -1835,6 +1835,16 @@ struct FrontPair {
     ending: Ending,
 }
 
+/// How [`TreePair::face_separation`] measures the extent of an inner node along a leaf's face
+/// normal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Extent {
+    /// Projecting every corner of its triangles: exact, for small subtrees.
+    Exact,
+    /// From its bounding sphere: a bound, in constant time, for large subtrees.
+    Sphere,
+}
+
 /// How a traversal ended at a node pair.
 #[derive(Debug, Clone, Copy)]
 enum Ending {
@@ -2132,7 +2142,7 @@ impl<R> TreePair<'_, R> {
                         let ending = if found {
                             Ending::Retest
                         } else {
-                            self.face_separation(ia, ib)
+                            self.face_separation(ia, ib, Extent::Exact)
                         };
                         front.push(FrontPair {
                             pair: (ia, ib),
@@ -2159,15 +2169,18 @@ impl<R> TreePair<'_, R> {
                     }
                     continue;
                 }
-                // A small subtree against one triangle: the triangle's plane often separates
-                // them where their DOPs overlap, and it stays a valid certificate along motion
-                // in that plane (a peg sliding down its hole's wall), where the DOP axis that
-                // would separate their descendants is often the direction of motion.
+                // A subtree against one triangle: the triangle's plane often separates them
+                // where their DOPs overlap, and it stays a valid certificate along motion in
+                // that plane (a peg sliding down its hole's wall), where the DOP axis that would
+                // separate their descendants is often the direction of motion. Against a large
+                // triangle at a slant it is what ends the descent at all: the triangle's
+                // re-aligned DOP is as wide as the triangle along every axis, and would overlap
+                // most of the other tree's nodes (a table top under a fine part).
                 if let Some(front) = front.as_deref_mut()
-                    && self.worth_a_plane_test(na, nb, ia, ib)
+                    && let Some(extent) = self.plane_test_extent(na, nb, ia, ib)
                 {
                     stats.bv_tests += 1;
-                    let ending = self.face_separation(ia, ib);
+                    let ending = self.face_separation(ia, ib, extent);
                     if let Ending::Separated { .. } = ending {
                         front.push(FrontPair {
                             pair: (ia, ib),
@@ -2269,29 +2282,49 @@ impl<R> TreePair<'_, R> {
         });
     }
 
-    /// Whether the pair of a leaf and an inner node of at most [`PLANE_TEST_MAX_TRIANGLES`]
-    /// triangles, one in each tree, gets the leaf's face planes tried before it is split.
-    fn worth_a_plane_test(&self, na: &Node, nb: &Node, ia: u32, ib: u32) -> bool {
-        let small = |tree: &DopTree, index: u32| {
+    /// How the leaf's face planes are tried against the other node of a pair of a leaf and an
+    /// inner node, one in each tree: against the inner node's triangles when it has at most
+    /// [`PLANE_TEST_MAX_TRIANGLES`]; against its bounding sphere when it is smaller than the
+    /// leaf (the traversal would otherwise descend the inner node alone under a large
+    /// triangle); not at all for other pairs (a small triangle's plane rarely clears a larger
+    /// subtree, and the descent splits that subtree anyway).
+    fn plane_test_extent(&self, na: &Node, nb: &Node, ia: u32, ib: u32) -> Option<Extent> {
+        let extent = |tree: &DopTree, index: u32, inner: &Node, leaf: &Node| {
             let [start, end] = tree.triangle_ranges[index as usize];
-            end - start <= PLANE_TEST_MAX_TRIANGLES
+            if end - start <= PLANE_TEST_MAX_TRIANGLES {
+                Some(Extent::Exact)
+            } else {
+                (inner.size < leaf.size).then_some(Extent::Sphere)
+            }
         };
         match (na.is_leaf(), nb.is_leaf()) {
-            (true, false) => small(self.b, ib),
-            (false, true) => small(self.a, ia),
-            _ => false,
+            (true, false) => extent(self.b, ib, nb, na),
+            (false, true) => extent(self.a, ia, na, nb),
+            _ => None,
         }
     }
 
     /// The certificate of node pair `(ia, ib)` where at least one is a leaf: the plane of one
-    /// of the leaves' triangles with all of the other node's corners strictly beyond it, the
-    /// widest gap of them; [`Ending::Retest`] when no such plane separates them.
-    fn face_separation(&self, ia: u32, ib: u32) -> Ending {
+    /// of the leaves' triangles with all of the other node's corners (or, by `extent`, its
+    /// bounding sphere) strictly beyond it, the widest gap of them; [`Ending::Retest`] when no
+    /// such plane separates them.
+    fn face_separation(&self, ia: u32, ib: u32, extent: Extent) -> Ending {
+        let (node_a, node_b) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
         let triangles_a = self.a.node_triangles(ia);
         let triangles_b = self.b.node_triangles(ib);
         let planes = |node: &Node, triangles| if node.is_leaf() { triangles } else { &[][..] };
-        let planes_a = planes(&self.a.nodes[ia as usize], triangles_a);
-        let planes_b = planes(&self.b.nodes[ib as usize], triangles_b);
+        let planes_a = planes(node_a, triangles_a);
+        let planes_b = planes(node_b, triangles_b);
+        // A node's projections on `direction` (in its tree's frame) plus `offset`.
+        let range = |node: &Node, triangles, direction: &Vector3<f64>, offset: f64| {
+            if node.is_leaf() || extent == Extent::Exact {
+                projection_range(triangles, direction, offset)
+            } else {
+                let centre = direction.dot(&node.sphere.centre()) + offset;
+                let radius = f64::from(node.sphere.radius);
+                (centre - radius, centre + radius)
+            }
+        };
         let mut best = Ending::Retest;
         let mut widest = 0.0;
         // A's normals in A's frame, B's in B's own; each rounded to f32 (as stored) before the
@@ -2312,8 +2345,8 @@ impl<R> TreePair<'_, R> {
             } else {
                 (exact, self.rotation.transpose() * exact)
             };
-            let (low_a, high_a) = projection_range(triangles_a, &in_a, 0.0);
-            let (low_b, high_b) = projection_range(triangles_b, &in_b, in_a.dot(&self.translation));
+            let (low_a, high_a) = range(node_a, triangles_a, &in_a, 0.0);
+            let (low_b, high_b) = range(node_b, triangles_b, &in_b, in_a.dot(&self.translation));
             // In A's frame the other tree is B (beyond along +normal when B is above); in B's
             // frame it is A.
             let (gap, sign) = if low_b - high_a > widest {

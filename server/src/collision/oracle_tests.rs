@@ -264,6 +264,55 @@ fn real_mesh_agrees_with_brute_force_and_parry() {
     );
 }
 
+#[test]
+fn large_triangles_against_a_fine_mesh_agree_with_brute_force_and_parry() {
+    // A handful of triangles larger than the whole torus: each is a leaf of B that outgrows
+    // every inner node of A, where the traversal tries a leaf's plane against A's node spheres.
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    let a = torus(0.35, 40, 20);
+    let b = random_soup(&mut rng, 6, 1.6);
+    let colliding = check_all(&a, &b, 300, 1.5, 42);
+    assert!(
+        colliding > 30 && colliding < 290,
+        "{colliding} colliding poses"
+    );
+}
+
+#[test]
+fn a_large_slanted_triangle_clear_of_a_fine_mesh_is_proved_apart_near_the_roots() {
+    // One triangle much larger than the torus, in a slanted plane just clear of it: its DOP
+    // overlaps nearly every node of the torus's tree, but its plane clears their spheres.
+    let a = torus(0.35, 80, 40);
+    let normal = Vector3::new(0.3, -0.2, 1.0).normalize();
+    let clearance = (0..a.vertices().len())
+        .map(|i| normal.dot(&a.vertices()[i].coords))
+        .fold(f64::MIN, f64::max)
+        + 0.02;
+    let across = normal.cross(&Vector3::x()).normalize();
+    let along = normal.cross(&across);
+    let centre = normal * clearance;
+    let corners = [0.0, 2.1, 4.2].map(|angle: f64| {
+        Point3::from(centre + (across * angle.cos() + along * angle.sin()) * 6.0)
+    });
+    let b = TriMesh::new(corners.to_vec(), vec![[0, 1, 2]]).unwrap().0;
+    let pose = Isometry3::identity();
+    assert!(
+        brute_force_pairs(&a, &b, &pose).is_empty(),
+        "the triangle clears the torus"
+    );
+    let (tree_a, tree_b) = (DopTree::build(&a), DopTree::build(&b));
+    for (first, second, b_to_a) in [(&tree_a, &tree_b, pose), (&tree_b, &tree_a, pose.inverse())] {
+        let mut stats = QueryStats::default();
+        assert!(!first.intersects(second, &b_to_a, &mut stats));
+        assert!(
+            stats.nodes_visited * 50 < tree_a.node_count() as u64,
+            "{} of the torus tree's {} nodes visited",
+            stats.nodes_visited,
+            tree_a.node_count()
+        );
+    }
+}
+
 /// B's pose after a small random step from `pose`: a turn of up to `turn` radians about a random
 /// axis and a shift of up to `shift` per coordinate, pulled towards `centre` so the walk keeps
 /// crossing in and out of contact.
