@@ -284,8 +284,10 @@ fn a_large_slanted_triangle_clear_of_a_fine_mesh_is_proved_apart_near_the_roots(
     // overlaps nearly every node of the torus's tree, but its plane clears their spheres.
     let a = torus(0.35, 80, 40);
     let normal = Vector3::new(0.3, -0.2, 1.0).normalize();
-    let clearance = (0..a.vertices().len())
-        .map(|i| normal.dot(&a.vertices()[i].coords))
+    let clearance = a
+        .vertices()
+        .iter()
+        .map(|v| normal.dot(&v.coords))
         .fold(f64::MIN, f64::max)
         + 0.02;
     let across = normal.cross(&Vector3::x()).normalize();
