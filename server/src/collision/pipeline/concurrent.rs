@@ -48,7 +48,7 @@ impl<C: ExactTest + 'static> ConcurrentPipeline<C> {
                 let serve = || serve(pipeline, &worker_front, &command_receiver, &report_sender);
                 // The whole loop runs inside the pool, so the thread that runs the frames is one
                 // of the pool's own: a frame starts without a hand-over to the pool, and the
-                // first queued move can wake the pool's other threads (see `wake_pool`).
+                // first queued move can wake the pool's other threads (see `PoolWarmer`).
                 match pool {
                     Some(pool) => pool.install(serve),
                     None => serve(),

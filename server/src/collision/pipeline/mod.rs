@@ -35,6 +35,7 @@ use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 use thiserror::Error;
 
@@ -341,26 +342,49 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
 
     /// Takes the pairs down the back end, spread over the current rayon pool, and returns the
     /// time the separating-plane and the exact stages took, summed over the threads.
+    ///
+    /// The pre-checks run in tasks of [`PAIRS_PER_TASK`] pairs, and each exact test a task runs
+    /// into is spawned as a task of its own: exact tests cost from one to tens of microseconds,
+    /// against a quarter of one for a pre-check, so a thread that happened to take a task holding
+    /// several of them was left working alone at the end of the frame (up to 40 us in B4 on two
+    /// threads); split this way, it is left with at most one.
     fn run(&self, work: &mut [PairWork]) -> (Duration, Duration) {
         if rayon::current_num_threads() == 1 || work.len() <= PAIRS_PER_TASK {
-            return self.test(work);
+            let planes = self.pre_check(work);
+            let start = Instant::now();
+            work.iter_mut()
+                .filter(|item| !item.separated)
+                .for_each(|item| self.exact(item));
+            return (planes, start.elapsed());
         }
-        work.par_chunks_mut(PAIRS_PER_TASK)
-            .map(|chunk| self.test(chunk))
-            .reduce(
-                || (Duration::ZERO, Duration::ZERO),
-                |a, b| (a.0 + b.0, a.1 + b.1),
-            )
+        let exact_nanos = AtomicU64::new(0);
+        let planes = rayon::scope(|scope| {
+            work.par_chunks_mut(PAIRS_PER_TASK)
+                .with_max_len(1)
+                .map(|chunk| {
+                    let planes = self.pre_check(chunk);
+                    for item in chunk.iter_mut().filter(|item| !item.separated) {
+                        let exact_nanos = &exact_nanos;
+                        scope.spawn(move |_| {
+                            let start = Instant::now();
+                            self.exact(item);
+                            exact_nanos
+                                .fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+                        });
+                    }
+                    planes
+                })
+                .sum()
+        });
+        (planes, Duration::from_nanos(exact_nanos.into_inner()))
     }
 
-    /// Takes a task's pairs through the separating-plane stage and the unseparated ones through
-    /// the exact test, and returns the time each stage took. Both stages share one parallel pass
-    /// (a pass per stage cost a second hand-over to the sleeping threads every frame); the
-    /// stages still run one after the other within a task, so that each is timed as a whole.
-    fn test(&self, pairs: &mut [PairWork]) -> (Duration, Duration) {
+    /// Fills in the kept state of each pair and runs the separating-plane stage on them; returns
+    /// the stage's time.
+    fn pre_check(&self, pairs: &mut [PairWork]) -> Duration {
         for item in pairs.iter_mut() {
             let state = self.pairs.get(&item.pair);
-            item.b_to_a = pose(self.slots, item.pair.0).inv_mul(&pose(self.slots, item.pair.1));
+            item.b_to_a = relative_pose(self.slots, item.pair);
             if let Some(state) = state {
                 item.plane = state.plane;
                 item.was_colliding = state.contact.is_some();
@@ -376,26 +400,27 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
                 item.loops = check.loops;
             }
         }
-        let planes_done = Instant::now();
-        for item in pairs.iter_mut().filter(|item| !item.separated) {
-            let [a, b] = models(self.slots, item.pair);
-            let (a, b) = (a.exact(), b.exact());
-            item.colliding = match self.detail {
-                Detail::Pairs if item.expected_bv_tests >= self.split_min_bv_tests => {
-                    item.split = true;
-                    a.intersects_split(b, &item.b_to_a, &mut item.stats)
-                }
-                Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
-                Detail::TrianglePairs => {
-                    let mut triangles = Vec::new();
-                    a.intersecting_pairs(b, &item.b_to_a, &mut triangles, &mut item.stats);
-                    let colliding = !triangles.is_empty();
-                    item.triangles = Some(triangles);
-                    colliding
-                }
-            };
-        }
-        (planes_done - start, planes_done.elapsed())
+        start.elapsed()
+    }
+
+    /// The exact test of a pair the pre-check did not separate.
+    fn exact(&self, item: &mut PairWork) {
+        let [a, b] = models(self.slots, item.pair);
+        let (a, b) = (a.exact(), b.exact());
+        item.colliding = match self.detail {
+            Detail::Pairs if item.expected_bv_tests >= self.split_min_bv_tests => {
+                item.split = true;
+                a.intersects_split(b, &item.b_to_a, &mut item.stats)
+            }
+            Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
+            Detail::TrianglePairs => {
+                let mut triangles = Vec::new();
+                a.intersecting_pairs(b, &item.b_to_a, &mut triangles, &mut item.stats);
+                let colliding = !triangles.is_empty();
+                item.triangles = Some(triangles);
+                colliding
+            }
+        };
     }
 }
 
@@ -408,6 +433,7 @@ pub struct CollisionPipeline<C> {
     pairs: FxHashMap<PairKey, PairState>,
     queue: Vec<u32>,
     queued: Vec<bool>,
+    warmer: PoolWarmer,
     config: PipelineConfig,
 }
 
@@ -422,6 +448,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
             pairs: FxHashMap::default(),
             queue: Vec::new(),
             queued: Vec::new(),
+            warmer: PoolWarmer::default(),
             config,
         }
     }
@@ -539,7 +566,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
 
     fn enqueue(&mut self, index: u32) {
         if self.queue.is_empty() {
-            wake_pool();
+            self.warmer.wake();
         }
         if !self.queued[index as usize] {
             self.queued[index as usize] = true;
@@ -586,6 +613,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
             queue: &self.queue,
             interest: &self.interest,
         };
+        self.warmer.release();
         let (mut update, carried_times) = rayon::join(
             || boxes.update(&back_end),
             || back_end.run(&mut carried_work),
@@ -694,7 +722,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
         let slots = &self.slots;
         missing.par_iter_mut().for_each(|(pair, triangles)| {
             let [a, b] = models(slots, *pair);
-            let b_to_a = pose(slots, pair.0).inv_mul(&pose(slots, pair.1));
+            let b_to_a = relative_pose(slots, *pair);
             a.exact()
                 .intersecting_pairs(b.exact(), &b_to_a, triangles, &mut QueryStats::default());
         });
@@ -811,16 +839,46 @@ impl<C: ExactTest> BoxStage<'_, C> {
     }
 }
 
-/// Wakes the idle threads of the current rayon pool; called when a frame's first move is
-/// queued.
+/// Keeps the other threads of the current rayon pool awake from a frame's first queued move until
+/// the frame's back end starts.
 ///
 /// A pool thread asleep between frames took 23-31 us to take up the back end once a two-thread
-/// frame handed it work (measured in B4); woken by the first move, it is up by the time the
-/// frame starts. Only from inside a pool of several threads: elsewhere there is no pool of the
+/// frame handed it work (measured in B4). Woken by the first move but left idle, it went back to
+/// sleep about as often as not before the frame started: its first pair then came 8-26 us after
+/// the back end's start, against 1.4-1.9 us when it waits awake. So it is handed a task that
+/// spins until the back end starts, or [`WARM_SPIN_LIMIT`] passes (a frame that is queued but not
+/// run soon). Only from inside a pool of several threads: elsewhere there is no pool of the
 /// pipeline's to wake.
-fn wake_pool() {
-    if rayon::current_thread_index().is_some() && rayon::current_num_threads() > 1 {
-        rayon::spawn(|| {});
+#[derive(Default)]
+struct PoolWarmer {
+    /// Counts the back ends started: a spinning task stops when it changes.
+    back_ends: Arc<AtomicU64>,
+}
+
+/// Longest a [`PoolWarmer`] task spins.
+const WARM_SPIN_LIMIT: Duration = Duration::from_micros(300);
+
+impl PoolWarmer {
+    /// Wakes the other threads of the current pool and keeps them awake until [`Self::release`].
+    fn wake(&self) {
+        if rayon::current_thread_index().is_none() {
+            return;
+        }
+        let started = self.back_ends.load(Ordering::Relaxed);
+        for _ in 1..rayon::current_num_threads() {
+            let back_ends = Arc::clone(&self.back_ends);
+            rayon::spawn(move || {
+                let deadline = Instant::now() + WARM_SPIN_LIMIT;
+                while back_ends.load(Ordering::Relaxed) == started && Instant::now() < deadline {
+                    std::hint::spin_loop();
+                }
+            });
+        }
+    }
+
+    /// Lets the spinning tasks end: the back end's work is about to be handed out.
+    fn release(&self) {
+        self.back_ends.fetch_add(1, Ordering::Relaxed);
     }
 }
 
@@ -836,8 +894,9 @@ fn models<C>(slots: &[Slot<C>], (a, b): PairKey) -> [&CollisionModel<C>; 2] {
     [a, b].map(|index| &*live(slots, index).model)
 }
 
-fn pose<C>(slots: &[Slot<C>], index: u32) -> Isometry3<f64> {
-    live(slots, index).pose
+/// The pose of a pair's second object in its first one's frame.
+fn relative_pose<C>(slots: &[Slot<C>], (a, b): PairKey) -> Isometry3<f64> {
+    live(slots, a).pose.inv_mul(&live(slots, b).pose)
 }
 
 fn ordered(a: u32, b: u32) -> PairKey {
