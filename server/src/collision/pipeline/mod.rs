@@ -855,6 +855,13 @@ struct PoolWarmer {
     back_ends: Arc<AtomicU64>,
 }
 
+/// The cores of this machine: a [`PoolWarmer`] keeps no more threads spinning than there are
+/// cores besides the caller's, so that they never take the core the caller queues moves on.
+fn cores() -> usize {
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from))
+}
+
 /// Longest a [`PoolWarmer`] task spins.
 const WARM_SPIN_LIMIT: Duration = Duration::from_micros(300);
 
@@ -865,7 +872,7 @@ impl PoolWarmer {
             return;
         }
         let started = self.back_ends.load(Ordering::Relaxed);
-        for _ in 1..rayon::current_num_threads() {
+        for _ in 1..rayon::current_num_threads().min(cores()) {
             let back_ends = Arc::clone(&self.back_ends);
             rayon::spawn(move || {
                 let deadline = Instant::now() + WARM_SPIN_LIMIT;
