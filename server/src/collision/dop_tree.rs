@@ -280,6 +280,9 @@ struct PairMemory {
     /// queries without contact since.
     witness: Option<[u32; 2]>,
     misses_since_witness: u32,
+    /// The last query found the trees apart at its walk from the remembered front, the roots'
+    /// probes having failed: the next one walks from the front before it probes the roots.
+    apart_by_front: bool,
     /// How [`roots_separated_along_offset`] last proved the roots apart: checked first next time.
     root_separation: Option<RootSeparation>,
     /// B's pose in A's frame at the last traversal that recorded a front, and that front: every
@@ -669,6 +672,12 @@ const WITNESS_SEARCH_LEVELS: u32 = 4;
 /// touches where the last one did.
 const WITNESS_KEPT_MISSES: u32 = 1;
 
+/// Largest front walked before the roots' probes when it proved the last query apart: scanning
+/// it costs about what the probes cost (on the 50k torus of B1, whose fronts hold hundreds to
+/// thousands of pairs, walking them first made the queries at d = 1.5 and 1.75, most of them far
+/// apart, 40-75 % slower).
+const FRONT_FIRST_MAX_PAIRS: usize = 128;
+
 /// A carried front is used while B moved by at most this fraction of the smaller bounding radius
 /// since the previous query; beyond, most of it would be tested again and the roots are cheaper.
 const FRONT_MAX_MOTION: f64 = 0.05;
@@ -770,6 +779,7 @@ impl PairMemory {
                 memory.witness = None;
                 memory.root_separation = None;
                 memory.front_pose = None;
+                memory.apart_by_front = false;
             }
             memory
         })
@@ -800,7 +810,25 @@ impl PairMemory {
         {
             return true;
         }
+        // Near a pair apart, the probes of the roots usually fail again where they failed last
+        // time, and the front settles the query alone (on the bunny at d = 2.0 to 1.25 of B1,
+        // the failed probes took about 40 % of a query's time).
+        if self.apart_by_front
+            && self.front.len() <= FRONT_FIRST_MAX_PAIRS
+            && self.witness.is_none()
+            && !RootSeparation::still_holds(&self.root_separation, a, b, b_to_a, centre_b)
+        {
+            let pair = LazyPair::<K>::new(a, b, b_to_a);
+            let (carry, placement) = self.carry_front(&pair);
+            if let Carry::Advanced { .. } = carry {
+                let hit = self.search_carried::<K>(&pair, carry, placement, stats, parallel);
+                self.apart_by_front = hit.is_none();
+                self.remember_witness(hit);
+                return hit.is_some();
+            }
+        }
         let Some(pair) = affine_pair::<K>(a, b, b_to_a, centre_b, &mut self.root_separation) else {
+            self.apart_by_front = false;
             stats.bv_tests += 1;
             // The front, if any, stays valid: its pose is kept with it.
             self.remember_witness(None);
@@ -815,7 +843,11 @@ impl PairMemory {
             );
             pair.get().run_walk::<K>(Walk::from(&[start]), stats)
         });
-        let hit = near.or_else(|| self.search_from_front::<K>(&pair, stats, parallel));
+        let hit = near.or_else(|| {
+            let (carry, placement) = self.carry_front(&pair);
+            self.search_carried::<K>(&pair, carry, placement, stats, parallel)
+        });
+        self.apart_by_front = hit.is_none();
         self.remember_witness(hit);
         hit.is_some()
     }
@@ -833,17 +865,19 @@ impl PairMemory {
         }
     }
 
-    /// The traversal of a first-hit query from the remembered front (or from the roots), split
-    /// across rayon's threads when `parallel` and long. A query without a hit leaves the front
-    /// where it ended; one with a hit leaves the front as it was when it came from it.
-    fn search_from_front<const K: usize>(
+    /// The traversal of a first-hit query from the remembered front (or from the roots), as
+    /// [`PairMemory::carry_front`] decided, split across rayon's threads when `parallel` and
+    /// long. A query without a hit leaves the front where it ended; one with a hit leaves the
+    /// front as it was when it came from it.
+    fn search_carried<const K: usize>(
         &mut self,
         pair: &LazyPair<'_, K>,
+        carry: Carry,
+        placement: Placement,
         stats: &mut QueryStats,
         parallel: bool,
     ) -> Option<[u32; 2]> {
         let (a, b) = (pair.a, pair.b);
-        let (carry, placement) = self.carry_front(pair);
         // A restart costs about as much as the last complete front was large.
         let split = parallel
             && rayon::current_num_threads() > 1
@@ -1028,13 +1062,7 @@ fn affine_pair<'a, const K: usize>(
             roots_separated_along_offset(a, b, b_to_a, centre_b, hints, root_separation)
         })
     };
-    (!separated).then(|| LazyPair {
-        a,
-        b,
-        rotation: *b_to_a.rotation.to_rotation_matrix().matrix(),
-        translation: b_to_a.translation.vector,
-        pair: std::cell::OnceCell::new(),
-    })
+    (!separated).then(|| LazyPair::new(a, b, b_to_a))
 }
 
 /// A query's two trees and B's pose in A's frame, with the traversal's set-up (the support cones
@@ -1049,6 +1077,17 @@ struct LazyPair<'a, const K: usize> {
 }
 
 impl<'a, const K: usize> LazyPair<'a, K> {
+    /// The query of `b` posed at `b_to_a` against `a`, set up on first use.
+    fn new(a: &'a DopTree, b: &'a DopTree, b_to_a: &Isometry3<f64>) -> Self {
+        LazyPair {
+            a,
+            b,
+            rotation: *b_to_a.rotation.to_rotation_matrix().matrix(),
+            translation: b_to_a.translation.vector,
+            pair: std::cell::OnceCell::new(),
+        }
+    }
+
     /// The traversal's set-up, made now if not yet.
     fn get(&self) -> &TreePair<'a, AffineRealign<K>> {
         self.pair.get_or_init(|| {
