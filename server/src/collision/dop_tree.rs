@@ -811,8 +811,8 @@ impl PairMemory {
             return true;
         }
         // Near a pair apart, the probes of the roots usually fail again where they failed last
-        // time, and the front settles the query alone (on the bunny at d = 2.0 to 1.25 of B1,
-        // the failed probes took about 40 % of a query's time).
+        // time, and the front settles the query alone (on the bunny at d = 2.0 of B1, the failed
+        // probes took about 40 % of a query's time).
         if self.apart_by_front
             && self.front.len() <= FRONT_FIRST_MAX_PAIRS
             && self.witness.is_none()
