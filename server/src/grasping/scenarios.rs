@@ -519,16 +519,13 @@ fn the_grasping_scene_names_a_hand_that_grasps_its_handle() {
     let script = ScriptedGrasp::PowerOnHandle;
     let shift = scene.parts[handle].pose * script.part_pose().inverse();
     // The scene's own trees, with the scene's orientation set, as the server uses them.
-    let geometry = |part: &crate::scene::Part| {
-        PartGeometry::with_tree(Arc::clone(&part.mesh), part.tree().clone())
-    };
-    let handle_geometry = geometry(&scene.parts[handle]);
+    let handle_geometry = scene.parts[handle].grasp_geometry();
     let others: Vec<(PartId, PartGeometry, Isometry3<f64>)> = scene
         .parts
         .iter()
         .enumerate()
         .filter(|&(i, _)| i != handle)
-        .map(|(i, p)| (i as PartId, geometry(p), p.pose))
+        .map(|(i, p)| (i as PartId, p.grasp_geometry(), p.pose))
         .collect();
     let keys = script.keyframes();
     let mut hand = GraspingHand::new(

@@ -45,10 +45,7 @@ impl GraspStage {
     pub fn new(hand: GraspingHand, parts: &[Part]) -> GraspStage {
         GraspStage {
             hand,
-            parts: parts
-                .iter()
-                .map(|part| PartGeometry::with_tree(Arc::clone(&part.mesh), part.tree().clone()))
-                .collect(),
+            parts: parts.iter().map(Part::grasp_geometry).collect(),
             poses: parts.iter().map(|part| part.pose).collect(),
         }
     }

@@ -51,6 +51,7 @@ use crate::collision::pipeline::ObjectId;
 use crate::collision::{DopTree, OrientationSet};
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{GeometryError, Point, TriMesh, load_mesh};
+use crate::grasping::PartGeometry;
 use params::Problem;
 pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates};
 
@@ -146,6 +147,11 @@ impl Part {
     /// the same mesh.
     pub fn tree(&self) -> &DopTree {
         self.tree.get(&self.mesh)
+    }
+
+    /// The part as the grasping stage tests it: its shared mesh and tree, not copies.
+    pub fn grasp_geometry(&self) -> PartGeometry {
+        PartGeometry::with_tree(Arc::clone(&self.mesh), self.tree().clone())
     }
 }
 
