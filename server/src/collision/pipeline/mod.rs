@@ -843,9 +843,10 @@ impl<C: ExactTest> BoxStage<'_, C> {
 /// the frame's back end starts.
 ///
 /// A pool thread asleep between frames took 23-31 us to take up the back end once a two-thread
-/// frame handed it work (measured in B4). Woken by the first move but left idle, it went back to
-/// sleep about as often as not before the frame started: its first pair then came 8-26 us after
-/// the back end's start, against 1.4-1.9 us when it waits awake. So it is handed a task that
+/// frame handed it work (measured in B4). Woken by the first move but left idle, it often fell
+/// asleep again while the moves were queued: its first pair came 6.7-26 us after the back end's
+/// start (means over the frames of seven runs), against 1.4-1.9 us in most runs when it waited
+/// awake. So it is handed a task that
 /// spins until the back end starts, or [`WARM_SPIN_LIMIT`] passes (a frame that is queued but not
 /// run soon). Only from inside a pool of several threads: elsewhere there is no pool of the
 /// pipeline's to wake.
