@@ -822,9 +822,7 @@ impl PairMemory {
             let (carry, placement) = self.carry_front(&pair);
             if let Carry::Advanced { .. } = carry {
                 let hit = self.search_carried::<K>(&pair, carry, placement, stats, parallel);
-                self.apart_by_front = hit.is_none();
-                self.remember_witness(hit);
-                return hit.is_some();
+                return self.remember_walk(hit);
             }
         }
         let Some(pair) = affine_pair::<K>(a, b, b_to_a, centre_b, &mut self.root_separation) else {
@@ -847,6 +845,13 @@ impl PairMemory {
             let (carry, placement) = self.carry_front(&pair);
             self.search_carried::<K>(&pair, carry, placement, stats, parallel)
         });
+        self.remember_walk(hit)
+    }
+
+    /// Remembers what a query's walk found (its hit, if any) and returns whether it found
+    /// contact: the witness, and whether the walk proved the trees apart, which sends the next
+    /// query to the front first.
+    fn remember_walk(&mut self, hit: Option<[u32; 2]>) -> bool {
         self.apart_by_front = hit.is_none();
         self.remember_witness(hit);
         hit.is_some()
