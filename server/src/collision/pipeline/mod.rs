@@ -846,10 +846,9 @@ impl<C: ExactTest> BoxStage<'_, C> {
 /// frame handed it work (measured in B4). Woken by the first move but left idle, it often fell
 /// asleep again while the moves were queued: its first pair came 6.7-26 us after the back end's
 /// start (means over the frames of seven runs), against 1.4-1.9 us in most runs when it waited
-/// awake. So it is handed a task that
-/// spins until the back end starts, or [`WARM_SPIN_LIMIT`] passes (a frame that is queued but not
-/// run soon). Only from inside a pool of several threads: elsewhere there is no pool of the
-/// pipeline's to wake.
+/// awake. So it is handed a task that spins until the back end starts, or [`WARM_SPIN_LIMIT`]
+/// passes (a frame that is queued but not run soon). Only from inside a pool of several threads:
+/// elsewhere there is no pool of the pipeline's to wake.
 #[derive(Default)]
 struct PoolWarmer {
     /// Counts the back ends started: a spinning task stops when it changes.
