@@ -18,15 +18,22 @@ use crate::geometry::TriMesh;
 /// almost zero) do not produce false separations, as RAPID does.
 const PARALLEL_SLACK: f64 = 1e-6;
 
+/// A box fitted to a set of triangles: the OBB-tree's bounding volume, and the DOP-tree's second
+/// test near the leaves (`dop_tree::NodeBox`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct OrientedBox {
+    /// Box axes as columns, in the mesh frame, by decreasing variance of the triangles.
+    pub(crate) axes: Matrix3<f64>,
+    pub(crate) center: Vector3<f64>,
+    /// Half side lengths along the axes.
+    pub(crate) extents: Vector3<f64>,
+}
+
 /// A node: an oriented box; a leaf (`count > 0`) owns triangles `first..first + count`, an inner
 /// node has children `first` and `first + 1`.
 #[derive(Debug, Clone, Copy)]
 struct ObbNode {
-    /// Box axes as columns, in the mesh frame.
-    axes: Matrix3<f64>,
-    center: Vector3<f64>,
-    /// Half side lengths along the axes.
-    extents: Vector3<f64>,
+    bounds: OrientedBox,
     first: u32,
     count: u32,
 }
@@ -36,7 +43,7 @@ impl ObbNode {
         self.count > 0
     }
     fn size(&self) -> f64 {
-        self.extents.max()
+        self.bounds.extents.max()
     }
 }
 
@@ -75,7 +82,11 @@ impl ObbTree {
             let (na, nb) = (&self.nodes[ia as usize], &other.nodes[ib as usize]);
             stats.bv_tests += 1;
             stats.realignments += 1;
-            if obbs_disjoint(na, nb, &rotation, &translation) {
+            if na
+                .bounds
+                .separating_axis(&nb.bounds, &rotation, &translation)
+                .is_some()
+            {
                 continue;
             }
             stats.nodes_visited += 1;
@@ -119,7 +130,7 @@ impl MeshCollider for ObbTree {
             .map(|i| mesh.triangle(i))
             .collect();
         let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-        let mut nodes = vec![fit_box(&triangles, &order)];
+        let mut nodes = vec![ObbNode::fit(&triangles, &order)];
         build_node(&triangles, &mut order, &mut nodes, 0, 0);
         ObbTree {
             nodes,
@@ -156,7 +167,7 @@ fn build_node(
         return;
     }
     let range = &mut order[start..start + count];
-    let axis = nodes[index].axes.column(0).into_owned();
+    let axis = nodes[index].bounds.axes.column(0).into_owned();
     let centroid = |t: u32| {
         let [p, q, r] = &triangles[t as usize];
         axis.dot(&((p.coords + q.coords + r.coords) / 3.0))
@@ -175,8 +186,8 @@ fn build_node(
         range.select_nth_unstable_by(left, |&a, &b| centroid(a).total_cmp(&centroid(b)));
     }
     let children = nodes.len();
-    let mut first = fit_box(triangles, &order[start..start + left]);
-    let mut second = fit_box(triangles, &order[start + left..start + count]);
+    let mut first = ObbNode::fit(triangles, &order[start..start + left]);
+    let mut second = ObbNode::fit(triangles, &order[start + left..start + count]);
     first.first = start as u32;
     second.first = (start + left) as u32;
     nodes.push(first);
@@ -187,90 +198,102 @@ fn build_node(
     build_node(triangles, order, nodes, children + 1, start + left);
 }
 
-/// The box fitted to the triangles `subset` (a leaf covering them until it is split).
-fn fit_box(triangles: &[Triangle], subset: &[u32]) -> ObbNode {
-    // Area-weighted second moments of the triangles as surfaces.
-    let mut area_sum = 0.0;
-    let mut mean = Vector3::zeros();
-    let mut moment = Matrix3::zeros();
-    for &t in subset {
-        let [p, q, r] = &triangles[t as usize];
-        let area = 0.5 * (q - p).cross(&(r - p)).norm();
-        let m = (p.coords + q.coords + r.coords) / 3.0;
-        area_sum += area;
-        mean += area * m;
-        moment += (area / 12.0)
-            * (9.0 * m * m.transpose()
-                + p.coords * p.coords.transpose()
-                + q.coords * q.coords.transpose()
-                + r.coords * r.coords.transpose());
-    }
-    mean /= area_sum;
-    let covariance = moment / area_sum - mean * mean.transpose();
-    let eigen = SymmetricEigen::new(covariance);
-    // Columns sorted by decreasing variance: the first axis is the one to split along.
-    let mut order = [0usize, 1, 2];
-    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
-    let axes = Matrix3::from_columns(&order.map(|i| eigen.eigenvectors.column(i).into_owned()));
-    let mut lo = Vector3::repeat(f64::MAX);
-    let mut hi = Vector3::repeat(f64::MIN);
-    for &t in subset {
-        for p in &triangles[t as usize] {
-            let local = axes.tr_mul(&p.coords);
-            lo = lo.inf(&local);
-            hi = hi.sup(&local);
+impl ObbNode {
+    /// The node fitted to the triangles `subset`: a leaf covering them until it is split.
+    fn fit(triangles: &[Triangle], subset: &[u32]) -> Self {
+        ObbNode {
+            bounds: OrientedBox::fit(triangles, subset),
+            first: 0,
+            count: subset.len() as u32,
         }
-    }
-    let scale = hi.abs().max().max(lo.abs().max());
-    ObbNode {
-        axes,
-        center: axes * ((lo + hi) * 0.5),
-        // A relative pad covers the rounding of the projections.
-        extents: (hi - lo) * 0.5 + Vector3::repeat(scale * 1e-12),
-        first: 0,
-        count: subset.len() as u32,
     }
 }
 
-/// The 15-axis separating-axis test of box `a` and box `b`, B posed by (rotation, translation)
-/// in A's frame. True when an axis separates them.
-fn obbs_disjoint(
-    a: &ObbNode,
-    b: &ObbNode,
-    rotation: &Matrix3<f64>,
-    translation: &Vector3<f64>,
-) -> bool {
-    // B's box in A's box frame: r[i][j] = A_i . B_j, t = centre offset in A's axes.
-    let b_axes = rotation * b.axes;
-    let r = a.axes.tr_mul(&b_axes);
-    let t = a
-        .axes
-        .tr_mul(&(rotation * b.center + translation - a.center));
-    let abs_r = r.abs().add_scalar(PARALLEL_SLACK);
-    let (ea, eb) = (&a.extents, &b.extents);
-    for i in 0..3 {
-        let rb = eb.dot(&abs_r.row(i).transpose());
-        if t[i].abs() > ea[i] + rb {
-            return true;
+impl OrientedBox {
+    /// The box fitted to the triangles `subset` of `triangles`.
+    pub(crate) fn fit(triangles: &[Triangle], subset: &[u32]) -> Self {
+        // Area-weighted second moments of the triangles as surfaces.
+        let mut area_sum = 0.0;
+        let mut mean = Vector3::zeros();
+        let mut moment = Matrix3::zeros();
+        for &t in subset {
+            let [p, q, r] = &triangles[t as usize];
+            let area = 0.5 * (q - p).cross(&(r - p)).norm();
+            let m = (p.coords + q.coords + r.coords) / 3.0;
+            area_sum += area;
+            mean += area * m;
+            moment += (area / 12.0)
+                * (9.0 * m * m.transpose()
+                    + p.coords * p.coords.transpose()
+                    + q.coords * q.coords.transpose()
+                    + r.coords * r.coords.transpose());
         }
-    }
-    for j in 0..3 {
-        let ra = ea.dot(&abs_r.column(j));
-        if t.dot(&r.column(j)).abs() > ra + eb[j] {
-            return true;
-        }
-    }
-    for i in 0..3 {
-        let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
-        for j in 0..3 {
-            let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-            let ra = ea[i1] * abs_r[(i2, j)] + ea[i2] * abs_r[(i1, j)];
-            let rb = eb[j1] * abs_r[(i, j2)] + eb[j2] * abs_r[(i, j1)];
-            let distance = (t[i2] * r[(i1, j)] - t[i1] * r[(i2, j)]).abs();
-            if distance > ra + rb {
-                return true;
+        mean /= area_sum;
+        let covariance = moment / area_sum - mean * mean.transpose();
+        let eigen = SymmetricEigen::new(covariance);
+        // Columns sorted by decreasing variance: the first axis is the one to split along.
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+        let axes = Matrix3::from_columns(&order.map(|i| eigen.eigenvectors.column(i).into_owned()));
+        let mut lo = Vector3::repeat(f64::MAX);
+        let mut hi = Vector3::repeat(f64::MIN);
+        for &t in subset {
+            for p in &triangles[t as usize] {
+                let local = axes.tr_mul(&p.coords);
+                lo = lo.inf(&local);
+                hi = hi.sup(&local);
             }
         }
+        let scale = hi.abs().max().max(lo.abs().max());
+        OrientedBox {
+            axes,
+            center: axes * ((lo + hi) * 0.5),
+            // A relative pad covers the rounding of the projections.
+            extents: (hi - lo) * 0.5 + Vector3::repeat(scale * 1e-12),
+        }
     }
-    false
+
+    /// The 15-axis separating-axis test of this box against `other` posed by (rotation,
+    /// translation) in this box's mesh frame: an axis, in that frame and not normalised, along
+    /// which the boxes' projections are disjoint, or `None` when none of the 15 is.
+    pub(crate) fn separating_axis(
+        &self,
+        other: &OrientedBox,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+    ) -> Option<Vector3<f64>> {
+        // The other box in this box's frame: r[i][j] = A_i . B_j, t = centre offset in A's axes.
+        let b_axes = rotation * other.axes;
+        let r = self.axes.tr_mul(&b_axes);
+        let t = self
+            .axes
+            .tr_mul(&(rotation * other.center + translation - self.center));
+        let abs_r = r.abs().add_scalar(PARALLEL_SLACK);
+        let (ea, eb) = (&self.extents, &other.extents);
+        for i in 0..3 {
+            let rb = eb.dot(&abs_r.row(i).transpose());
+            if t[i].abs() > ea[i] + rb {
+                return Some(self.axes.column(i).into_owned());
+            }
+        }
+        for j in 0..3 {
+            let ra = ea.dot(&abs_r.column(j));
+            if t.dot(&r.column(j)).abs() > ra + eb[j] {
+                return Some(b_axes.column(j).into_owned());
+            }
+        }
+        for i in 0..3 {
+            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+            for j in 0..3 {
+                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+                let ra = ea[i1] * abs_r[(i2, j)] + ea[i2] * abs_r[(i1, j)];
+                let rb = eb[j1] * abs_r[(i, j2)] + eb[j2] * abs_r[(i, j1)];
+                let distance = (t[i2] * r[(i1, j)] - t[i1] * r[(i2, j)]).abs();
+                if distance > ra + rb {
+                    return Some(self.axes.column(i).cross(&b_axes.column(j)));
+                }
+            }
+        }
+        None
+    }
 }
