@@ -2647,7 +2647,7 @@ mod tests {
 
     use super::*;
     use crate::collision::ObbTree;
-    use crate::collision::oracle_tests::{random_soup, torus};
+    use crate::collision::oracle_tests::{random_pose, random_soup, torus};
 
     /// Every corner of every node's triangles, with the node.
     fn node_corners(tree: &DopTree) -> impl Iterator<Item = (usize, Point3<f64>)> + '_ {
@@ -2750,12 +2750,7 @@ mod tests {
         };
         let mut certified = 0;
         for _ in 0..20 {
-            let axis =
-                nalgebra::Unit::new_normalize(Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)));
-            let pose = Isometry3::from_parts(
-                Translation3::from(Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0))),
-                UnitQuaternion::from_axis_angle(&axis, rng.random_range(-3.0..3.0)),
-            );
+            let pose = random_pose(&mut rng, 1.0);
             let pair = TreePair::new(&a, &b, &pose, |_, _| ());
             for ia in 0..a.node_count() as u32 {
                 for ib in 0..b.node_count() as u32 {
