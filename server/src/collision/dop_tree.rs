@@ -725,7 +725,7 @@ const PLANE_TEST_MAX_TRIANGLES: u32 = 16;
 /// is as wide as the patch along most of them: on the 50k torus of B1 the first query after a
 /// contact phase opened 1,100-1,200 node pairs down to the leaves with the DOPs alone. Above
 /// this size a box test (about 30 ns) rarely separates what the DOPs did not.
-const BOX_TEST_MAX_TRIANGLES: u32 = 64;
+const BOX_TEST_MAX_TRIANGLES: usize = 64;
 
 /// Depth of the cut through the larger tree where a split query from the roots starts: up to
 /// 2^depth pairs, enough for work stealing to balance two to eight threads.
@@ -1558,17 +1558,10 @@ impl NodeBox {
     /// The box fitted (as the OBB-tree fits its boxes) to the triangles `subset` of
     /// `triangles`, rounded to `f32` outwards.
     fn around(triangles: &[Triangle], subset: &[u32]) -> Self {
-        let axes = OrientedBox::fit(triangles, subset)
-            .axes
+        let axes = OrientedBox::fitted_axes(triangles, subset)
             .map(|x| x as f32)
             .cast::<f64>();
-        let mut lo = Vector3::repeat(f64::MAX);
-        let mut hi = Vector3::repeat(f64::MIN);
-        for p in subset.iter().flat_map(|&t| &triangles[t as usize]) {
-            let local = axes.tr_mul(&p.coords);
-            lo = lo.inf(&local);
-            hi = hi.sup(&local);
-        }
+        let (lo, hi) = OrientedBox::local_range(&axes, triangles, subset);
         let centre = axes * ((lo + hi) * 0.5);
         let half = (hi - lo) * 0.5;
         let pad = BOX_ROUNDING * (centre.norm() + half.sum());
@@ -1579,23 +1572,13 @@ impl NodeBox {
         }
     }
 
-    /// The box in `f64`, for the separating-axis test.
+    /// The box in `f64`, for the separating-axis test and projections.
     fn oriented(&self) -> OrientedBox {
         OrientedBox {
             axes: Matrix3::from(self.axes).cast::<f64>(),
             center: Vector3::from(self.centre).cast::<f64>(),
             extents: Vector3::from(self.extents).cast::<f64>(),
         }
-    }
-
-    /// The box's projection on `direction` (in its tree's frame) plus `offset`.
-    fn projection(&self, direction: &Vector3<f64>, offset: f64) -> (f64, f64) {
-        let oriented = self.oriented();
-        let centre = oriented.center.dot(direction) + offset;
-        let radius = (0..3)
-            .map(|i| oriented.extents[i] * oriented.axes.column(i).dot(direction).abs())
-            .sum::<f64>();
-        (centre - radius, centre + radius)
     }
 }
 
@@ -2064,21 +2047,15 @@ impl<'a, R> TreePair<'a, R> {
     /// between the boxes' projections on it; `None` when the boxes overlap too, or when either
     /// node is above [`BOX_TEST_MAX_TRIANGLES`] (untested).
     fn box_separation(&self, (ia, ib): (u32, u32), stats: &mut QueryStats) -> Option<Ending> {
-        let count = |tree: &DopTree, node: u32| {
-            let [start, end] = tree.triangle_ranges[node as usize];
-            end - start
-        };
-        if count(self.a, ia) > BOX_TEST_MAX_TRIANGLES || count(self.b, ib) > BOX_TEST_MAX_TRIANGLES
+        if self.a.node_triangles(ia).len() > BOX_TEST_MAX_TRIANGLES
+            || self.b.node_triangles(ib).len() > BOX_TEST_MAX_TRIANGLES
         {
             return None;
         }
         stats.bv_tests += 1;
-        let (box_a, box_b) = (&self.a.boxes[ia as usize], &self.b.boxes[ib as usize]);
-        let axis = box_a.oriented().separating_axis(
-            &box_b.oriented(),
-            &self.rotation,
-            &self.translation,
-        )?;
+        let box_a = self.a.boxes[ia as usize].oriented();
+        let box_b = self.b.boxes[ib as usize].oriented();
+        let axis = box_a.separating_axis(&box_b, &self.rotation, &self.translation)?;
         let direction = axis.try_normalize(f64::MIN_POSITIVE)?.cast::<f32>();
         let exact = direction.cast::<f64>();
         // B's box projected in B's frame: n . (R q + t) = (Rᵀ n) . q + n . t.
@@ -2380,12 +2357,12 @@ impl<R> TreePair<'_, R> {
                     };
                 for (pair, slack) in [shallower, deeper] {
                     if slack.value >= 0.0 {
-                        match front.as_deref_mut() {
-                            Some(front) => match self.box_separation(pair, stats) {
-                                Some(ending) => front.push(FrontPair { pair, ending }),
-                                None => stack.push(pair),
-                            },
-                            None => stack.push(pair),
+                        if let Some(front) = front.as_deref_mut()
+                            && let Some(ending) = self.box_separation(pair, stats)
+                        {
+                            front.push(FrontPair { pair, ending });
+                        } else {
+                            stack.push(pair);
                         }
                     } else {
                         let front = front.as_deref_mut();
@@ -2719,7 +2696,7 @@ mod tests {
                 .collect();
             for (node, corner) in node_corners(&tree) {
                 for direction in &directions {
-                    let (low, high) = tree.boxes[node].projection(direction, 0.0);
+                    let (low, high) = tree.boxes[node].oriented().projection(direction, 0.0);
                     let along = corner.coords.dot(direction);
                     assert!(
                         (low..=high).contains(&along),

@@ -212,6 +212,20 @@ impl ObbNode {
 impl OrientedBox {
     /// The box fitted to the triangles `subset` of `triangles`.
     pub(crate) fn fit(triangles: &[Triangle], subset: &[u32]) -> Self {
+        let axes = Self::fitted_axes(triangles, subset);
+        let (lo, hi) = Self::local_range(&axes, triangles, subset);
+        let scale = hi.abs().max().max(lo.abs().max());
+        OrientedBox {
+            axes,
+            center: axes * ((lo + hi) * 0.5),
+            // A relative pad covers the rounding of the projections.
+            extents: (hi - lo) * 0.5 + Vector3::repeat(scale * 1e-12),
+        }
+    }
+
+    /// The axes of the box fitted to the triangles `subset`, as columns: the eigenvectors of
+    /// their area-weighted covariance, by decreasing variance.
+    pub(crate) fn fitted_axes(triangles: &[Triangle], subset: &[u32]) -> Matrix3<f64> {
         // Area-weighted second moments of the triangles as surfaces.
         let mut area_sum = 0.0;
         let mut mean = Vector3::zeros();
@@ -234,23 +248,33 @@ impl OrientedBox {
         // Columns sorted by decreasing variance: the first axis is the one to split along.
         let mut order = [0usize, 1, 2];
         order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
-        let axes = Matrix3::from_columns(&order.map(|i| eigen.eigenvectors.column(i).into_owned()));
+        Matrix3::from_columns(&order.map(|i| eigen.eigenvectors.column(i).into_owned()))
+    }
+
+    /// The lowest and highest projections of the corners of the triangles `subset` on each of
+    /// `axes` (columns).
+    pub(crate) fn local_range(
+        axes: &Matrix3<f64>,
+        triangles: &[Triangle],
+        subset: &[u32],
+    ) -> (Vector3<f64>, Vector3<f64>) {
         let mut lo = Vector3::repeat(f64::MAX);
         let mut hi = Vector3::repeat(f64::MIN);
-        for &t in subset {
-            for p in &triangles[t as usize] {
-                let local = axes.tr_mul(&p.coords);
-                lo = lo.inf(&local);
-                hi = hi.sup(&local);
-            }
+        for p in subset.iter().flat_map(|&t| &triangles[t as usize]) {
+            let local = axes.tr_mul(&p.coords);
+            lo = lo.inf(&local);
+            hi = hi.sup(&local);
         }
-        let scale = hi.abs().max().max(lo.abs().max());
-        OrientedBox {
-            axes,
-            center: axes * ((lo + hi) * 0.5),
-            // A relative pad covers the rounding of the projections.
-            extents: (hi - lo) * 0.5 + Vector3::repeat(scale * 1e-12),
-        }
+        (lo, hi)
+    }
+
+    /// The box's projection on `direction` (in its own frame) plus `offset`.
+    pub(crate) fn projection(&self, direction: &Vector3<f64>, offset: f64) -> (f64, f64) {
+        let centre = self.center.dot(direction) + offset;
+        let radius = (0..3)
+            .map(|i| self.extents[i] * self.axes.column(i).dot(direction).abs())
+            .sum::<f64>();
+        (centre - radius, centre + radius)
     }
 
     /// The 15-axis separating-axis test of this box against `other` posed by (rotation,
