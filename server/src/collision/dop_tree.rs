@@ -297,11 +297,22 @@ struct PairMemory {
     /// pair of leaves lies under one of its node pairs, proved apart or to be tested again.
     front_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
     front: Front,
-    /// Buffers reused across queries: the pairs to test again, the indices of the due
-    /// certificates among them, and where their tests ended.
+    /// Buffers reused across queries: the pairs to test again, the certificates due among
+    /// them and those to renew, and where their tests ended.
     retest: Vec<(u32, u32)>,
-    due: [Vec<u32>; 2],
+    due: [DueCertificates; 2],
     ended: Vec<FrontPair>,
+}
+
+/// What [`Front::due`] found in one frame's certificates.
+#[derive(Default)]
+struct DueCertificates {
+    /// Indices of the certificates that may no longer hold: their pairs are tested again.
+    indices: Vec<u32>,
+    /// Certificates whose tree bound failed but whose node bound held, with the tree bound's
+    /// expiry renewed from the node bound (see [`Certificates::flagged`]); applied when the
+    /// front settles at this query's pose.
+    renewed: Vec<(u32, f64)>,
 }
 
 /// The node pairs at which the traversals since the last one from the roots ended.
@@ -448,24 +459,32 @@ impl Certificates {
         self.pairs.push(pair);
     }
 
-    /// Appends to `indices` the certificates that may no longer hold: those whose tree bound
-    /// (`expiry + direction . centre`, with the other tree's centre at `centre`) is at most
-    /// `threshold` and whose node bound (`anchor + direction . (rotation c + translation) -
-    /// radius * turn`, with the moving node's sphere) is at most `guard`.
+    /// Appends to `due.indices` the certificates that may no longer hold: those whose tree
+    /// bound (`expiry + direction . centre`, with the other tree's centre at `centre`) is at
+    /// most `threshold` and whose node bound (`anchor + direction . (rotation c + translation)
+    /// - radius * turn`, with the moving node's sphere) is at most `guard`.
+    ///
+    /// Both bounds are lower bounds on the gap now (less the guard). Where the node bound holds
+    /// and the tree bound does not, the node bound's value renews the tree bound's expiry
+    /// (`due.renewed`), as if the pair had been found apart by that gap at this pose: under
+    /// steady turning the tree bound fails soon after each pair was found, and without renewal
+    /// every later query would pay for the node bound of most pairs. The renewal is valid only
+    /// from this pose on, so it is applied only when the front settles here (where its turn is
+    /// counted from).
     fn flagged(
         &self,
         centre: &Vector3<f64>,
         threshold: f64,
         nodes: &NodeBound,
-        indices: &mut Vec<u32>,
+        due: &mut DueCertificates,
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: the CPU supports AVX2 and FMA, checked just above.
-            return unsafe { self.flagged_avx2(centre, threshold, nodes, indices) };
+            return unsafe { self.flagged_avx2(centre, threshold, nodes, due) };
         }
-        self.flagged_chunks(centre, threshold, nodes, indices);
+        self.flagged_chunks(centre, threshold, nodes, due);
     }
 
     /// [`Self::flagged_chunks`] compiled with AVX2 and FMA enabled.
@@ -476,9 +495,9 @@ impl Certificates {
         centre: &Vector3<f64>,
         threshold: f64,
         nodes: &NodeBound,
-        indices: &mut Vec<u32>,
+        due: &mut DueCertificates,
     ) {
-        self.flagged_chunks(centre, threshold, nodes, indices);
+        self.flagged_chunks(centre, threshold, nodes, due);
     }
 
     /// The scan of [`Self::flagged`]: chunks of pairs are checked into bit masks without
@@ -490,7 +509,7 @@ impl Certificates {
         centre: &Vector3<f64>,
         threshold: f64,
         nodes: &NodeBound,
-        indices: &mut Vec<u32>,
+        due: &mut DueCertificates,
     ) {
         const CHUNK: usize = 32;
         let [dx, dy, dz] = &self.directions;
@@ -498,7 +517,8 @@ impl Certificates {
         let (m, v) = (&nodes.rotation, &nodes.translation);
         // Bounds are computed into an array, then compared into a mask: two simple loops that
         // compile to vector code.
-        let mut bounds = [0.0f64; CHUNK];
+        let mut tree_bounds = [0.0f64; CHUNK];
+        let mut node_bounds = [0.0f64; CHUNK];
         let mask_at_most = |bounds: &[f64; CHUNK], limit: f64, n: usize| {
             let mut mask = 0u32;
             for (j, &bound) in bounds.iter().enumerate() {
@@ -516,12 +536,12 @@ impl Certificates {
                 &dz[range.clone()],
             );
             for j in 0..n {
-                bounds[j] = expiry[j]
+                tree_bounds[j] = expiry[j]
                     + dx[j] as f64 * centre.x
                     + dy[j] as f64 * centre.y
                     + dz[j] as f64 * centre.z;
             }
-            let tree_mask = mask_at_most(&bounds, threshold, n);
+            let tree_mask = mask_at_most(&tree_bounds, threshold, n);
             if tree_mask == 0 {
                 continue;
             }
@@ -537,19 +557,38 @@ impl Certificates {
                 let moved = |row: usize| {
                     m[(row, 0)] * c[0] + m[(row, 1)] * c[1] + m[(row, 2)] * c[2] + v[row]
                 };
-                bounds[j] = anchors[j]
+                node_bounds[j] = anchors[j]
                     + dx[j] as f64 * moved(0)
                     + dy[j] as f64 * moved(1)
                     + dz[j] as f64 * moved(2)
                     - radii[j] as f64 * nodes.turn;
             }
-            let node_mask = mask_at_most(&bounds, nodes.guard, n);
+            let node_mask = mask_at_most(&node_bounds, nodes.guard, n);
             let mut mask = tree_mask & node_mask;
             while mask != 0 {
-                indices.push(start as u32 + mask.trailing_zeros());
+                due.indices.push(start as u32 + mask.trailing_zeros());
+                mask &= mask - 1;
+            }
+            // The tree bound's gap now is `tree - (threshold - guard)`; the node bound's is
+            // `node`, larger here: the expiry grows by the difference.
+            let mut mask = tree_mask & !node_mask;
+            while mask != 0 {
+                let j = mask.trailing_zeros() as usize;
+                let renewed =
+                    expiry[j] + node_bounds[j] - tree_bounds[j] + (threshold - nodes.guard);
+                due.renewed.push(((start + j) as u32, renewed));
                 mask &= mask - 1;
             }
         }
+    }
+
+    /// Renews the expiries that [`Certificates::flagged`] computed, then removes the pairs it
+    /// flagged.
+    fn settle(&mut self, due: &DueCertificates) {
+        for &(i, expiry) in &due.renewed {
+            self.expiry[i as usize] = expiry;
+        }
+        self.remove(&due.indices);
     }
 
     /// Removes the pairs at `indices` (ascending).
@@ -593,14 +632,15 @@ impl Front {
         turn: f64,
         placement: &Placement,
         retest: &mut Vec<(u32, u32)>,
-        due: &mut [Vec<u32>; 2],
+        due: &mut [DueCertificates; 2],
     ) {
         retest.clear();
         retest.extend_from_slice(&self.leaves);
         let turn = self.turn + turn;
         let guard = CERTIFICATE_ROUNDING * self.scale.max(placement.scale);
         for (frame, certificates) in self.separated.iter().enumerate() {
-            due[frame].clear();
+            due[frame].indices.clear();
+            due[frame].renewed.clear();
             let threshold = guard + placement.radii[frame] * turn;
             let centre = &placement.centres[frame];
             let (rotation, translation) = placement.motion(frame);
@@ -611,7 +651,12 @@ impl Front {
                 guard,
             };
             certificates.flagged(centre, threshold, &nodes, &mut due[frame]);
-            retest.extend(due[frame].iter().map(|&i| certificates.pairs[i as usize]));
+            retest.extend(
+                due[frame]
+                    .indices
+                    .iter()
+                    .map(|&i| certificates.pairs[i as usize]),
+            );
         }
     }
 
@@ -620,13 +665,13 @@ impl Front {
         &mut self,
         trees: [&DopTree; 2],
         turn: f64,
-        due: &[Vec<u32>; 2],
+        due: &[DueCertificates; 2],
         ended: &[FrontPair],
         placement: &Placement,
     ) {
         self.leaves.clear();
-        for (certificates, indices) in self.separated.iter_mut().zip(due) {
-            certificates.remove(indices);
+        for (certificates, due) in self.separated.iter_mut().zip(due) {
+            certificates.settle(due);
         }
         self.turn += turn;
         self.add(trees, ended, placement);
@@ -2623,6 +2668,7 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
+    use crate::bench::tumble::tumble_pose;
     use crate::collision::ObbTree;
     use crate::collision::oracle_tests::{random_pose, random_soup, torus};
 
@@ -2756,6 +2802,74 @@ mod tests {
             }
         }
         assert!(certified > 1000, "only {certified} certificates");
+    }
+
+    #[test]
+    fn front_certificates_not_due_still_separate() {
+        // Along a tumble, every certificate of the remembered front that the next pose does not
+        // put due (its tree bound, its node bound, or the renewal of one by the other) must
+        // still separate its pair there: B's corners beyond A's along its direction.
+        let a = DopTree::build(&torus(0.35, 20, 10));
+        let b = DopTree::build(&torus(0.35, 20, 10));
+        let corners = |tree: &DopTree, node: u32, pose: &Isometry3<f64>| -> Vec<Vector3<f64>> {
+            tree.node_triangles(node)
+                .iter()
+                .flatten()
+                .map(|corner| (pose * corner).coords)
+                .collect()
+        };
+        let (mut checked, mut renewed) = (0, 0);
+        for d in [2.8, 2.5, 2.3] {
+            for s in 0..240 {
+                let pose = tumble_pose(d, s, 1200);
+                let mut memory = PairMemory::take(&a, &b);
+                let pair = LazyPair::<18>::new(&a, &b, &pose);
+                if let (Carry::Advanced { .. }, _) = memory.carry_front(&pair) {
+                    let inverse = pose.inverse();
+                    for (frame, certificates) in memory.front.separated.iter().enumerate() {
+                        let due = &memory.due[frame];
+                        renewed += due.renewed.len();
+                        for (i, &(ia, ib)) in certificates.pairs.iter().enumerate() {
+                            if due.indices.contains(&(i as u32)) {
+                                continue;
+                            }
+                            let direction =
+                                Vector3::from_fn(|c, _| f64::from(certificates.directions[c][i]));
+                            // In A's frame B lies beyond; in B's frame A does.
+                            let (near, far) = if frame == 0 {
+                                (
+                                    corners(&a, ia, &Isometry3::identity()),
+                                    corners(&b, ib, &pose),
+                                )
+                            } else {
+                                (
+                                    corners(&b, ib, &Isometry3::identity()),
+                                    corners(&a, ia, &inverse),
+                                )
+                            };
+                            let top = near
+                                .iter()
+                                .map(|p| p.dot(&direction))
+                                .fold(f64::MIN, f64::max);
+                            let bottom = far
+                                .iter()
+                                .map(|q| q.dot(&direction))
+                                .fold(f64::MAX, f64::min);
+                            assert!(
+                                bottom > top,
+                                "d {d} step {s}: pair ({ia}, {ib}) overlaps by {} along its certificate",
+                                top - bottom
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+                PairMemory::put_back(memory);
+                a.intersects(&b, &pose, &mut QueryStats::default());
+            }
+        }
+        assert!(checked > 10_000, "only {checked} certificates checked");
+        assert!(renewed > 1_000, "only {renewed} certificates renewed");
     }
 
     #[test]
