@@ -762,7 +762,7 @@ const PARALLEL_CHUNKS_PER_THREAD: usize = 4;
 
 /// Largest subtree, in triangles, whose pair with a leaf of the other tree is tested against the
 /// leaf's face planes before it is split (a test costs a projection of the subtree's corners).
-const PLANE_TEST_MAX_TRIANGLES: u32 = 16;
+const PLANE_TEST_MAX_TRIANGLES: usize = 16;
 
 /// Largest node, in triangles, whose pair with another such node is tested with their oriented
 /// boxes when their DOPs overlap, in walks that record a front. Near contact a small patch of a
@@ -2489,8 +2489,7 @@ impl<R> TreePair<'_, R> {
     /// subtree, and the descent splits that subtree anyway).
     fn plane_test_extent(&self, na: &Node, nb: &Node, ia: u32, ib: u32) -> Option<Extent> {
         let extent = |tree: &DopTree, index: u32, inner: &Node, leaf: &Node| {
-            let [start, end] = tree.triangle_ranges[index as usize];
-            if end - start <= PLANE_TEST_MAX_TRIANGLES {
+            if tree.node_triangles(index).len() <= PLANE_TEST_MAX_TRIANGLES {
                 Some(Extent::Exact)
             } else {
                 (inner.size < leaf.size).then_some(Extent::Sphere)
@@ -2682,6 +2681,33 @@ mod tests {
         })
     }
 
+    /// Every corner of node `node`'s triangles, placed by `pose`.
+    fn corners_at(tree: &DopTree, node: u32, pose: &Isometry3<f64>) -> Vec<Vector3<f64>> {
+        tree.node_triangles(node)
+            .iter()
+            .flatten()
+            .map(|corner| (pose * corner).coords)
+            .collect()
+    }
+
+    /// How far every point of `far` lies beyond every point of `near` along `direction`
+    /// (negative where their projections overlap).
+    fn separation_along(
+        near: &[Vector3<f64>],
+        far: &[Vector3<f64>],
+        direction: &Vector3<f64>,
+    ) -> f64 {
+        let top = near
+            .iter()
+            .map(|p| p.dot(direction))
+            .fold(f64::MIN, f64::max);
+        let bottom = far
+            .iter()
+            .map(|q| q.dot(direction))
+            .fold(f64::MAX, f64::min);
+        bottom - top
+    }
+
     #[test]
     fn a_remembered_proof_answers_only_for_its_own_pair() {
         // Thin rings, long along y: their bounding spheres overlap 1 apart along x, so the
@@ -2764,13 +2790,6 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(13);
         let a = DopTree::build(&torus(0.3, 12, 6));
         let b = DopTree::build(&random_soup(&mut rng, 120, 0.3));
-        let corners = |tree: &DopTree, node: u32| -> Vec<Point3<f64>> {
-            tree.node_triangles(node)
-                .iter()
-                .flatten()
-                .copied()
-                .collect()
-        };
         let mut certified = 0;
         for _ in 0..20 {
             let pose = random_pose(&mut rng, 1.0);
@@ -2785,18 +2804,14 @@ mod tests {
                     };
                     certified += 1;
                     let direction = Vector3::from(direction).cast::<f64>();
-                    let top_a = corners(&a, ia)
-                        .iter()
-                        .map(|p| p.coords.dot(&direction))
-                        .fold(f64::MIN, f64::max);
-                    let bottom_b = corners(&b, ib)
-                        .iter()
-                        .map(|q| (pose * q).coords.dot(&direction))
-                        .fold(f64::MAX, f64::min);
+                    let apart = separation_along(
+                        &corners_at(&a, ia, &Isometry3::identity()),
+                        &corners_at(&b, ib, &pose),
+                        &direction,
+                    );
                     assert!(
-                        bottom_b - top_a >= gap - 1e-12,
-                        "pair ({ia}, {ib}): corners {} apart, certificate {gap}",
-                        bottom_b - top_a
+                        apart >= gap - 1e-12,
+                        "pair ({ia}, {ib}): corners {apart} apart, certificate {gap}"
                     );
                 }
             }
@@ -2811,13 +2826,6 @@ mod tests {
         // still separate its pair there: B's corners beyond A's along its direction.
         let a = DopTree::build(&torus(0.35, 20, 10));
         let b = DopTree::build(&torus(0.35, 20, 10));
-        let corners = |tree: &DopTree, node: u32, pose: &Isometry3<f64>| -> Vec<Vector3<f64>> {
-            tree.node_triangles(node)
-                .iter()
-                .flatten()
-                .map(|corner| (pose * corner).coords)
-                .collect()
-        };
         let (mut checked, mut renewed) = (0, 0);
         for d in [2.8, 2.5, 2.3] {
             for s in 0..240 {
@@ -2838,27 +2846,20 @@ mod tests {
                             // In A's frame B lies beyond; in B's frame A does.
                             let (near, far) = if frame == 0 {
                                 (
-                                    corners(&a, ia, &Isometry3::identity()),
-                                    corners(&b, ib, &pose),
+                                    corners_at(&a, ia, &Isometry3::identity()),
+                                    corners_at(&b, ib, &pose),
                                 )
                             } else {
                                 (
-                                    corners(&b, ib, &Isometry3::identity()),
-                                    corners(&a, ia, &inverse),
+                                    corners_at(&b, ib, &Isometry3::identity()),
+                                    corners_at(&a, ia, &inverse),
                                 )
                             };
-                            let top = near
-                                .iter()
-                                .map(|p| p.dot(&direction))
-                                .fold(f64::MIN, f64::max);
-                            let bottom = far
-                                .iter()
-                                .map(|q| q.dot(&direction))
-                                .fold(f64::MAX, f64::min);
+                            let apart = separation_along(&near, &far, &direction);
                             assert!(
-                                bottom > top,
+                                apart > 0.0,
                                 "d {d} step {s}: pair ({ia}, {ib}) overlaps by {} along its certificate",
-                                top - bottom
+                                -apart
                             );
                             checked += 1;
                         }
