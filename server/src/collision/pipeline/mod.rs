@@ -255,49 +255,43 @@ struct Slot<C> {
 /// A pair of object slots, smaller index first.
 type PairKey = (u32, u32);
 
-/// What is kept for a pair of objects whose boxes overlap.
-#[derive(Debug, Clone, Default)]
-struct PairState {
+/// A pair of interest whose boxes overlap: what is kept of it between frames, and what the last
+/// frame that tested it found. The pipeline keeps one for every such pair (see
+/// [`CollisionPipeline::run_frame`]), and the back end tests it in place, so that no serial pass
+/// copies the kept state into a frame's work and the results back out.
+#[derive(Debug, Clone)]
+struct PairEntry {
+    pair: PairKey,
     plane: SeparatingPlane,
     /// `Some` while the pair collides, with its triangle pairs if they were asked for.
     contact: Option<Option<Vec<[u32; 2]>>>,
     /// Bounding-volume tests of the pair's last first-hit exact test (0 before the first): the
     /// expected cost of the next one.
     exact_bv_tests: u64,
-}
-
-/// One pair going down the back end in this frame, and what it found.
-struct PairWork {
-    pair: PairKey,
+    /// The last test's pose of the second object in the first one's frame.
     b_to_a: Isometry3<f64>,
-    plane: SeparatingPlane,
-    /// The pair collided when last tested: the pre-check would most likely fail, so it is skipped.
-    was_colliding: bool,
-    /// Bounding-volume tests of the pair's last exact test.
-    expected_bv_tests: u64,
+    /// The last test: the pre-check separated the pair.
     separated: bool,
+    /// The last test: perceptron loops of the pre-check.
     loops: u32,
-    /// The exact test was split across threads.
+    /// The last test: the exact test was split across threads.
     split: bool,
-    colliding: bool,
-    triangles: Option<Vec<[u32; 2]>>,
+    /// The last test: work counters of the exact test.
     stats: QueryStats,
 }
 
-impl PairWork {
-    /// A pair not yet looked at (the back end fills in its state).
+impl PairEntry {
+    /// A pair whose overlap just started: nothing kept yet.
     fn new(pair: PairKey) -> Self {
-        PairWork {
+        PairEntry {
             pair,
-            b_to_a: Isometry3::identity(),
             plane: SeparatingPlane::new(),
-            was_colliding: false,
-            expected_bv_tests: 0,
+            contact: None,
+            exact_bv_tests: 0,
+            b_to_a: Isometry3::identity(),
             separated: false,
             loops: 0,
             split: false,
-            colliding: false,
-            triangles: None,
             stats: QueryStats::default(),
         }
     }
@@ -311,7 +305,6 @@ const PAIRS_PER_TASK: usize = 8;
 /// What the back end reads while it tests the pairs of a frame, on any thread.
 struct BackEnd<'a, C> {
     slots: &'a [Slot<C>],
-    pairs: &'a FxHashMap<PairKey, PairState>,
     /// `None` when the separating-plane stage is off.
     plane_search: Option<PlaneSearch>,
     split_min_bv_tests: u64,
@@ -319,16 +312,10 @@ struct BackEnd<'a, C> {
 }
 
 impl<'a, C: ExactTest> BackEnd<'a, C> {
-    /// The back end of a frame over `slots`, reading the pairs' kept state from `pairs`.
-    fn new(
-        slots: &'a [Slot<C>],
-        pairs: &'a FxHashMap<PairKey, PairState>,
-        config: &PipelineConfig,
-        detail: Detail,
-    ) -> Self {
+    /// The back end of a frame over `slots`.
+    fn new(slots: &'a [Slot<C>], config: &PipelineConfig, detail: Detail) -> Self {
         BackEnd {
             slots,
-            pairs,
             plane_search: config.separating_plane.then_some(config.plane_search),
             // On one thread, a split traversal would only add its overhead.
             split_min_bv_tests: if rayon::current_num_threads() > 1 {
@@ -340,34 +327,37 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
         }
     }
 
-    /// Takes the pairs down the back end, spread over the current rayon pool, and returns the
-    /// time the separating-plane and the exact stages took, summed over the threads.
+    /// Takes the pairs down the back end, spread over the current rayon pool, leaving each one's
+    /// results in its entry, and returns the time the separating-plane and the exact stages took,
+    /// summed over the threads.
     ///
     /// The pre-checks run in tasks of [`PAIRS_PER_TASK`] pairs, and each exact test a task runs
     /// into is spawned as a task of its own: exact tests cost from one to tens of microseconds,
     /// against a quarter of one for a pre-check, so a thread that happened to take a task holding
     /// several of them was left working alone at the end of the frame (up to 40 us in B4 on two
     /// threads); split this way, it is left with at most one.
-    fn run(&self, work: &mut [PairWork]) -> (Duration, Duration) {
-        if rayon::current_num_threads() == 1 || work.len() <= PAIRS_PER_TASK {
-            let planes = self.pre_check(work);
+    fn run(&self, entries: &mut [&mut PairEntry]) -> (Duration, Duration) {
+        if rayon::current_num_threads() == 1 || entries.len() <= PAIRS_PER_TASK {
+            let planes = self.pre_check(entries);
             let start = Instant::now();
-            work.iter_mut()
-                .filter(|item| !item.separated)
-                .for_each(|item| self.exact(item));
+            entries
+                .iter_mut()
+                .filter(|entry| !entry.separated)
+                .for_each(|entry| self.exact(entry));
             return (planes, start.elapsed());
         }
         let exact_nanos = AtomicU64::new(0);
         let planes = rayon::scope(|scope| {
-            work.par_chunks_mut(PAIRS_PER_TASK)
+            entries
+                .par_chunks_mut(PAIRS_PER_TASK)
                 .with_max_len(1)
                 .map(|chunk| {
                     let planes = self.pre_check(chunk);
-                    for item in chunk.iter_mut().filter(|item| !item.separated) {
+                    for entry in chunk.iter_mut().filter(|entry| !entry.separated) {
                         let exact_nanos = &exact_nanos;
                         scope.spawn(move |_| {
                             let start = Instant::now();
-                            self.exact(item);
+                            self.exact(entry);
                             exact_nanos
                                 .fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
                         });
@@ -379,46 +369,54 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
         (planes, Duration::from_nanos(exact_nanos.into_inner()))
     }
 
-    /// Fills in the kept state of each pair and runs the separating-plane stage on them; returns
-    /// the stage's time.
-    fn pre_check(&self, pairs: &mut [PairWork]) -> Duration {
-        for item in pairs.iter_mut() {
-            let state = self.pairs.get(&item.pair);
-            item.b_to_a = relative_pose(self.slots, item.pair);
-            if let Some(state) = state {
-                item.plane = state.plane;
-                item.was_colliding = state.contact.is_some();
-                item.expected_bv_tests = state.exact_bv_tests;
-            }
+    /// Clears the pairs' last results and runs the separating-plane stage on them; returns the
+    /// stage's time. A pair that collided when last tested skips it: the pre-check would most
+    /// likely fail, after many loops.
+    fn pre_check(&self, entries: &mut [&mut PairEntry]) -> Duration {
+        for entry in entries.iter_mut() {
+            entry.b_to_a = relative_pose(self.slots, entry.pair);
+            entry.separated = false;
+            entry.loops = 0;
+            entry.split = false;
+            entry.stats = QueryStats::default();
         }
         let start = Instant::now();
         if let Some(search) = &self.plane_search {
-            for item in pairs.iter_mut().filter(|item| !item.was_colliding) {
-                let [a, b] = models(self.slots, item.pair);
-                let check = item.plane.check(a.hull(), b.hull(), &item.b_to_a, search);
-                item.separated = check.separated;
-                item.loops = check.loops;
+            for entry in entries.iter_mut() {
+                if entry.contact.is_some() {
+                    continue;
+                }
+                let [a, b] = models(self.slots, entry.pair);
+                let check = entry.plane.check(a.hull(), b.hull(), &entry.b_to_a, search);
+                entry.separated = check.separated;
+                entry.loops = check.loops;
             }
+        }
+        for entry in entries.iter_mut().filter(|entry| entry.separated) {
+            entry.contact = None;
         }
         start.elapsed()
     }
 
     /// The exact test of a pair the pre-check did not separate.
-    fn exact(&self, item: &mut PairWork) {
-        let [a, b] = models(self.slots, item.pair);
+    fn exact(&self, entry: &mut PairEntry) {
+        let [a, b] = models(self.slots, entry.pair);
         let (a, b) = (a.exact(), b.exact());
-        item.colliding = match self.detail {
-            Detail::Pairs if item.expected_bv_tests >= self.split_min_bv_tests => {
-                item.split = true;
-                a.intersects_split(b, &item.b_to_a, &mut item.stats)
+        entry.contact = match self.detail {
+            Detail::Pairs => {
+                let colliding = if entry.exact_bv_tests >= self.split_min_bv_tests {
+                    entry.split = true;
+                    a.intersects_split(b, &entry.b_to_a, &mut entry.stats)
+                } else {
+                    a.intersects(b, &entry.b_to_a, &mut entry.stats)
+                };
+                entry.exact_bv_tests = entry.stats.bv_tests;
+                colliding.then_some(None)
             }
-            Detail::Pairs => a.intersects(b, &item.b_to_a, &mut item.stats),
             Detail::TrianglePairs => {
                 let mut triangles = Vec::new();
-                a.intersecting_pairs(b, &item.b_to_a, &mut triangles, &mut item.stats);
-                let colliding = !triangles.is_empty();
-                item.triangles = Some(triangles);
-                colliding
+                a.intersecting_pairs(b, &entry.b_to_a, &mut triangles, &mut entry.stats);
+                (!triangles.is_empty()).then_some(Some(triangles))
             }
         };
     }
@@ -430,7 +428,9 @@ pub struct CollisionPipeline<C> {
     free: Vec<u32>,
     broad_phase: SweepAndPrune,
     interest: InterestMatrix,
-    pairs: FxHashMap<PairKey, PairState>,
+    /// Every pair of interest whose boxes overlap: a pair enters when its overlap starts (or the
+    /// interest rules come to allow it) and leaves when the overlap ends (or the rules forbid it).
+    pairs: FxHashMap<PairKey, PairEntry>,
     queue: Vec<u32>,
     queued: Vec<bool>,
     warmer: PoolWarmer,
@@ -476,10 +476,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
             index,
             generation: slot.generation,
         };
-        self.broad_phase.insert(
-            index,
-            Aabb::transformed(desc.model.local_bounds(), &desc.pose),
-        );
+        let bounds = Aabb::transformed(desc.model.local_bounds(), &desc.pose);
         slot.object = Some(Object {
             model: desc.model,
             pose: desc.pose,
@@ -489,6 +486,15 @@ impl<C: ExactTest> CollisionPipeline<C> {
                 is_static: desc.is_static,
             },
         });
+        self.broad_phase.insert(index, bounds);
+        // The new object's overlaps enter the pair table now; it is queued, so the next frame
+        // tests them.
+        for [a, b] in self.broad_phase.drain_started() {
+            let pair = ordered(a, b);
+            if is_interesting(&self.slots, &self.interest, pair) {
+                self.pairs.insert(pair, PairEntry::new(pair));
+            }
+        }
         self.enqueue(index);
         Ok(id)
     }
@@ -531,14 +537,27 @@ impl<C: ExactTest> CollisionPipeline<C> {
         &self.interest
     }
 
-    /// Replaces the interest rules; every object is queued, so the next frame re-evaluates the
+    /// Replaces the interest rules: the pairs they forbid are forgotten, the overlapping pairs they
+    /// come to allow are taken in, and every object is queued, so the next frame re-evaluates the
     /// whole scene under the new rules.
     pub fn set_interest(&mut self, interest: InterestMatrix) {
         self.interest = interest;
+        let (slots, rules) = (&self.slots, &self.interest);
+        self.pairs
+            .retain(|&pair, _| is_interesting(slots, rules, pair));
         for index in 0..self.slots.len() as u32 {
-            if self.slots[index as usize].object.is_some() {
-                self.enqueue(index);
+            if self.slots[index as usize].object.is_none() {
+                continue;
             }
+            for &other in self.broad_phase.overlaps(index) {
+                let pair = (index, other);
+                if index < other && is_interesting(&self.slots, &self.interest, pair) {
+                    self.pairs
+                        .entry(pair)
+                        .or_insert_with(|| PairEntry::new(pair));
+                }
+            }
+            self.enqueue(index);
         }
     }
 
@@ -590,85 +609,79 @@ impl<C: ExactTest> CollisionPipeline<C> {
     /// the two running side by side; the pairs whose overlap ended are then dropped, and those
     /// whose overlap started go down the back end after them. A frame's answers are those of
     /// running the stages one after the other; only the wall time differs.
+    ///
+    /// The pair table holds only pairs of interest: the interest matrix judges a pair when its
+    /// overlap starts and when the rules change, not at every frame. The back end tests the
+    /// table's entries in place. Both keep the serial parts of a frame short: on two threads, a
+    /// serial pass over the pairs costs more than on one, each entry having been written last by
+    /// the other core (B4 in the README).
     pub fn run_frame(&mut self, detail: Detail) -> FrameReport {
         let frame_start = Instant::now();
         let moved = self.queue.len() as u64;
+        let objects = self.len() as u64;
         let mut stats = FrameStats {
             moved,
             ..FrameStats::default()
         };
-        // Overlaps that objects added since the last frame started are gathered below with the
-        // others of the moved objects.
-        self.broad_phase.drain_started().for_each(drop);
-
-        let carried = self.overlapping_moved_pairs();
-        let interest_start = Instant::now();
-        let mut carried_work = self.interesting_work(&carried);
-        let carried_interest_time = interest_start.elapsed();
-
-        let back_end = BackEnd::new(&self.slots, &self.pairs, &self.config, detail);
+        let queued = &self.queued;
+        let mut carried: Vec<&mut PairEntry> = self
+            .pairs
+            .values_mut()
+            .filter(|entry| queued[entry.pair.0 as usize] || queued[entry.pair.1 as usize])
+            .collect();
+        let back_end = BackEnd::new(&self.slots, &self.config, detail);
         let boxes = BoxStage {
             broad_phase: &mut self.broad_phase,
             slots: &self.slots,
             queue: &self.queue,
+            queued,
             interest: &self.interest,
         };
         self.warmer.release();
-        let (mut update, carried_times) = rayon::join(
-            || boxes.update(&back_end),
-            || back_end.run(&mut carried_work),
-        );
+        let (mut update, carried_times) =
+            rayon::join(|| boxes.update(&back_end), || back_end.run(&mut carried));
+
+        let has_ended = |pair: &PairKey| update.ended.binary_search(pair).is_ok();
+        carried.retain(|entry| !has_ended(&entry.pair));
+        stats.broad_phase = StageCounters {
+            pairs_in: moved * (objects - moved) + moved * moved.saturating_sub(1) / 2,
+            pairs_out: update.overlapping as u64,
+            time: update.time,
+        };
+        stats.interest = StageCounters {
+            pairs_in: stats.broad_phase.pairs_out,
+            pairs_out: (carried.len() + update.started.len()) as u64,
+            time: update.interest_time,
+        };
+        let tested = carried.iter().map(|entry| &**entry).chain(&update.started);
+        let mut unseparated = 0;
+        for entry in tested {
+            unseparated += u64::from(!entry.separated);
+            stats.plane_loops += u64::from(entry.loops);
+            stats.split_tests += u64::from(entry.split);
+            stats.exact.pairs_out += u64::from(entry.contact.is_some());
+            stats.exact_work += entry.stats;
+        }
+        stats.separating_plane = StageCounters {
+            pairs_in: stats.interest.pairs_out,
+            pairs_out: unseparated,
+            time: carried_times.0 + update.started_times.0,
+        };
+        stats.exact.pairs_in = unseparated;
+        stats.exact.time = carried_times.1 + update.started_times.1;
+        drop(carried);
+
         for &index in &self.queue {
             self.queued[index as usize] = false;
         }
         self.queue.clear();
-
-        // Ended pairs go before the results are written back: a pair whose overlap ended and
-        // started again within the update has a fresh result among the started pairs.
+        // Ended pairs go before the started ones come in: a pair whose overlap ended and started
+        // again within the update has a fresh entry among the started pairs.
         for pair in &update.ended {
             self.pairs.remove(pair);
         }
-        let has_ended = |pair: &PairKey| update.ended.binary_search(pair).is_ok();
-        let still_overlapping = carried.iter().filter(|pair| !has_ended(pair)).count();
-        stats.broad_phase = StageCounters {
-            pairs_in: moved * (self.len() as u64 - moved) + moved * moved.saturating_sub(1) / 2,
-            pairs_out: (still_overlapping + update.started) as u64,
-            time: update.time,
-        };
-        carried_work.retain(|item| !has_ended(&item.pair));
-        let mut work = carried_work;
-        work.append(&mut update.started_work);
-        stats.interest = StageCounters {
-            pairs_in: stats.broad_phase.pairs_out,
-            pairs_out: work.len() as u64,
-            time: carried_interest_time + update.interest_time,
-        };
-        let started_times = update.started_times;
-
-        let unseparated = work.iter().filter(|item| !item.separated).count() as u64;
-        stats.separating_plane = StageCounters {
-            pairs_in: work.len() as u64,
-            pairs_out: unseparated,
-            time: carried_times.0 + started_times.0,
-        };
-        stats.plane_loops = work.iter().map(|item| u64::from(item.loops)).sum();
-        stats.split_tests = work.iter().filter(|item| item.split).count() as u64;
-        stats.exact = StageCounters {
-            pairs_in: unseparated,
-            pairs_out: work.iter().filter(|item| item.colliding).count() as u64,
-            time: carried_times.1 + started_times.1,
-        };
-        for item in &work {
-            stats.exact_work += item.stats;
-        }
-
-        for item in work {
-            let state = self.pairs.entry(item.pair).or_default();
-            state.plane = item.plane;
-            state.contact = item.colliding.then_some(item.triangles);
-            if !item.separated && detail == Detail::Pairs {
-                state.exact_bv_tests = item.stats.bv_tests;
-            }
+        for entry in update.started.drain(..) {
+            self.pairs.insert(entry.pair, entry);
         }
         if detail == Detail::TrianglePairs {
             self.fill_missing_triangles();
@@ -678,37 +691,6 @@ impl<C: ExactTest> CollisionPipeline<C> {
             colliding: self.colliding_pairs(detail),
             stats,
         }
-    }
-
-    /// The pairs whose boxes overlap and that involve a queued object, each once as (smaller
-    /// index, larger index).
-    fn overlapping_moved_pairs(&self) -> Vec<PairKey> {
-        let mut pairs = Vec::new();
-        for &index in &self.queue {
-            for &other in self.broad_phase.overlaps(index) {
-                if !self.queued[other as usize] || index < other {
-                    pairs.push(ordered(index, other));
-                }
-            }
-        }
-        pairs
-    }
-
-    /// The back-end work for the pairs of interest among `pairs`; the state kept for the others
-    /// is dropped.
-    fn interesting_work(&mut self, pairs: &[PairKey]) -> Vec<PairWork> {
-        let mut work = Vec::with_capacity(pairs.len());
-        for &(a, b) in pairs {
-            if self
-                .interest
-                .is_interesting(&self.live(a).key, &self.live(b).key)
-            {
-                work.push(PairWork::new((a, b)));
-            } else {
-                self.pairs.remove(&(a, b));
-            }
-        }
-        work
     }
 
     /// Computes triangle pairs for colliding pairs that were last tested without them.
@@ -760,6 +742,7 @@ struct BoxStage<'a, C> {
     broad_phase: &'a mut SweepAndPrune,
     slots: &'a [Slot<C>],
     queue: &'a [u32],
+    queued: &'a [bool],
     interest: &'a InterestMatrix,
 }
 
@@ -767,12 +750,12 @@ struct BoxStage<'a, C> {
 struct BoxUpdate {
     /// Wall time of moving the boxes.
     time: Duration,
+    /// Pairs whose boxes overlap after the update and that involve a queued object.
+    overlapping: usize,
     /// Pairs whose overlap ended, sorted.
     ended: Vec<PairKey>,
-    /// Number of pairs whose overlap started.
-    started: usize,
-    /// The started pairs of interest, tested.
-    started_work: Vec<PairWork>,
+    /// The pairs of interest whose overlap started, tested.
+    started: Vec<PairEntry>,
     /// Time of the interest matrix on the started pairs.
     interest_time: Duration,
     /// Separating-plane and exact times of the started pairs, as [`BackEnd::run`] gives them.
@@ -781,14 +764,8 @@ struct BoxUpdate {
 
 impl<C: ExactTest> BoxStage<'_, C> {
     /// Moves the boxes of the queued objects to their objects' poses, then gathers the pairs
-    /// whose overlap ended and tests those whose overlap started: here rather than after the
-    /// join, so that this work too runs beside the carried pairs instead of after them.
-    ///
-    /// A started pair has no kept state to drop when it is not of interest: a pair's state is
-    /// dropped when its overlap ends, so the interest matrix only filters it. A pair whose
-    /// overlap ended and started again within this update still has its old state during the
-    /// join (it is dropped after), and its test may start from it: that changes how much work
-    /// the test does, not its answer, and the result is kept as a new state.
+    /// whose overlap ended and tests those of interest whose overlap started: here rather than
+    /// after the join, so that this work too runs beside the carried pairs instead of after them.
     fn update(self, back_end: &BackEnd<'_, C>) -> BoxUpdate {
         let start = Instant::now();
         let updates: Vec<(u32, Aabb)> = self
@@ -805,6 +782,17 @@ impl<C: ExactTest> BoxStage<'_, C> {
         self.broad_phase.update_many(&updates);
         let time = start.elapsed();
 
+        let overlapping = self
+            .queue
+            .iter()
+            .map(|&index| {
+                let overlaps = self.broad_phase.overlaps(index);
+                overlaps
+                    .iter()
+                    .filter(|&&other| !self.queued[other as usize] || index < other)
+                    .count()
+            })
+            .sum();
         let mut ended: Vec<PairKey> = self
             .broad_phase
             .drain_ended()
@@ -820,19 +808,18 @@ impl<C: ExactTest> BoxStage<'_, C> {
         started.retain(|&(a, b)| self.broad_phase.overlaps(a).contains(&b));
 
         let interest_start = Instant::now();
-        let key = |index: u32| &live(self.slots, index).key;
-        let mut started_work: Vec<PairWork> = started
-            .iter()
-            .filter(|&&(a, b)| self.interest.is_interesting(key(a), key(b)))
-            .map(|&pair| PairWork::new(pair))
+        let mut started: Vec<PairEntry> = started
+            .into_iter()
+            .filter(|&pair| is_interesting(self.slots, self.interest, pair))
+            .map(PairEntry::new)
             .collect();
         let interest_time = interest_start.elapsed();
-        let started_times = back_end.run(&mut started_work);
+        let started_times = back_end.run(&mut started.iter_mut().collect::<Vec<_>>());
         BoxUpdate {
             time,
+            overlapping,
             ended,
-            started: started.len(),
-            started_work,
+            started,
             interest_time,
             started_times,
         }
@@ -895,6 +882,11 @@ fn live<C>(slots: &[Slot<C>], index: u32) -> &Object<C> {
         .object
         .as_ref()
         .expect("pairs name live objects")
+}
+
+/// Whether the interest rules let a pair of live objects be tested.
+fn is_interesting<C>(slots: &[Slot<C>], rules: &InterestMatrix, (a, b): PairKey) -> bool {
+    rules.is_interesting(&live(slots, a).key, &live(slots, b).key)
 }
 
 fn models<C>(slots: &[Slot<C>], (a, b): PairKey) -> [&CollisionModel<C>; 2] {
