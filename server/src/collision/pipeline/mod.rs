@@ -34,7 +34,7 @@ use crate::geometry::ConvexHull;
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 use thiserror::Error;
@@ -272,12 +272,6 @@ struct PairEntry {
     b_to_a: Isometry3<f64>,
     /// The last test: the pre-check separated the pair.
     separated: bool,
-    /// The last test: perceptron loops of the pre-check.
-    loops: u32,
-    /// The last test: the exact test was split across threads.
-    split: bool,
-    /// The last test: work counters of the exact test.
-    stats: QueryStats,
 }
 
 impl PairEntry {
@@ -290,10 +284,62 @@ impl PairEntry {
             exact_bv_tests: 0,
             b_to_a: Isometry3::identity(),
             separated: false,
-            loops: 0,
-            split: false,
-            stats: QueryStats::default(),
         }
+    }
+}
+
+/// What the back end's tests of a frame add up to, for the frame's counters. Each test adds its
+/// share as it ends, while its entry is still in the cache, rather than in a serial pass over the
+/// pairs after the frame's parallel part.
+///
+/// The pair counts leave out the carried pairs whose overlap ended during the frame (see
+/// [`Tally::forget`]), so that each stage takes in what the one before let through; the loops, the
+/// work and the times count every test the back end ran.
+#[derive(Debug, Default, Clone, Copy)]
+struct Tally {
+    /// Pairs tested.
+    pairs: u64,
+    /// Of those, pairs the pre-check did not separate.
+    unseparated: u64,
+    /// Of those, pairs the exact test found colliding.
+    colliding: u64,
+    plane_loops: u64,
+    split_tests: u64,
+    exact_work: QueryStats,
+    /// Separating-plane and exact times, summed over the threads.
+    plane_time: Duration,
+    exact_time: Duration,
+}
+
+impl std::ops::AddAssign for Tally {
+    fn add_assign(&mut self, other: Tally) {
+        self.pairs += other.pairs;
+        self.unseparated += other.unseparated;
+        self.colliding += other.colliding;
+        self.plane_loops += other.plane_loops;
+        self.split_tests += other.split_tests;
+        self.exact_work += other.exact_work;
+        self.plane_time += other.plane_time;
+        self.exact_time += other.exact_time;
+    }
+}
+
+impl std::iter::Sum for Tally {
+    fn sum<I: Iterator<Item = Tally>>(tallies: I) -> Tally {
+        tallies.fold(Tally::default(), |mut sum, tally| {
+            sum += tally;
+            sum
+        })
+    }
+}
+
+impl Tally {
+    /// Takes out of the pair counts a pair tested in this frame and then dropped, its overlap
+    /// having ended.
+    fn forget(&mut self, entry: &PairEntry) {
+        self.pairs -= 1;
+        self.unseparated -= u64::from(!entry.separated);
+        self.colliding -= u64::from(entry.contact.is_some());
     }
 }
 
@@ -328,97 +374,99 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
     }
 
     /// Takes the pairs down the back end, spread over the current rayon pool, leaving each one's
-    /// results in its entry, and returns the time the separating-plane and the exact stages took,
-    /// summed over the threads.
+    /// results in its entry, and returns what the tests add up to.
     ///
     /// The pre-checks run in tasks of [`PAIRS_PER_TASK`] pairs, and each exact test a task runs
     /// into is spawned as a task of its own: exact tests cost from one to tens of microseconds,
     /// against a quarter of one for a pre-check, so a thread that happened to take a task holding
     /// several of them was left working alone at the end of the frame (up to 40 us in B4 on two
     /// threads); split this way, it is left with at most one.
-    fn run(&self, entries: &mut [&mut PairEntry]) -> (Duration, Duration) {
+    fn run(&self, entries: &mut [&mut PairEntry]) -> Tally {
         if rayon::current_num_threads() == 1 || entries.len() <= PAIRS_PER_TASK {
-            let planes = self.pre_check(entries);
-            let start = Instant::now();
-            entries
-                .iter_mut()
-                .filter(|entry| !entry.separated)
-                .for_each(|entry| self.exact(entry));
-            return (planes, start.elapsed());
+            let mut tally = self.pre_check(entries);
+            for entry in entries.iter_mut().filter(|entry| !entry.separated) {
+                tally += self.exact(entry);
+            }
+            return tally;
         }
-        let exact_nanos = AtomicU64::new(0);
-        let planes = rayon::scope(|scope| {
+        let exact_tally = Mutex::new(Tally::default());
+        let plane_tally = rayon::scope(|scope| {
             entries
                 .par_chunks_mut(PAIRS_PER_TASK)
                 .with_max_len(1)
                 .map(|chunk| {
-                    let planes = self.pre_check(chunk);
+                    let tally = self.pre_check(chunk);
                     for entry in chunk.iter_mut().filter(|entry| !entry.separated) {
-                        let exact_nanos = &exact_nanos;
+                        let exact_tally = &exact_tally;
                         scope.spawn(move |_| {
-                            let start = Instant::now();
-                            self.exact(entry);
-                            exact_nanos
-                                .fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+                            let tally = self.exact(entry);
+                            *exact_tally.lock().unwrap_or_else(PoisonError::into_inner) += tally;
                         });
                     }
-                    planes
+                    tally
                 })
-                .sum()
+                .sum::<Tally>()
         });
-        (planes, Duration::from_nanos(exact_nanos.into_inner()))
+        let mut tally = exact_tally
+            .into_inner()
+            .unwrap_or_else(PoisonError::into_inner);
+        tally += plane_tally;
+        tally
     }
 
-    /// Clears the pairs' last results and runs the separating-plane stage on them; returns the
-    /// stage's time. A pair that collided when last tested skips it: the pre-check would most
-    /// likely fail, after many loops.
-    fn pre_check(&self, entries: &mut [&mut PairEntry]) -> Duration {
+    /// Runs the separating-plane stage on the pairs. A pair that collided when last tested skips
+    /// it: the pre-check would most likely fail, after many loops.
+    fn pre_check(&self, entries: &mut [&mut PairEntry]) -> Tally {
+        let start = Instant::now();
+        let mut tally = Tally {
+            pairs: entries.len() as u64,
+            ..Tally::default()
+        };
         for entry in entries.iter_mut() {
             entry.b_to_a = relative_pose(self.slots, entry.pair);
             entry.separated = false;
-            entry.loops = 0;
-            entry.split = false;
-            entry.stats = QueryStats::default();
-        }
-        let start = Instant::now();
-        if let Some(search) = &self.plane_search {
-            for entry in entries.iter_mut() {
-                if entry.contact.is_some() {
-                    continue;
-                }
+            if let Some(search) = &self.plane_search
+                && entry.contact.is_none()
+            {
                 let [a, b] = models(self.slots, entry.pair);
                 let check = entry.plane.check(a.hull(), b.hull(), &entry.b_to_a, search);
                 entry.separated = check.separated;
-                entry.loops = check.loops;
+                tally.plane_loops += u64::from(check.loops);
             }
+            tally.unseparated += u64::from(!entry.separated);
         }
-        for entry in entries.iter_mut().filter(|entry| entry.separated) {
-            entry.contact = None;
-        }
-        start.elapsed()
+        tally.plane_time = start.elapsed();
+        tally
     }
 
     /// The exact test of a pair the pre-check did not separate.
-    fn exact(&self, entry: &mut PairEntry) {
+    fn exact(&self, entry: &mut PairEntry) -> Tally {
+        let start = Instant::now();
+        let mut tally = Tally::default();
         let [a, b] = models(self.slots, entry.pair);
         let (a, b) = (a.exact(), b.exact());
+        let stats = &mut tally.exact_work;
         entry.contact = match self.detail {
             Detail::Pairs => {
-                let colliding = if entry.exact_bv_tests >= self.split_min_bv_tests {
-                    entry.split = true;
-                    a.intersects_split(b, &entry.b_to_a, &mut entry.stats)
+                let split = entry.exact_bv_tests >= self.split_min_bv_tests;
+                let colliding = if split {
+                    a.intersects_split(b, &entry.b_to_a, stats)
                 } else {
-                    a.intersects(b, &entry.b_to_a, &mut entry.stats)
+                    a.intersects(b, &entry.b_to_a, stats)
                 };
-                entry.exact_bv_tests = entry.stats.bv_tests;
+                tally.split_tests = u64::from(split);
+                entry.exact_bv_tests = stats.bv_tests;
                 colliding.then_some(None)
             }
             Detail::TrianglePairs => {
                 let mut triangles = Vec::new();
-                a.intersecting_pairs(b, &entry.b_to_a, &mut triangles, &mut entry.stats);
+                a.intersecting_pairs(b, &entry.b_to_a, &mut triangles, stats);
                 (!triangles.is_empty()).then_some(Some(triangles))
             }
         };
+        tally.colliding = u64::from(entry.contact.is_some());
+        tally.exact_time = start.elapsed();
+        tally
     }
 }
 
@@ -638,39 +686,10 @@ impl<C: ExactTest> CollisionPipeline<C> {
             interest: &self.interest,
         };
         self.warmer.release();
-        let (mut update, carried_times) =
+        let (mut update, carried_tally) =
             rayon::join(|| boxes.update(&back_end), || back_end.run(&mut carried));
-
-        let has_ended = |pair: &PairKey| update.ended.binary_search(pair).is_ok();
-        carried.retain(|entry| !has_ended(&entry.pair));
-        stats.broad_phase = StageCounters {
-            pairs_in: moved * (objects - moved) + moved * moved.saturating_sub(1) / 2,
-            pairs_out: update.overlapping as u64,
-            time: update.time,
-        };
-        stats.interest = StageCounters {
-            pairs_in: stats.broad_phase.pairs_out,
-            pairs_out: (carried.len() + update.started.len()) as u64,
-            time: update.interest_time,
-        };
-        let tested = carried.iter().map(|entry| &**entry).chain(&update.started);
-        let mut unseparated = 0;
-        for entry in tested {
-            unseparated += u64::from(!entry.separated);
-            stats.plane_loops += u64::from(entry.loops);
-            stats.split_tests += u64::from(entry.split);
-            stats.exact.pairs_out += u64::from(entry.contact.is_some());
-            stats.exact_work += entry.stats;
-        }
-        stats.separating_plane = StageCounters {
-            pairs_in: stats.interest.pairs_out,
-            pairs_out: unseparated,
-            time: carried_times.0 + update.started_times.0,
-        };
-        stats.exact.pairs_in = unseparated;
-        stats.exact.time = carried_times.1 + update.started_times.1;
-        drop(carried);
-
+        let mut tally = carried_tally;
+        tally += update.started_tally;
         for &index in &self.queue {
             self.queued[index as usize] = false;
         }
@@ -678,11 +697,36 @@ impl<C: ExactTest> CollisionPipeline<C> {
         // Ended pairs go before the started ones come in: a pair whose overlap ended and started
         // again within the update has a fresh entry among the started pairs.
         for pair in &update.ended {
-            self.pairs.remove(pair);
+            if let Some(entry) = self.pairs.remove(pair) {
+                tally.forget(&entry);
+            }
         }
         for entry in update.started.drain(..) {
             self.pairs.insert(entry.pair, entry);
         }
+        stats.broad_phase = StageCounters {
+            pairs_in: moved * (objects - moved) + moved * moved.saturating_sub(1) / 2,
+            pairs_out: update.overlapping as u64,
+            time: update.time,
+        };
+        stats.interest = StageCounters {
+            pairs_in: stats.broad_phase.pairs_out,
+            pairs_out: tally.pairs,
+            time: update.interest_time,
+        };
+        stats.separating_plane = StageCounters {
+            pairs_in: tally.pairs,
+            pairs_out: tally.unseparated,
+            time: tally.plane_time,
+        };
+        stats.exact = StageCounters {
+            pairs_in: tally.unseparated,
+            pairs_out: tally.colliding,
+            time: tally.exact_time,
+        };
+        stats.plane_loops = tally.plane_loops;
+        stats.split_tests = tally.split_tests;
+        stats.exact_work = tally.exact_work;
         if detail == Detail::TrianglePairs {
             self.fill_missing_triangles();
         }
@@ -758,8 +802,8 @@ struct BoxUpdate {
     started: Vec<PairEntry>,
     /// Time of the interest matrix on the started pairs.
     interest_time: Duration,
-    /// Separating-plane and exact times of the started pairs, as [`BackEnd::run`] gives them.
-    started_times: (Duration, Duration),
+    /// What the tests of the started pairs add up to.
+    started_tally: Tally,
 }
 
 impl<C: ExactTest> BoxStage<'_, C> {
@@ -814,14 +858,14 @@ impl<C: ExactTest> BoxStage<'_, C> {
             .map(PairEntry::new)
             .collect();
         let interest_time = interest_start.elapsed();
-        let started_times = back_end.run(&mut started.iter_mut().collect::<Vec<_>>());
+        let started_tally = back_end.run(&mut started.iter_mut().collect::<Vec<_>>());
         BoxUpdate {
             time,
             overlapping,
             ended,
             started,
             interest_time,
-            started_times,
+            started_tally,
         }
     }
 }
