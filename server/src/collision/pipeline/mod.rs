@@ -34,8 +34,8 @@ use crate::geometry::ConvexHull;
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
-use std::sync::{Arc, Mutex, PoisonError};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 use thiserror::Error;
 
@@ -671,11 +671,16 @@ impl<C: ExactTest> CollisionPipeline<C> {
             moved,
             ..FrameStats::default()
         };
+        // When everything moved, every pair is carried: taking them without reading their keys
+        // leaves the entries in the cache of the core that tested them last.
+        let everything_moved = moved == objects;
         let queued = &self.queued;
         let mut carried: Vec<&mut PairEntry> = self
             .pairs
             .values_mut()
-            .filter(|entry| queued[entry.pair.0 as usize] || queued[entry.pair.1 as usize])
+            .filter(|entry| {
+                everything_moved || queued[entry.pair.0 as usize] || queued[entry.pair.1 as usize]
+            })
             .collect();
         let back_end = BackEnd::new(&self.slots, &self.config, detail);
         let boxes = BoxStage {
