@@ -303,11 +303,15 @@ struct Tally {
     unseparated: u64,
     /// Of those, pairs the exact test found colliding.
     colliding: u64,
+    /// Perceptron loops of the pre-checks.
     plane_loops: u64,
+    /// Exact tests split across the threads.
     split_tests: u64,
+    /// Work counters of the exact tests.
     exact_work: QueryStats,
-    /// Separating-plane and exact times, summed over the threads.
+    /// Time of the pre-checks, summed over the threads.
     plane_time: Duration,
+    /// Time of the exact tests, summed over the threads.
     exact_time: Duration,
 }
 
