@@ -748,32 +748,32 @@ impl<C: ExactTest> CollisionPipeline<C> {
 
     /// Computes triangle pairs for colliding pairs that were last tested without them.
     fn fill_missing_triangles(&mut self) {
-        let mut missing: Vec<(PairKey, Vec<[u32; 2]>)> = self
-            .pairs
-            .iter()
-            .filter(|(_, state)| matches!(state.contact, Some(None)))
-            .map(|(&pair, _)| (pair, Vec::new()))
-            .collect();
         let slots = &self.slots;
-        missing.par_iter_mut().for_each(|(pair, triangles)| {
-            let [a, b] = models(slots, *pair);
-            let b_to_a = relative_pose(slots, *pair);
-            a.exact()
-                .intersecting_pairs(b.exact(), &b_to_a, triangles, &mut QueryStats::default());
+        let mut missing: Vec<&mut PairEntry> = self
+            .pairs
+            .values_mut()
+            .filter(|entry| matches!(entry.contact, Some(None)))
+            .collect();
+        missing.par_iter_mut().for_each(|entry| {
+            let [a, b] = models(slots, entry.pair);
+            let b_to_a = relative_pose(slots, entry.pair);
+            let mut triangles = Vec::new();
+            a.exact().intersecting_pairs(
+                b.exact(),
+                &b_to_a,
+                &mut triangles,
+                &mut QueryStats::default(),
+            );
+            entry.contact = Some(Some(triangles));
         });
-        for (pair, triangles) in missing {
-            if let Some(state) = self.pairs.get_mut(&pair) {
-                state.contact = Some(Some(triangles));
-            }
-        }
     }
 
     fn colliding_pairs(&self, detail: Detail) -> Vec<CollidingPair> {
         let mut colliding: Vec<CollidingPair> = self
             .pairs
             .iter()
-            .filter_map(|(&(a, b), state)| {
-                let triangles = state.contact.as_ref()?;
+            .filter_map(|(&(a, b), entry)| {
+                let triangles = entry.contact.as_ref()?;
                 Some(CollidingPair {
                     a: self.live(a).key.object,
                     b: self.live(b).key.object,
