@@ -272,6 +272,18 @@ impl Client {
         Ok(())
     }
 
+    /// Returns once the server has taken in every sample this client sent before the call; call
+    /// it before dropping a client whose last samples matter.
+    ///
+    /// A sent sample stays in this client's shared memory until the server takes it, and goes
+    /// with the client: a program that sends and exits at once loses the samples the server has
+    /// not taken yet. The server takes in input before it answers a control request, so one
+    /// round trip is enough.
+    pub fn flush_inputs(&self, timeout: Duration) -> Result<(), ClientError> {
+        self.control(ControlRequest::scene_info(), timeout)
+            .map(drop)
+    }
+
     /// Sends a glove sample and wakes the server.
     pub fn send_glove(&self, sample: &GloveSample) -> Result<(), ClientError> {
         self.glove

@@ -135,3 +135,46 @@ fn bursts_of_malformed_input_are_rejected_and_counted_and_change_nothing() {
     }
     assert!(server.process.is_running());
 }
+
+/// A sample lives in its sender's shared memory until the server takes it: without the flush
+/// that ends `send-tracker`, `send-glove` and `replay`, about a third of these were lost.
+#[test]
+fn samples_sent_just_before_the_sender_exits_are_all_taken_in() {
+    const SENDS: u64 = 12;
+    let mut server = Server::start("leaving");
+    let observer = server.connect();
+    let nan_flex = format!("NaN{}", ",0".repeat(FLEX_COUNT - 1));
+    for seq in 1..=SENDS {
+        let client = Client::connect(Some(server.prefix())).expect("connect");
+        let mut sample = tracker(seq, [0.0; 3]);
+        sample.hand.position[0] = f64::NAN;
+        client.send_tracker(&sample).expect("send");
+        client.flush_inputs(PATIENCE).expect("flush");
+        drop(client);
+
+        let seq = seq.to_string();
+        for args in [
+            [
+                "send-tracker",
+                "--position",
+                "NaN,0,0",
+                "--seq",
+                seq.as_str(),
+            ],
+            [
+                "send-glove",
+                "--flex",
+                nan_flex.as_str(),
+                "--seq",
+                seq.as_str(),
+            ],
+        ] {
+            let mut tool = server.client_tool(&args, Stdio::null());
+            let status = tool.wait_exit(PATIENCE).expect("the tool ends");
+            assert!(status.success(), "{}", tool.log());
+        }
+    }
+    let stats = observer.input_stats(PATIENCE).expect("stats");
+    assert_eq!(stats.tracker_rejected_non_finite, 2 * SENDS);
+    assert_eq!(stats.glove_rejected_non_finite, SENDS);
+}

@@ -51,10 +51,13 @@ pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
             &mut client,
             &recording,
             Duration::from_millis(args.answer_timeout_ms),
-        )
+        )?;
     } else {
-        real_time(&client, &recording)
+        real_time(&client, &recording)?;
     }
+    // The last samples, unanswered yet, would go with this process.
+    client.flush_inputs(super::CONTROL_TIMEOUT)?;
+    Ok(())
 }
 
 fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {

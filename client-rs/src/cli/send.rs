@@ -92,6 +92,7 @@ pub fn tracker(prefix: Option<&str>, args: &TrackerArgs) -> anyhow::Result<()> {
     };
     let mut client = super::connect(prefix)?;
     client.send_tracker(&sample)?;
+    client.flush_inputs(super::CONTROL_TIMEOUT)?;
     let stamp = sample.stamp();
     report_answer(&mut client, &args.answer, |frame| frame.tracker == stamp)
 }
@@ -109,6 +110,7 @@ pub fn glove(prefix: Option<&str>, args: &GloveArgs) -> anyhow::Result<()> {
     };
     let mut client = super::connect(prefix)?;
     client.send_glove(&sample)?;
+    client.flush_inputs(super::CONTROL_TIMEOUT)?;
     let stamp = sample.stamp();
     report_answer(&mut client, &args.answer, |frame| frame.glove == stamp)
 }

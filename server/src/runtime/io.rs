@@ -279,6 +279,14 @@ impl Io {
         }
     }
 
+    /// Answers the waiting control requests, each after taking in the input samples that came
+    /// before it.
+    ///
+    /// A sample lives in its sender's shared memory until it is taken, and goes with the sender:
+    /// one sent just before its client exits (`vas-client send-tracker`, the end of a replay) is
+    /// lost unless it was taken first. Taking input before each answer makes any answer proof
+    /// that every sample its client sent before the request has been taken in
+    /// (`Client::flush_inputs`).
     fn answer_control_requests(&mut self) {
         let mut answered = false;
         loop {
@@ -290,6 +298,8 @@ impl Io {
                     break;
                 }
             };
+            self.process_tracker_samples();
+            self.process_glove_samples();
             let (response, change) = control::answer(&mut self.session, request.payload());
             tracing::debug!(
                 kind = response.kind,
