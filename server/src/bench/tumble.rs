@@ -331,6 +331,9 @@ pub fn run_tumble(a: &TriMesh, b: &TriMesh, config: &TumbleConfig) -> Result<Tum
     if config.steps == 0 || config.distances.is_empty() || config.algos.is_empty() {
         bail!("the tumbling benchmark needs at least one step, one distance and one algorithm");
     }
+    if let Some(d) = config.distances.iter().find(|d| !d.is_finite()) {
+        bail!("the tumbling benchmark's distances must be finite, not {d}");
+    }
     let (a, b) = (a.normalized_to_unit_box(), b.normalized_to_unit_box());
     let colliders: Vec<BuiltCollider> = config
         .algos
@@ -504,7 +507,7 @@ pub struct TumbleArgs {
     #[arg(long)]
     pub steps: Option<usize>,
     /// Distances d, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES)]
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES, value_parser = super::finite_number)]
     pub distances: Vec<f64>,
     /// Algorithms to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = Algo::DEFAULT)]
@@ -722,6 +725,22 @@ mod tests {
                 .render()
                 .contains("kdop-bruteforce")
         );
+    }
+
+    #[test]
+    fn non_finite_distances_are_refused() {
+        let mesh = torus(0.35, 8, 4);
+        for d in [f64::NAN, f64::INFINITY] {
+            let config = TumbleConfig {
+                steps: 4,
+                distances: vec![2.0, d],
+                algos: vec![Algo::Obbtree],
+                orientations: OrientationSet::default(),
+                rounds: 1,
+            };
+            let error = run_tumble(&mesh, &mesh, &config).unwrap_err();
+            assert!(error.to_string().contains("finite"), "{error}");
+        }
     }
 
     #[test]
