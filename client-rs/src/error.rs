@@ -2,6 +2,11 @@
 
 use std::time::Duration;
 
+use iceoryx2::port::listener::ListenerCreateError;
+use iceoryx2::port::notifier::NotifierCreateError;
+use iceoryx2::port::publisher::PublisherCreateError;
+use iceoryx2::port::subscriber::SubscriberCreateError;
+use iceoryx2::service::port_factory::client::ClientCreateError;
 use vas_protocol::services::{PrefixError, ServiceOpenError};
 use vas_protocol::{ControlRequestKind, ControlStatus, UnknownCode, WireTextError};
 
@@ -14,6 +19,17 @@ pub enum ClientError {
     /// A service could not be opened, e.g. because its settings or types do not match.
     #[error(transparent)]
     Service(#[from] ServiceOpenError),
+    /// A service already has as many ports of a kind as it takes: too many clients (or
+    /// recorders) are connected to this server. Ports of a killed client are freed when the next
+    /// one connects.
+    #[error(
+        "a vas service already has as many {kind} as it takes: too many clients or recorders \
+         are connected"
+    )]
+    Full {
+        /// The kind of port the service has no room for.
+        kind: &'static str,
+    },
     /// An iceoryx2 operation failed.
     #[error("cannot {action}: {reason}")]
     Ipc {
@@ -57,8 +73,56 @@ impl ClientError {
         }
     }
 
-    /// A [`ClientError::Ipc`] for a port that could not be created.
-    pub(crate) fn port(error: impl std::fmt::Debug) -> Self {
-        Self::ipc("create a port", error)
+    /// The error of a port that could not be created: [`ClientError::Full`] where the service
+    /// had no room for it, else a [`ClientError::Ipc`].
+    pub(crate) fn port<E: PortCreateError>(error: E) -> Self {
+        if error.service_full() {
+            Self::Full { kind: E::KIND }
+        } else {
+            Self::ipc("create a port", error)
+        }
+    }
+}
+
+/// iceoryx2's errors of creating a port, told apart where the service had no room for it.
+pub(crate) trait PortCreateError: std::fmt::Debug {
+    /// The kind of port, plural, for messages.
+    const KIND: &'static str;
+    /// True when the service already had as many ports of this kind as it takes.
+    fn service_full(&self) -> bool;
+}
+
+impl PortCreateError for PublisherCreateError {
+    const KIND: &'static str = "publishers";
+    fn service_full(&self) -> bool {
+        matches!(self, Self::ExceedsMaxSupportedPublishers)
+    }
+}
+
+impl PortCreateError for SubscriberCreateError {
+    const KIND: &'static str = "subscribers";
+    fn service_full(&self) -> bool {
+        matches!(self, Self::ExceedsMaxSupportedSubscribers)
+    }
+}
+
+impl PortCreateError for NotifierCreateError {
+    const KIND: &'static str = "notifiers";
+    fn service_full(&self) -> bool {
+        matches!(self, Self::ExceedsMaxSupportedNotifiers)
+    }
+}
+
+impl PortCreateError for ListenerCreateError {
+    const KIND: &'static str = "listeners";
+    fn service_full(&self) -> bool {
+        matches!(self, Self::ExceedsMaxSupportedListeners)
+    }
+}
+
+impl PortCreateError for ClientCreateError {
+    const KIND: &'static str = "control clients";
+    fn service_full(&self) -> bool {
+        matches!(self, Self::ExceedsMaxSupportedClients)
     }
 }

@@ -37,8 +37,10 @@ pub const CONTROL: &str = "vas/control";
 
 /// Settings of an input service (tracker, glove).
 pub mod input {
-    /// Devices, replays and scripts may feed the same stream.
-    pub const MAX_PUBLISHERS: usize = 8;
+    /// Every client publishes on both input streams (renderers, device bridges, replays,
+    /// scripts), so as many as the control service takes clients: with fewer, the input streams
+    /// would refuse clients that the outputs and control still take.
+    pub const MAX_PUBLISHERS: usize = super::control::MAX_CLIENTS;
     /// The server, plus recorders.
     pub const MAX_SUBSCRIBERS: usize = 8;
     /// Samples buffered per subscriber; with safe overflow the oldest are dropped first, so a
@@ -46,8 +48,9 @@ pub mod input {
     pub const SUBSCRIBER_BUFFER: usize = 64;
     /// Inputs have no history: an old sample is no target.
     pub const HISTORY: usize = 0;
-    /// Nodes that may take part in the service.
-    pub const MAX_NODES: usize = 20;
+    /// Nodes that may take part in the service: every publisher's and subscriber's (the server
+    /// is a subscriber).
+    pub const MAX_NODES: usize = MAX_PUBLISHERS + MAX_SUBSCRIBERS;
 }
 
 /// Settings of an output service (parts, hand, events, force).

@@ -5,6 +5,7 @@ use std::process::Stdio;
 use std::time::Instant;
 
 use vas_client::{Client, ClientError, Frame};
+use vas_protocol::services::control::MAX_CLIENTS;
 use vas_protocol::{
     ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, TrackerSample, wall_clock_ns,
 };
@@ -177,4 +178,29 @@ fn samples_sent_just_before_the_sender_exits_are_all_taken_in() {
     let stats = observer.input_stats(PATIENCE).expect("stats");
     assert_eq!(stats.tracker_rejected_non_finite, 2 * SENDS);
     assert_eq!(stats.glove_rejected_non_finite, SENDS);
+}
+
+/// Every client opens ports on every service; the services take the same number of clients, and
+/// one more is told so.
+#[test]
+fn as_many_clients_as_the_services_take_connect_and_one_more_is_told_they_are_full() {
+    let mut server = Server::start("full");
+    let mut clients = vec![server.connect()];
+    while clients.len() < MAX_CLIENTS {
+        let client = Client::connect(Some(server.prefix())).expect("a client within the limit");
+        clients.push(client);
+    }
+    for client in &clients {
+        client
+            .flush_inputs(PATIENCE)
+            .expect("each client is served");
+    }
+    match Client::connect(Some(server.prefix())) {
+        Err(ClientError::Full { kind }) => assert!(!kind.is_empty()),
+        Err(other) => panic!("one client too many: {other}"),
+        Ok(_) => panic!("one client too many connected"),
+    }
+    clients.pop();
+    let client = Client::connect(Some(server.prefix())).expect("room again");
+    client.flush_inputs(PATIENCE).expect("served");
 }
