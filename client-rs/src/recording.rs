@@ -125,12 +125,13 @@ pub struct RecordedSample {
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
     /// The file cannot be opened, read or written.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {error}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// What the system reported.
-        source: std::io::Error,
+        /// What the system reported: in the message, not as the error's source, so that a
+        /// message with its chain of causes says it once.
+        error: std::io::Error,
     },
     /// A line is not a header or sample of this format.
     #[error("{}:{line}: {reason}", path.display())]
@@ -165,9 +166,9 @@ impl Recording {
     /// Reads and checks a recording file: header format and version, one valid sample per
     /// line, times finite and non-decreasing. Blank lines are skipped.
     pub fn load(path: &Path) -> Result<Self, RecordingError> {
-        let io_error = |source| RecordingError::Io {
+        let io_error = |error| RecordingError::Io {
             path: path.to_owned(),
-            source,
+            error,
         };
         let invalid = |line: usize, reason: String| RecordingError::Invalid {
             path: path.to_owned(),
@@ -229,9 +230,9 @@ pub struct RecordingWriter {
 impl RecordingWriter {
     /// Creates (or truncates) the file and writes the header.
     pub fn create(path: &Path, header: &RecordingHeader) -> Result<Self, RecordingError> {
-        let file = File::create(path).map_err(|source| RecordingError::Io {
+        let file = File::create(path).map_err(|error| RecordingError::Io {
             path: path.to_owned(),
-            source,
+            error,
         })?;
         let mut writer = Self {
             path: path.to_owned(),
@@ -262,9 +263,9 @@ impl RecordingWriter {
     }
 
     fn write_line(&mut self, value: &impl Serialize) -> Result<(), RecordingError> {
-        let io_error = |source| RecordingError::Io {
+        let io_error = |error| RecordingError::Io {
             path: self.path.clone(),
-            source,
+            error,
         };
         serde_json::to_writer(&mut self.out, value).map_err(|error| io_error(error.into()))?;
         self.out.write_all(b"\n").map_err(io_error)?;
