@@ -92,37 +92,23 @@ pub(crate) trait PortCreateError: std::fmt::Debug {
     fn service_full(&self) -> bool;
 }
 
-impl PortCreateError for PublisherCreateError {
-    const KIND: &'static str = "publishers";
-    fn service_full(&self) -> bool {
-        matches!(self, Self::ExceedsMaxSupportedPublishers)
-    }
+/// Implements [`PortCreateError`] for iceoryx2 error types, one `Error => "kind", FullVariant;`
+/// each.
+macro_rules! port_create_errors {
+    ($($error:ident => $kind:literal, $full:ident;)*) => {$(
+        impl PortCreateError for $error {
+            const KIND: &'static str = $kind;
+            fn service_full(&self) -> bool {
+                matches!(self, Self::$full)
+            }
+        }
+    )*};
 }
 
-impl PortCreateError for SubscriberCreateError {
-    const KIND: &'static str = "subscribers";
-    fn service_full(&self) -> bool {
-        matches!(self, Self::ExceedsMaxSupportedSubscribers)
-    }
-}
-
-impl PortCreateError for NotifierCreateError {
-    const KIND: &'static str = "notifiers";
-    fn service_full(&self) -> bool {
-        matches!(self, Self::ExceedsMaxSupportedNotifiers)
-    }
-}
-
-impl PortCreateError for ListenerCreateError {
-    const KIND: &'static str = "listeners";
-    fn service_full(&self) -> bool {
-        matches!(self, Self::ExceedsMaxSupportedListeners)
-    }
-}
-
-impl PortCreateError for ClientCreateError {
-    const KIND: &'static str = "control clients";
-    fn service_full(&self) -> bool {
-        matches!(self, Self::ExceedsMaxSupportedClients)
-    }
+port_create_errors! {
+    PublisherCreateError => "publishers", ExceedsMaxSupportedPublishers;
+    SubscriberCreateError => "subscribers", ExceedsMaxSupportedSubscribers;
+    NotifierCreateError => "notifiers", ExceedsMaxSupportedNotifiers;
+    ListenerCreateError => "listeners", ExceedsMaxSupportedListeners;
+    ClientCreateError => "control clients", ExceedsMaxSupportedClients;
 }
