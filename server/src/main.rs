@@ -41,9 +41,8 @@ enum Command {
         /// Which object.
         kind: ShapeKind,
         /// About how many triangles.
-        #[arg(long, default_value_t = 10_000,
-              value_parser = clap::value_parser!(u64).range(1..=shapes::MAX_TRIANGLES as u64))]
-        triangles: u64,
+        #[arg(long, default_value_t = 10_000, value_parser = bench::triangle_count())]
+        triangles: usize,
         /// The OBJ file to write.
         #[arg(long)]
         out: PathBuf,
@@ -128,9 +127,9 @@ fn main() -> ExitCode {
 }
 
 /// `vas-server shape`: builds the object and writes it as OBJ.
-fn write_shape(kind: ShapeKind, triangles: u64, out: &Path) -> anyhow::Result<()> {
+fn write_shape(kind: ShapeKind, triangles: usize, out: &Path) -> anyhow::Result<()> {
     // The argument parser's range keeps the count within usize.
-    let mesh = shapes::build(kind, triangles as usize);
+    let mesh = shapes::build(kind, triangles);
     write_obj(&mesh, out)?;
     println!(
         "wrote {kind} with {} triangles and {} vertices to {}",

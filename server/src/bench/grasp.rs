@@ -285,10 +285,10 @@ pub struct GraspArgs {
     pub parts: Vec<ScriptedGrasp>,
     /// Triangle counts of the parts, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_TRIANGLES,
-          value_parser = super::triangle_count)]
+          value_parser = super::triangle_count())]
     pub triangles: Vec<usize>,
     /// Runs per part and triangle count (the table shows medians).
-    #[arg(long, default_value_t = 5, value_parser = super::pass_count)]
+    #[arg(long, default_value_t = 5, value_parser = super::pass_count())]
     pub repeats: usize,
     /// Write the results as JSON to this file.
     #[arg(long)]

@@ -1,5 +1,7 @@
 //! Benchmark procedures of BENCHMARKS.md, shared by the `vas-server bench` subcommands and tests.
 
+use clap::builder::TypedValueParser;
+
 pub mod bounce;
 pub mod grasp;
 pub mod orbit;
@@ -21,30 +23,26 @@ pub fn finite_number(text: &str) -> Result<f64, String> {
     }
 }
 
-/// Parses a count of passes or runs of a benchmark, which must be at least one: with none there
-/// is nothing to time (and a table that says "fastest of 0 rounds").
-pub fn pass_count(text: &str) -> Result<usize, String> {
-    match text.trim().parse::<usize>() {
-        Ok(0) => Err("must be at least 1".to_owned()),
-        Ok(count) => Ok(count),
-        Err(error) => Err(format!("{error}")),
-    }
+/// clap's parser of a count of passes or runs of a benchmark, which must be at least one: with
+/// none there is nothing to time (and a table that says "fastest of 0 rounds").
+pub fn pass_count() -> impl TypedValueParser<Value = usize> {
+    clap::value_parser!(u64)
+        .range(1..)
+        .map(|count| count as usize)
 }
 
-/// Parses the triangle count of a procedural shape: from 1 to
+/// clap's parser of the triangle count of a procedural shape: from 1 to
 /// [`MAX_TRIANGLES`](crate::geometry::shapes::MAX_TRIANGLES), as a scene config allows.
-pub fn triangle_count(text: &str) -> Result<usize, String> {
-    let max = crate::geometry::shapes::MAX_TRIANGLES;
-    match text.trim().parse::<usize>() {
-        Ok(count) if (1..=max).contains(&count) => Ok(count),
-        Ok(count) => Err(format!("must be between 1 and {max}, not {count}")),
-        Err(error) => Err(format!("{error}")),
-    }
+pub fn triangle_count() -> impl TypedValueParser<Value = usize> {
+    clap::value_parser!(u64)
+        .range(1..=crate::geometry::shapes::MAX_TRIANGLES as u64)
+        .map(|count| count as usize)
 }
 
 #[cfg(test)]
 mod tests {
     use super::{finite_number, pass_count, triangle_count};
+    use clap::Parser;
 
     #[test]
     fn only_finite_numbers_pass_the_command_line() {
@@ -55,16 +53,32 @@ mod tests {
         }
     }
 
+    /// A command line with one count, parsed by the given parser.
+    #[derive(Parser)]
+    struct Counts {
+        #[arg(long, value_parser = pass_count())]
+        passes: Option<usize>,
+        #[arg(long, value_parser = triangle_count())]
+        triangles: Option<usize>,
+    }
+
+    fn parse(flag: &str, text: &str) -> Result<Counts, clap::Error> {
+        Counts::try_parse_from(["bench", &format!("--{flag}={text}")])
+    }
+
     #[test]
     fn counts_of_passes_and_triangles_must_be_in_range() {
-        assert_eq!(pass_count("3"), Ok(3));
-        assert_eq!(triangle_count("1"), Ok(1));
-        assert_eq!(triangle_count("20000000"), Ok(20_000_000));
+        assert_eq!(parse("passes", "3").unwrap().passes, Some(3));
+        assert_eq!(parse("triangles", "1").unwrap().triangles, Some(1));
+        assert_eq!(
+            parse("triangles", "20000000").unwrap().triangles,
+            Some(20_000_000)
+        );
         for text in ["0", "-1", "x", ""] {
-            assert!(pass_count(text).is_err(), "{text:?} passed");
+            assert!(parse("passes", text).is_err(), "{text:?} passed");
         }
         for text in ["0", "20000001", "-5", "1.5"] {
-            assert!(triangle_count(text).is_err(), "{text:?} passed");
+            assert!(parse("triangles", text).is_err(), "{text:?} passed");
         }
     }
 }

@@ -132,7 +132,7 @@ pub struct RandomArgs {
     #[arg(long, default_value_t = crate::collision::orientation::DEFAULT_K)]
     pub k: usize,
     /// Passes over the poses; each query's time is its fastest pass (robust to preemption).
-    #[arg(long, default_value_t = 3, value_parser = super::pass_count)]
+    #[arg(long, default_value_t = 3, value_parser = super::pass_count())]
     pub rounds: usize,
     /// Write the results as JSON to this file.
     #[arg(long)]

@@ -490,10 +490,10 @@ pub fn config_scenarios(configs: &Path) -> Result<Vec<Scenario>> {
 pub struct SlideBenchArgs {
     /// Triangle counts of the grasped part in the peg-in-hole scene.
     #[arg(long, value_delimiter = ',', default_values_t = [1_000, 5_000, 10_000, 50_000],
-          value_parser = super::triangle_count)]
+          value_parser = super::triangle_count())]
     pub triangles: Vec<usize>,
     /// Runs per scene; the table shows medians.
-    #[arg(long, default_value_t = 5, value_parser = super::pass_count)]
+    #[arg(long, default_value_t = 5, value_parser = super::pass_count())]
     pub runs: usize,
     /// Thread counts to run every scene with (comma-separated; 0 is rayon's default): on more
     /// than one, long collision queries are split across the threads.
