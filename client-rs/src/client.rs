@@ -280,8 +280,7 @@ impl Client {
     /// not taken yet. The server takes in input before it answers a control request, so one
     /// round trip is enough.
     pub fn flush_inputs(&self, timeout: Duration) -> Result<(), ClientError> {
-        self.control(ControlRequest::scene_info(), timeout)
-            .map(drop)
+        self.input_stats(timeout).map(drop)
     }
 
     /// Sends a glove sample and wakes the server.
