@@ -34,6 +34,7 @@ use crate::geometry::ConvexHull;
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
+use std::collections::BTreeSet;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
@@ -359,6 +360,9 @@ struct BackEnd<'a, C> {
     plane_search: Option<PlaneSearch>,
     split_min_bv_tests: u64,
     detail: Detail,
+    /// The pairs whose contact an exact test started or ended: the pipeline's set of colliding
+    /// pairs is brought up to date from these alone.
+    contact_changes: Mutex<Vec<PairKey>>,
 }
 
 impl<'a, C: ExactTest> BackEnd<'a, C> {
@@ -374,7 +378,15 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
                 u64::MAX
             },
             detail,
+            contact_changes: Mutex::new(Vec::new()),
         }
+    }
+
+    /// The pairs whose contact started or ended in this frame's tests (a pair may come twice).
+    fn into_contact_changes(self) -> Vec<PairKey> {
+        self.contact_changes
+            .into_inner()
+            .unwrap_or_else(PoisonError::into_inner)
     }
 
     /// Takes the pairs down the back end, spread over the current rayon pool, leaving each one's
@@ -449,6 +461,7 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
         let mut tally = Tally::default();
         let [a, b] = models(self.slots, entry.pair);
         let (a, b) = (a.exact(), b.exact());
+        let was_colliding = entry.contact.is_some();
         let stats = &mut tally.exact_work;
         entry.contact = match self.detail {
             Detail::Pairs => {
@@ -469,6 +482,12 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
             }
         };
         tally.colliding = u64::from(entry.contact.is_some());
+        if entry.contact.is_some() != was_colliding {
+            self.contact_changes
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .push(entry.pair);
+        }
         tally.exact_time = start.elapsed();
         tally
     }
@@ -483,6 +502,10 @@ pub struct CollisionPipeline<C> {
     /// Every pair of interest whose boxes overlap: a pair enters when its overlap starts (or the
     /// interest rules come to allow it) and leaves when the overlap ends (or the rules forbid it).
     pairs: FxHashMap<PairKey, PairEntry>,
+    /// The keys of the entries in contact, in the order a frame reports them: kept up to date
+    /// from the few pairs whose contact started or ended, so that a frame's report costs in
+    /// proportion to the colliding pairs, not to all the pairs of the table.
+    colliding: BTreeSet<PairKey>,
     queue: Vec<u32>,
     queued: Vec<bool>,
     warmer: PoolWarmer,
@@ -498,6 +521,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
             broad_phase: SweepAndPrune::new(),
             interest: InterestMatrix::new(),
             pairs: FxHashMap::default(),
+            colliding: BTreeSet::new(),
             queue: Vec::new(),
             queued: Vec::new(),
             warmer: PoolWarmer::default(),
@@ -597,6 +621,8 @@ impl<C: ExactTest> CollisionPipeline<C> {
         let (slots, rules) = (&self.slots, &self.interest);
         self.pairs
             .retain(|&pair, _| is_interesting(slots, rules, pair));
+        let pairs = &self.pairs;
+        self.colliding.retain(|pair| pairs.contains_key(pair));
         for index in 0..self.slots.len() as u32 {
             if self.slots[index as usize].object.is_none() {
                 continue;
@@ -647,7 +673,9 @@ impl<C: ExactTest> CollisionPipeline<C> {
 
     fn drop_ended_pairs(&mut self) {
         for [a, b] in self.broad_phase.drain_ended() {
-            self.pairs.remove(&ordered(a, b));
+            let pair = ordered(a, b);
+            self.pairs.remove(&pair);
+            self.colliding.remove(&pair);
         }
     }
 
@@ -697,6 +725,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
         self.warmer.release();
         let (mut update, carried_tally) =
             rayon::join(|| boxes.update(&back_end), || back_end.run(&mut carried));
+        let contact_changes = back_end.into_contact_changes();
         let mut tally = carried_tally;
         tally += update.started_tally;
         for &index in &self.queue {
@@ -712,6 +741,18 @@ impl<C: ExactTest> CollisionPipeline<C> {
         }
         for entry in update.started.drain(..) {
             self.pairs.insert(entry.pair, entry);
+        }
+        // The table is now the truth for every pair whose membership may have changed.
+        for pair in update.ended.iter().chain(&contact_changes) {
+            if self
+                .pairs
+                .get(pair)
+                .is_some_and(|entry| entry.contact.is_some())
+            {
+                self.colliding.insert(*pair);
+            } else {
+                self.colliding.remove(pair);
+            }
         }
         stats.broad_phase = StageCounters {
             pairs_in: moved * (objects - moved) + moved * moved.saturating_sub(1) / 2,
@@ -768,24 +809,33 @@ impl<C: ExactTest> CollisionPipeline<C> {
         });
     }
 
+    /// Every colliding pair of the scene, sorted: the pair keys are ordered as the ids are.
     fn colliding_pairs(&self, detail: Detail) -> Vec<CollidingPair> {
-        let mut colliding: Vec<CollidingPair> = self
-            .pairs
+        debug_assert!(
+            self.colliding.iter().all(|pair| self
+                .pairs
+                .get(pair)
+                .is_some_and(|entry| entry.contact.is_some()))
+                && self.colliding.len()
+                    == self.pairs.values().filter(|e| e.contact.is_some()).count(),
+            "the set of colliding pairs is the pair table's entries in contact"
+        );
+        self.colliding
             .iter()
-            .filter_map(|(&(a, b), entry)| {
-                let triangles = entry.contact.as_ref()?;
-                Some(CollidingPair {
-                    a: self.live(a).key.object,
-                    b: self.live(b).key.object,
-                    triangles: match detail {
-                        Detail::Pairs => Vec::new(),
-                        Detail::TrianglePairs => triangles.clone().unwrap_or_default(),
-                    },
-                })
+            .map(|&(a, b)| CollidingPair {
+                a: self.live(a).key.object,
+                b: self.live(b).key.object,
+                triangles: match detail {
+                    Detail::Pairs => Vec::new(),
+                    Detail::TrianglePairs => self.pairs[&(a, b)]
+                        .contact
+                        .as_ref()
+                        .and_then(Option::as_ref)
+                        .cloned()
+                        .unwrap_or_default(),
+                },
             })
-            .collect();
-        colliding.sort_unstable_by_key(|pair| (pair.a, pair.b));
-        colliding
+            .collect()
     }
 }
 
