@@ -128,7 +128,6 @@ fn main() -> ExitCode {
 
 /// `vas-server shape`: builds the object and writes it as OBJ.
 fn write_shape(kind: ShapeKind, triangles: usize, out: &Path) -> anyhow::Result<()> {
-    // The argument parser's range keeps the count within usize.
     let mesh = shapes::build(kind, triangles);
     write_obj(&mesh, out)?;
     println!(

@@ -50,13 +50,15 @@ pub struct OrbitArgs {
     #[arg(long, default_value_t = 5000, value_parser = clap::value_parser!(u32).range(1..))]
     samples: u32,
     /// Centre distances (comma-separated; the spheres touch at 2).
-    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES, value_parser = super::finite_number)]
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES,
+          value_parser = super::finite_number)]
     distances: Vec<f64>,
     /// Polygon counts of the spheres (comma-separated).
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_POLYGONS)]
     polygons: Vec<usize>,
     /// Rotation speeds in degrees per step (comma-separated).
-    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_ROTATIONS, value_parser = super::finite_number)]
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_ROTATIONS,
+          value_parser = super::finite_number)]
     rotations: Vec<f64>,
     /// Timed repetitions of each batch; the median is reported.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]

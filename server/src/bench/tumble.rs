@@ -507,7 +507,8 @@ pub struct TumbleArgs {
     #[arg(long)]
     pub steps: Option<usize>,
     /// Distances d, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES, value_parser = super::finite_number)]
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES,
+          value_parser = super::finite_number)]
     pub distances: Vec<f64>,
     /// Algorithms to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = Algo::DEFAULT)]
