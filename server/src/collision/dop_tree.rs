@@ -20,7 +20,9 @@
 //!    leaf or a small subtree, a face plane of the leaf), taking up again only the pairs whose
 //!    gap the motion since may have closed along their direction (bounded with the tree's
 //!    sphere, then with the node's own); an all-pairs query (not split) walks from the same
-//!    front and leaves its own, which is complete whatever it finds;
+//!    front and leaves its own, which is complete whatever it finds. A first-hit query far from
+//!    both the front's pose and the last query's (two trees shared by many pairs of objects,
+//!    random poses) walks from the roots without recording a front;
 //! 1. the last proof that the roots are apart is checked against the motion since; failing
 //!    that, a few of A's root slabs nearest the direction from A to B are tested against B's
 //!    bounding sphere and B's root re-aligned along that slab only: far pairs end here, in tens
@@ -32,13 +34,14 @@
 //! 3. depth-first traversal: B's nodes are re-aligned lazily, once per query (a small
 //!    direct-mapped cache), leaves exactly from their corners; children pairs are tested when
 //!    generated and the deeper overlap is visited first; pairs that A's axes barely fail to
-//!    separate are also tested along B's axes (A's node re-aligned into B's frame); a query
-//!    that records a front tries a leaf's face planes against an overlapping subtree of up to
-//!    `PLANE_TEST_MAX_TRIANGLES` before it splits the subtree, and tests two overlapping nodes
-//!    of up to `BOX_TEST_MAX_TRIANGLES` each with their oriented boxes (fitted as the OBB-tree
-//!    fits its own, kept in `f32` beside the DOPs) before it descends: near contact a small
-//!    patch of a smooth surface is nearly flat, and its box is thin where a DOP of fixed axes
-//!    is not, so the walk and its front end several levels higher.
+//!    separate are also tested along B's axes (A's node re-aligned into B's frame); a leaf's
+//!    face planes are tried against an overlapping subtree of up to `PLANE_TEST_MAX_TRIANGLES`
+//!    before the subtree is split, and two overlapping nodes of up to `BOX_TEST_MAX_TRIANGLES`
+//!    each (`PLAIN_BOX_TEST_MAX_TRIANGLES` in a walk that records no front) are tested with
+//!    their oriented boxes (fitted as the OBB-tree fits its own, kept in `f32` beside the DOPs)
+//!    before the walk descends: near contact a small patch of a smooth surface is nearly flat,
+//!    and its box is thin where a DOP of fixed axes is not, so the walk and its front end
+//!    several levels higher.
 //!
 //! The traversal is compiled twice, portable and with AVX2/FMA, chosen at run time.
 
@@ -256,6 +259,7 @@ fn with_affine<const ALL: bool>(
         }
         let mut memory = PairMemory::take(a, b);
         let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats, parallel);
+        memory.last_query = Some(*b_to_a);
         PairMemory::put_back(memory);
         hit
     }
@@ -297,6 +301,9 @@ struct PairMemory {
     /// pair of leaves lies under one of its node pairs, proved apart or to be tested again.
     front_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
     front: Front,
+    /// B's pose in A's frame at the last query that reached the memory: a query far from it
+    /// and from the front's pose follows no coherent motion ([`PairMemory::detached`]).
+    last_query: Option<Isometry3<f64>>,
     /// Buffers reused across queries: the pairs to test again, the certificates due among
     /// them and those to renew, and where their tests ended.
     retest: Vec<(u32, u32)>,
@@ -772,6 +779,13 @@ const PLANE_TEST_MAX_TRIANGLES: usize = 16;
 /// this size a box test (about 30 ns) rarely separates what the DOPs did not.
 const BOX_TEST_MAX_TRIANGLES: usize = 64;
 
+/// The same bound in walks that record no front (a detached query's, the search around an old
+/// witness): there a box test only prunes, and most of these walks end on a hit, where the boxes
+/// on the way down overlap. On B4's scene the exact stage ran 140 million instructions with boxes
+/// of up to 64 triangles in such walks, 127 million with this bound and 115 million with none
+/// (callgrind, 210 frames); with none, the worst query of B2 (fcl_env against fcl_rob) doubled.
+const PLAIN_BOX_TEST_MAX_TRIANGLES: usize = 8;
+
 /// Depth of the cut through the larger tree where a split query from the roots starts: up to
 /// 2^depth pairs, enough for work stealing to balance two to eight threads.
 const PARALLEL_CUT_DEPTH: u32 = 5;
@@ -841,6 +855,7 @@ impl PairMemory {
                 memory.root_separation = None;
                 memory.front_pose = None;
                 memory.apart_by_front = false;
+                memory.last_query = None;
             }
             memory
         })
@@ -902,11 +917,19 @@ impl PairMemory {
             );
             pair.get().run_walk::<K>(Walk::from(&[start]), stats)
         });
+        let mut detached = false;
         let hit = near.or_else(|| {
+            if self.detached(&pair) {
+                detached = true;
+                return pair.get().run::<false, K>(stats, &mut Vec::new(), parallel);
+            }
             let (carry, placement) = self.carry_front(&pair);
             self.search_carried::<K>(&pair, carry, placement, stats, parallel)
         });
-        self.remember_walk(hit)
+        let found = self.remember_walk(hit);
+        // A detached walk proved nothing about the front: the next query must not start there.
+        self.apart_by_front &= !detached;
+        found
     }
 
     /// Remembers what a query's walk found (its hit, if any) and returns whether it found
@@ -1069,20 +1092,55 @@ impl PairMemory {
         {
             return (Carry::Restart { keep_on_hit: false }, placement);
         }
-        // |R' - R| in the spectral norm is at most the Frobenius norm over sqrt 2 (twice the
-        // sine of half the angle between them); the small term covers matrices that are
-        // orthogonal only to rounding.
-        let turn = (pair.rotation - old_rotation).norm() * std::f64::consts::FRAC_1_SQRT_2 + 1e-12;
-        // How far any point of B moved in A's frame.
-        let shift = (pair.translation - old_translation).norm();
-        let reach_b = b.bounding_centre.coords.norm() + b.bounding_radius;
-        if turn * reach_b + shift > FRONT_MAX_MOTION * a.bounding_radius.min(b.bounding_radius) {
+        let (turn, far) = motion_since(pair, old_rotation, old_translation);
+        if far {
             return (Carry::Restart { keep_on_hit: true }, placement);
         }
         self.front
             .due(turn, &placement, &mut self.retest, &mut self.due);
         (Carry::Advanced { turn }, placement)
     }
+
+    /// Whether a query at `pair`'s pose is far ([`motion_since`]) from both the front's pose and
+    /// the last query's: no motion connects it to the queries before, nor likely to the next one
+    /// (the trees are shared by several pairs of objects, as in a scene of many copies of a few
+    /// parts, or the poses are random). Such a query walks from the roots without recording a
+    /// front and leaves the old one as it is: on B4's scene, recording the front, with the box
+    /// tests that tighten it, was about half the cost of its queries (callgrind).
+    fn detached<const K: usize>(&self, pair: &LazyPair<'_, K>) -> bool {
+        let far_from = |rotation: &Matrix3<f64>, translation: &Vector3<f64>| {
+            motion_since(pair, rotation, translation).1
+        };
+        self.front_pose
+            .as_ref()
+            .is_some_and(|(rotation, translation)| far_from(rotation, translation))
+            && self.last_query.is_some_and(|last| {
+                far_from(
+                    last.rotation.to_rotation_matrix().matrix(),
+                    &last.translation.vector,
+                )
+            })
+    }
+}
+
+/// How far B turned since it was at `(rotation, translation)` in A's frame (a bound on `|R' - R|`
+/// in the spectral norm), and whether it moved too far since for a front kept there to pay off
+/// ([`FRONT_MAX_MOTION`]).
+fn motion_since<const K: usize>(
+    pair: &LazyPair<'_, K>,
+    rotation: &Matrix3<f64>,
+    translation: &Vector3<f64>,
+) -> (f64, bool) {
+    let (a, b) = (pair.a, pair.b);
+    // |R' - R| in the spectral norm is at most the Frobenius norm over sqrt 2 (twice the sine of
+    // half the angle between them); the small term covers matrices that are orthogonal only to
+    // rounding.
+    let turn = (pair.rotation - rotation).norm() * std::f64::consts::FRAC_1_SQRT_2 + 1e-12;
+    // How far any point of B moved in A's frame.
+    let shift = (pair.translation - translation).norm();
+    let reach_b = b.bounding_centre.coords.norm() + b.bounding_radius;
+    let far = turn * reach_b + shift > FRONT_MAX_MOTION * a.bounding_radius.min(b.bounding_radius);
+    (turn, far)
 }
 
 /// True when the pair of leaves that proved two trees in contact at the previous query still has
@@ -2123,6 +2181,14 @@ impl<'a, R> TreePair<'a, R> {
         })
     }
 
+    /// The triangles of the larger node of pair `(ia, ib)`.
+    fn largest_triangle_count(&self, (ia, ib): (u32, u32)) -> usize {
+        self.a
+            .node_triangles(ia)
+            .len()
+            .max(self.b.node_triangles(ib).len())
+    }
+
     /// The two node pairs to visit after `(ia, ib)` overlapped: the larger node is split.
     fn children(&self, ia: u32, ib: u32) -> [(u32, u32); 2] {
         let (na, nb) = (self.a.nodes[ia as usize], self.b.nodes[ib as usize]);
@@ -2369,16 +2435,16 @@ impl<R> TreePair<'_, R> {
                 // triangle at a slant it is what ends the descent at all: the triangle's
                 // re-aligned DOP is as wide as the triangle along every axis, and would overlap
                 // most of the other tree's nodes (a table top under a fine part).
-                if let Some(front) = front.as_deref_mut()
-                    && let Some(extent) = self.plane_test_extent(na, nb, ia, ib)
-                {
+                if let Some(extent) = self.plane_test_extent(na, nb, ia, ib) {
                     stats.bv_tests += 1;
                     let ending = self.face_separation(ia, ib, extent);
                     if let Ending::Separated { .. } = ending {
-                        front.push(FrontPair {
-                            pair: (ia, ib),
-                            ending,
-                        });
+                        if let Some(front) = front.as_deref_mut() {
+                            front.push(FrontPair {
+                                pair: (ia, ib),
+                                ending,
+                            });
+                        }
                         continue;
                     }
                 }
@@ -2402,10 +2468,12 @@ impl<R> TreePair<'_, R> {
                     };
                 for (pair, slack) in [shallower, deeper] {
                     if slack.value >= 0.0 {
-                        if let Some(front) = front.as_deref_mut()
-                            && let Some(ending) = self.box_separation(pair, stats)
-                        {
-                            front.push(FrontPair { pair, ending });
+                        let box_test = front.is_some()
+                            || self.largest_triangle_count(pair) <= PLAIN_BOX_TEST_MAX_TRIANGLES;
+                        if box_test && let Some(ending) = self.box_separation(pair, stats) {
+                            if let Some(front) = front.as_deref_mut() {
+                                front.push(FrontPair { pair, ending });
+                            }
                         } else {
                             stack.push(pair);
                         }
@@ -2871,6 +2939,63 @@ mod tests {
         }
         assert!(checked > 10_000, "only {checked} certificates checked");
         assert!(renewed > 1_000, "only {renewed} certificates renewed");
+    }
+
+    #[test]
+    fn a_detached_query_leaves_the_front_to_the_coherent_ones() {
+        let mesh = torus(0.35, 20, 10);
+        let (a, b) = (DopTree::build(&mesh), DopTree::build(&mesh));
+        let (oracle_a, oracle_b) = (ObbTree::build(&mesh), ObbTree::build(&mesh));
+        // The front's pose and size, and whether a query at `next` would start from it.
+        let front_at = |next: &Isometry3<f64>| {
+            let mut memory = PairMemory::take(&a, &b);
+            let carry = memory.carry_front(&LazyPair::<18>::new(&a, &b, next)).0;
+            let state = (
+                memory.front_pose,
+                memory.front.len(),
+                matches!(carry, Carry::Advanced { .. }),
+            );
+            PairMemory::put_back(memory);
+            state
+        };
+        let check = |pose: &Isometry3<f64>| {
+            let hit = a.intersects(&b, pose, &mut QueryStats::default());
+            let expected = oracle_a.intersects(&oracle_b, pose, &mut QueryStats::default());
+            assert_eq!(hit, expected, "at {pose:?}");
+        };
+        let d = 2.0;
+        // A tumble near contact leaves a front.
+        for s in 0..20 {
+            check(&tumble_pose(d, s, 1200));
+        }
+        let next = tumble_pose(d, 20, 1200);
+        let kept = front_at(&next);
+        assert!(kept.0.is_some() && kept.1 > 0, "the tumble left no front");
+        // Poses far from it and from each other (random ones, in contact or not) leave it as
+        // it is, and the tumble can go on from it as before.
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..20 {
+            check(&random_pose(&mut rng, 1.5));
+        }
+        assert_eq!(front_at(&next), kept, "a detached query changed the front");
+        check(&next);
+        // Queries that follow one another far from the front make a front of their own: B
+        // linked through A like two links of a chain (the tubes 0.3 apart), sliding along.
+        let linked = |s: usize| {
+            Isometry3::from_parts(
+                Translation3::new(1.0, 0.001 * s as f64, 0.0),
+                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
+            )
+        };
+        for s in 0..3 {
+            check(&linked(s));
+        }
+        let (pose, len, _) = front_at(&linked(3));
+        assert_ne!(
+            pose, kept.0,
+            "coherent queries far from the front kept the old one"
+        );
+        assert!(len > 0, "the linked pair left no front");
     }
 
     #[test]
