@@ -302,7 +302,8 @@ struct PairMemory {
     front_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
     front: Front,
     /// B's pose in A's frame at the last query that reached the memory: a query far from it
-    /// and from the front's pose follows no coherent motion ([`PairMemory::detached`]).
+    /// and from the front's pose follows no coherent motion
+    /// ([`PairMemory::far_from_last_query`]).
     last_query: Option<Isometry3<f64>>,
     /// Buffers reused across queries: the pairs to test again, the certificates due among
     /// them and those to renew, and where their tests ended.
@@ -919,11 +920,14 @@ impl PairMemory {
         });
         let mut detached = false;
         let hit = near.or_else(|| {
-            if self.detached(&pair) {
+            let (carry, placement) = self.carry_front(&pair);
+            // A restart that keeps the front on a hit: B moved too far from the front's pose.
+            if let Carry::Restart { keep_on_hit: true } = carry
+                && self.far_from_last_query(&pair)
+            {
                 detached = true;
                 return pair.get().run::<false, K>(stats, &mut Vec::new(), parallel);
             }
-            let (carry, placement) = self.carry_front(&pair);
             self.search_carried::<K>(&pair, carry, placement, stats, parallel)
         });
         let found = self.remember_walk(hit);
@@ -1101,25 +1105,18 @@ impl PairMemory {
         (Carry::Advanced { turn }, placement)
     }
 
-    /// Whether a query at `pair`'s pose is far ([`motion_since`]) from both the front's pose and
-    /// the last query's: no motion connects it to the queries before, nor likely to the next one
-    /// (the trees are shared by several pairs of objects, as in a scene of many copies of a few
-    /// parts, or the poses are random). Such a query walks from the roots without recording a
-    /// front and leaves the old one as it is: on B4's scene, recording the front, with the box
-    /// tests that tighten it, was about a quarter of the exact stage's instructions (callgrind).
-    fn detached<const K: usize>(&self, pair: &LazyPair<'_, K>) -> bool {
-        let far_from = |rotation: &Matrix3<f64>, translation: &Vector3<f64>| {
-            motion_since(pair, rotation, translation).1
-        };
-        self.front_pose
-            .as_ref()
-            .is_some_and(|(rotation, translation)| far_from(rotation, translation))
-            && self.last_query.is_some_and(|last| {
-                far_from(
-                    last.rotation.to_rotation_matrix().matrix(),
-                    &last.translation.vector,
-                )
-            })
+    /// Whether a query at `pair`'s pose is far ([`motion_since`]) from the last query's. A
+    /// first-hit query far from both the front's pose and the last query's is detached: no
+    /// motion connects it to the queries before, nor likely to the next one (the trees are
+    /// shared by several pairs of objects, as in a scene of many copies of a few parts, or the
+    /// poses are random). It walks from the roots without recording a front and leaves the old
+    /// one as it is: on B4's scene, recording the front, with the box tests that tighten it, was
+    /// about a quarter of the exact stage's instructions (callgrind).
+    fn far_from_last_query<const K: usize>(&self, pair: &LazyPair<'_, K>) -> bool {
+        self.last_query.is_some_and(|last| {
+            let rotation = last.rotation.to_rotation_matrix();
+            motion_since(pair, rotation.matrix(), &last.translation.vector).1
+        })
     }
 }
 
@@ -2148,10 +2145,15 @@ impl<'a, R> TreePair<'a, R> {
     /// The certificate of node pair `(ia, ib)`, whose DOPs overlap, from their oriented boxes:
     /// the separating axis the 15-axis test finds, in A's frame, rounded to `f32`, with the gap
     /// between the boxes' projections on it; `None` when the boxes overlap too, or when either
-    /// node is above [`BOX_TEST_MAX_TRIANGLES`] (untested).
-    fn box_separation(&self, (ia, ib): (u32, u32), stats: &mut QueryStats) -> Option<Ending> {
-        if self.a.node_triangles(ia).len() > BOX_TEST_MAX_TRIANGLES
-            || self.b.node_triangles(ib).len() > BOX_TEST_MAX_TRIANGLES
+    /// node has more than `max_triangles` (untested).
+    fn box_separation(
+        &self,
+        (ia, ib): (u32, u32),
+        max_triangles: usize,
+        stats: &mut QueryStats,
+    ) -> Option<Ending> {
+        if self.a.node_triangles(ia).len() > max_triangles
+            || self.b.node_triangles(ib).len() > max_triangles
         {
             return None;
         }
@@ -2179,14 +2181,6 @@ impl<'a, R> TreePair<'a, R> {
             direction: (direction * sign).into(),
             along_b: false,
         })
-    }
-
-    /// The triangles of the larger node of pair `(ia, ib)`.
-    fn largest_triangle_count(&self, (ia, ib): (u32, u32)) -> usize {
-        self.a
-            .node_triangles(ia)
-            .len()
-            .max(self.b.node_triangles(ib).len())
     }
 
     /// The two node pairs to visit after `(ia, ib)` overlapped: the larger node is split.
@@ -2368,6 +2362,11 @@ impl<R> TreePair<'_, R> {
             stop,
             mut front,
         } = walk;
+        let box_max_triangles = if front.is_some() {
+            BOX_TEST_MAX_TRIANGLES
+        } else {
+            PLAIN_BOX_TEST_MAX_TRIANGLES
+        };
         let mut hit = None;
         // Each start is explored to the end before the next one, so a first hit leaves the
         // later starts untested. The stack holds node pairs already known to overlap. Children
@@ -2468,9 +2467,7 @@ impl<R> TreePair<'_, R> {
                     };
                 for (pair, slack) in [shallower, deeper] {
                     if slack.value >= 0.0 {
-                        let box_test = front.is_some()
-                            || self.largest_triangle_count(pair) <= PLAIN_BOX_TEST_MAX_TRIANGLES;
-                        if box_test && let Some(ending) = self.box_separation(pair, stats) {
+                        if let Some(ending) = self.box_separation(pair, box_max_triangles, stats) {
                             if let Some(front) = front.as_deref_mut() {
                                 front.push(FrontPair { pair, ending });
                             }
@@ -2866,7 +2863,7 @@ mod tests {
                 for ib in 0..b.node_count() as u32 {
                     let mut stats = QueryStats::default();
                     let Some(Ending::Separated { gap, direction, .. }) =
-                        pair.box_separation((ia, ib), &mut stats)
+                        pair.box_separation((ia, ib), BOX_TEST_MAX_TRIANGLES, &mut stats)
                     else {
                         continue;
                     };
