@@ -416,6 +416,24 @@ mod tests {
         pairs
     }
 
+    /// Every axis in sort order, and every box's recorded positions where its endpoints are.
+    fn assert_sorted_and_placed(sap: &SweepAndPrune) {
+        for (endpoints, positions) in sap.axes.iter().zip(&sap.positions) {
+            for (at, pair) in endpoints.windows(2).enumerate() {
+                assert!(
+                    !pair[1].goes_before(pair[0]),
+                    "endpoints {at} and {} out of order",
+                    at + 1
+                );
+            }
+            for (at, endpoint) in endpoints.iter().enumerate() {
+                let recorded =
+                    positions[endpoint.owner() as usize][usize::from(endpoint.is_upper())];
+                assert_eq!(recorded as usize, at, "position of {endpoint:?}");
+            }
+        }
+    }
+
     #[test]
     fn overlaps_match_brute_force_through_moves_inserts_and_removals() {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
@@ -500,6 +518,7 @@ mod tests {
                 );
             }
             assert_eq!(listed(&sap, count), now, "frame {frame}");
+            assert_sorted_and_placed(&sap);
             previous = now;
             for (id, b) in boxes.iter().enumerate() {
                 assert_eq!(sap.bounds(id as u32), *b);
