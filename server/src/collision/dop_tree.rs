@@ -498,6 +498,17 @@ impl Certificates {
         self.flagged_scalar(centre, threshold, nodes, due, 0);
     }
 
+    /// The tree bound of pair `j` with the other tree's centre at `centre`:
+    /// `expiry + direction . centre`.
+    #[inline(always)]
+    fn tree_bound(&self, j: usize, centre: &Vector3<f64>) -> f64 {
+        let [dx, dy, dz] = &self.directions;
+        self.expiry[j]
+            + f64::from(dx[j]) * centre.x
+            + f64::from(dy[j]) * centre.y
+            + f64::from(dz[j]) * centre.z
+    }
+
     /// [`Self::flagged`] over the pairs from `first` on, one at a time.
     fn flagged_scalar(
         &self,
@@ -507,12 +518,8 @@ impl Certificates {
         due: &mut DueCertificates,
         first: usize,
     ) {
-        let [dx, dy, dz] = &self.directions;
         for j in first..self.expiry.len() {
-            let tree = self.expiry[j]
-                + f64::from(dx[j]) * centre.x
-                + f64::from(dy[j]) * centre.y
-                + f64::from(dz[j]) * centre.z;
+            let tree = self.tree_bound(j, centre);
             if tree <= threshold {
                 self.flag(j, tree, threshold, nodes, due);
             }
@@ -2998,14 +3005,8 @@ mod tests {
             certificates.flagged(&centre, threshold, &nodes, &mut fast);
             // Fused and unfused arithmetic round differently: compare with a tolerance far
             // below the bounds' spread, and only away from a tie at the threshold.
-            let near_tie = (0..certificates.expiry.len()).any(|j| {
-                let [dx, dy, dz] = &certificates.directions;
-                let tree = certificates.expiry[j]
-                    + f64::from(dx[j]) * centre.x
-                    + f64::from(dy[j]) * centre.y
-                    + f64::from(dz[j]) * centre.z;
-                (tree - threshold).abs() < 1e-12
-            });
+            let near_tie = (0..certificates.expiry.len())
+                .any(|j| (certificates.tree_bound(j, &centre) - threshold).abs() < 1e-12);
             if near_tie {
                 continue;
             }
