@@ -257,7 +257,10 @@ fn with_affine<const ALL: bool>(
             PairMemory::put_back(memory);
             return hit;
         }
-        let mut memory = PairMemory::take(a, b);
+        let Some(mut memory) = PairMemory::take_unless_apart(a, b, b_to_a, &centre_b) else {
+            stats.bv_tests += 1;
+            return false;
+        };
         let hit = memory.first_hit::<K>(a, b, b_to_a, &centre_b, stats, parallel);
         memory.last_query = Some(*b_to_a);
         PairMemory::put_back(memory);
@@ -865,23 +868,61 @@ impl PairMemory {
     /// slot's buffers, if the slot remembers another pair; a new one if a query of this thread
     /// already holds it).
     fn take(a: &DopTree, b: &DopTree) -> Box<PairMemory> {
+        PAIR_MEMORIES.with_borrow_mut(|memories| Self::claim(Self::slot_of(memories, a, b), a, b))
+    }
+
+    /// Takes the memory as [`Self::take`] does, unless the remembered proof that the roots are
+    /// apart still holds with B at `b_to_a` (its bounding centre at `centre_b`): then the memory
+    /// records the query as [`Self::first_hit`] would have, in its slot, and `None` says the
+    /// trees are apart. A query far apart then costs the bounding-sphere test and the proof's
+    /// check (a few nanoseconds), not the memory's trip out of its slot and back.
+    fn take_unless_apart(
+        a: &DopTree,
+        b: &DopTree,
+        b_to_a: &Isometry3<f64>,
+        centre_b: &Point3<f64>,
+    ) -> Option<Box<PairMemory>> {
         PAIR_MEMORIES.with_borrow_mut(|memories| {
-            if memories.is_empty() {
-                memories.resize_with(MEMORY_SLOTS, || Some(Box::default()));
-            }
-            let mut memory = memories[Self::slot((a.id, b.id))]
-                .take()
-                .unwrap_or_default();
-            if memory.ids != (a.id, b.id) {
-                memory.ids = (a.id, b.id);
-                memory.witness = None;
-                memory.root_separation = None;
-                memory.front_pose = None;
+            let slot = Self::slot_of(memories, a, b);
+            if let Some(memory) = slot.as_deref_mut()
+                && memory.ids == (a.id, b.id)
+                && memory.witness.is_none()
+                && RootSeparation::still_holds(&memory.root_separation, a, b, b_to_a, centre_b)
+            {
                 memory.apart_by_front = false;
-                memory.last_query = None;
+                memory.remember_witness(None);
+                memory.last_query = Some(*b_to_a);
+                return None;
             }
-            memory
+            Some(Self::claim(slot, a, b))
         })
+    }
+
+    /// This thread's slot for the pair `(a, b)` (the slots made on first use).
+    fn slot_of<'m>(
+        memories: &'m mut Vec<Option<Box<PairMemory>>>,
+        a: &DopTree,
+        b: &DopTree,
+    ) -> &'m mut Option<Box<PairMemory>> {
+        if memories.is_empty() {
+            memories.resize_with(MEMORY_SLOTS, || Some(Box::default()));
+        }
+        &mut memories[Self::slot((a.id, b.id))]
+    }
+
+    /// Takes the memory out of `slot` for the pair `(a, b)`: a blank one (keeping the slot's
+    /// buffers) if the slot remembers another pair, a new one if the slot is empty.
+    fn claim(slot: &mut Option<Box<PairMemory>>, a: &DopTree, b: &DopTree) -> Box<PairMemory> {
+        let mut memory = slot.take().unwrap_or_default();
+        if memory.ids != (a.id, b.id) {
+            memory.ids = (a.id, b.id);
+            memory.witness = None;
+            memory.root_separation = None;
+            memory.front_pose = None;
+            memory.apart_by_front = false;
+            memory.last_query = None;
+        }
+        memory
     }
 
     /// Puts the memory back in its slot.
