@@ -889,8 +889,7 @@ impl PairMemory {
                 && memory.witness.is_none()
                 && RootSeparation::still_holds(&memory.root_separation, a, b, b_to_a, centre_b)
             {
-                memory.apart_by_front = false;
-                memory.remember_witness(None);
+                memory.remember_roots_apart();
                 memory.last_query = Some(*b_to_a);
                 return None;
             }
@@ -966,10 +965,8 @@ impl PairMemory {
             }
         }
         let Some(pair) = affine_pair::<K>(a, b, b_to_a, centre_b, &mut self.root_separation) else {
-            self.apart_by_front = false;
             stats.bv_tests += 1;
-            // The front, if any, stays valid: its pose is kept with it.
-            self.remember_witness(None);
+            self.remember_roots_apart();
             return false;
         };
         // The contact usually moved only a few triangles along: search the subtrees around the
@@ -997,6 +994,13 @@ impl PairMemory {
         // A detached walk proved nothing about the front: the next query must not start there.
         self.apart_by_front &= !detached;
         found
+    }
+
+    /// Remembers a query that the roots' test proved apart. The front, if any, stays valid: its
+    /// pose is kept with it.
+    fn remember_roots_apart(&mut self) {
+        self.apart_by_front = false;
+        self.remember_witness(None);
     }
 
     /// Remembers what a query's walk found (its hit, if any) and returns whether it found
