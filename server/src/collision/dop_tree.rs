@@ -875,7 +875,9 @@ impl PairMemory {
     /// apart still holds with B at `b_to_a` (its bounding centre at `centre_b`): then the memory
     /// records the query as [`Self::first_hit`] would have, in its slot, and `None` says the
     /// trees are apart. A query far apart then costs the bounding-sphere test and the proof's
-    /// check (a few nanoseconds), not the memory's trip out of its slot and back.
+    /// check (a few nanoseconds), not the memory's trip out of its slot and back. Where the
+    /// proof fails, [`Self::first_hit`] checks it once more: a few nanoseconds on a query that
+    /// goes on to test nodes.
     fn take_unless_apart(
         a: &DopTree,
         b: &DopTree,
