@@ -11,9 +11,10 @@
 //! A pair that collided when last tested skips the pre-check (it would most likely fail to find a
 //! plane, after many loops) and goes straight to the exact test.
 //!
-//! The back end is parallel on the current rayon pool: the pairs of a frame are spread over the
-//! threads with work stealing, each going through its pre-check and, if need be, its exact test
-//! in the same task (coarse grain); it starts on the pairs that overlapped at the last frame while
+//! The back end is parallel on the current rayon pool: the threads claim the pairs of a frame a
+//! chunk at a time until none is left (dynamic load balancing, see [`SharedPairs`]), each pair
+//! going through its pre-check and, if need be, its exact test on the same thread (coarse grain);
+//! it starts on the pairs that overlapped at the last frame while
 //! the bounding-box stage moves the boxes, so that the broad phase, mostly serial, runs beside it
 //! instead of before it (see [`CollisionPipeline::run_frame`]); and the traversal of a
 //! pair expected to be expensive is itself split across the threads (fine grain; see
@@ -34,8 +35,8 @@ use crate::geometry::ConvexHull;
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
-use std::collections::BTreeSet;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::collections::{BTreeSet, VecDeque};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 use thiserror::Error;
@@ -348,10 +349,89 @@ impl Tally {
     }
 }
 
-/// Pairs a back-end task takes: a pre-check costs about 0.25 us, so much smaller tasks would let
-/// rayon's hand-overs dominate, and much larger ones would leave a thread idle behind a task that
-/// happens to hold several exact tests.
+/// Pairs a thread of the back end claims at a time: a pre-check costs about 0.25 us, so much
+/// smaller chunks would let the claims dominate, and much larger ones would leave a thread idle
+/// behind a chunk that happens to hold several exact tests.
 const PAIRS_PER_TASK: usize = 8;
+
+/// A frame's pairs shared out among the pool's threads.
+///
+/// The thread that runs [`BackEnd::run`] claims chunks of [`PAIRS_PER_TASK`] pairs from the front
+/// of the list and the others from the back, each running the pre-checks of its chunk and, while
+/// unclaimed chunks remain, the chunk's exact tests; the exact tests of the last chunks go to a
+/// common list that every thread takes from one at a time, so that no thread is left working
+/// alone at the end for more than one exact test.
+///
+/// Measured in B4 on two threads against rayon's parallel iterator over the same chunks: claiming
+/// from both ends keeps most pairs on the core that tested them at the last frame (the
+/// pre-checks' time 89-90 us against 93-94 claiming all from the front), and a thread that runs
+/// out of work waits awake (see [`help_until`]).
+struct SharedPairs<'s, 'e> {
+    unclaimed: Mutex<VecDeque<&'s mut [&'e mut PairEntry]>>,
+    deferred_exacts: Mutex<Vec<&'s mut PairEntry>>,
+    /// Chunks and deferred exact tests that a thread has claimed, or is about to claim, and not
+    /// finished: counted before the claim, so that no thread sees zero while another one works.
+    in_flight: AtomicUsize,
+}
+
+impl<'s, 'e> SharedPairs<'s, 'e> {
+    fn new(entries: &'s mut [&'e mut PairEntry]) -> Self {
+        SharedPairs {
+            unclaimed: Mutex::new(entries.chunks_mut(PAIRS_PER_TASK).collect()),
+            deferred_exacts: Mutex::new(Vec::new()),
+            in_flight: AtomicUsize::new(0),
+        }
+    }
+
+    /// The next chunk from the front or the back, in flight until [`Self::finish_item`].
+    fn claim_chunk(&self, from_front: bool) -> Option<&'s mut [&'e mut PairEntry]> {
+        self.in_flight.fetch_add(1, Ordering::SeqCst);
+        let mut unclaimed = lock(&self.unclaimed);
+        let claimed = if from_front {
+            unclaimed.pop_front()
+        } else {
+            unclaimed.pop_back()
+        };
+        drop(unclaimed);
+        if claimed.is_none() {
+            self.in_flight.fetch_sub(1, Ordering::SeqCst);
+        }
+        claimed
+    }
+
+    fn chunks_remain(&self) -> bool {
+        !lock(&self.unclaimed).is_empty()
+    }
+
+    /// Leaves an exact test to whichever thread is free first.
+    fn defer_exact(&self, entry: &'s mut PairEntry) {
+        lock(&self.deferred_exacts).push(entry);
+    }
+
+    /// A deferred exact test, in flight until [`Self::finish_item`].
+    fn claim_exact(&self) -> Option<&'s mut PairEntry> {
+        self.in_flight.fetch_add(1, Ordering::SeqCst);
+        let claimed = lock(&self.deferred_exacts).pop();
+        if claimed.is_none() {
+            self.in_flight.fetch_sub(1, Ordering::SeqCst);
+        }
+        claimed
+    }
+
+    fn finish_item(&self) {
+        self.in_flight.fetch_sub(1, Ordering::SeqCst);
+    }
+
+    /// Every chunk and deferred exact test finished, once no chunk is left to claim.
+    fn all_done(&self) -> bool {
+        self.in_flight.load(Ordering::SeqCst) == 0 && lock(&self.deferred_exacts).is_empty()
+    }
+}
+
+/// Locks a mutex of the back end's, whose data stay sound if a holder panicked.
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(PoisonError::into_inner)
+}
 
 /// What the back end reads while it tests the pairs of a frame, on any thread.
 struct BackEnd<'a, C> {
@@ -392,11 +472,10 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
     /// Takes the pairs down the back end, spread over the current rayon pool, leaving each one's
     /// results in its entry, and returns what the tests add up to.
     ///
-    /// The pre-checks run in tasks of [`PAIRS_PER_TASK`] pairs, and each exact test a task runs
-    /// into is spawned as a task of its own: exact tests cost from one to tens of microseconds,
-    /// against a quarter of one for a pre-check, so a thread that happened to take a task holding
-    /// several of them was left working alone at the end of the frame (up to 40 us in B4 on two
-    /// threads); split this way, it is left with at most one.
+    /// The calling thread and one task for each other thread of the pool take the pairs from a
+    /// [`SharedPairs`], and the caller returns once every pair is tested: exact tests cost from one
+    /// to tens of microseconds, against a quarter of one for a pre-check, so the last ones are
+    /// shared out one at a time.
     fn run(&self, entries: &mut [&mut PairEntry]) -> Tally {
         if rayon::current_num_threads() == 1 || entries.len() <= PAIRS_PER_TASK {
             let mut tally = self.pre_check(entries);
@@ -405,29 +484,53 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
             }
             return tally;
         }
-        let exact_tally = Mutex::new(Tally::default());
-        let plane_tally = rayon::scope(|scope| {
-            entries
-                .par_chunks_mut(PAIRS_PER_TASK)
-                .with_max_len(1)
-                .map(|chunk| {
-                    let tally = self.pre_check(chunk);
-                    for entry in chunk.iter_mut().filter(|entry| !entry.separated) {
-                        let exact_tally = &exact_tally;
-                        scope.spawn(move |_| {
-                            let tally = self.exact(entry);
-                            *exact_tally.lock().unwrap_or_else(PoisonError::into_inner) += tally;
-                        });
-                    }
-                    tally
-                })
-                .sum::<Tally>()
+        let shared = SharedPairs::new(entries);
+        let helpers_tally = Mutex::new(Tally::default());
+        let mut tally = rayon::scope(|scope| {
+            for _ in 1..rayon::current_num_threads() {
+                scope.spawn(|_| {
+                    let tally = self.drain(&shared, false);
+                    *lock(&helpers_tally) += tally;
+                });
+            }
+            self.drain(&shared, true)
         });
-        let mut tally = exact_tally
+        tally += helpers_tally
             .into_inner()
             .unwrap_or_else(PoisonError::into_inner);
-        tally += plane_tally;
         tally
+    }
+
+    /// Tests chunks of `shared` until none is left, from the front for the thread that owns it
+    /// (`owner`) and from the back for the others, then deferred exact tests until there are no
+    /// more; the owner then waits, awake, until the other threads have finished theirs too. Only
+    /// the owner waits: a helper task may run inside a wait of a thread that holds a pair of the
+    /// same frame (rayon runs pending tasks there), and would then wait for itself.
+    fn drain(&self, shared: &SharedPairs<'_, '_>, owner: bool) -> Tally {
+        let mut tally = Tally::default();
+        while let Some(chunk) = shared.claim_chunk(owner) {
+            tally += self.pre_check(chunk);
+            let chunk = chunk.iter_mut();
+            let chunks_remain = shared.chunks_remain();
+            for entry in chunk.filter(|entry| !entry.separated) {
+                if chunks_remain {
+                    tally += self.exact(entry);
+                } else {
+                    shared.defer_exact(&mut **entry);
+                }
+            }
+            shared.finish_item();
+        }
+        loop {
+            if let Some(entry) = shared.claim_exact() {
+                tally += self.exact(entry);
+                shared.finish_item();
+            } else if !owner || shared.all_done() {
+                return tally;
+            } else {
+                help_once();
+            }
+        }
     }
 
     /// Runs the separating-plane stage on the pairs. A pair that collided when last tested skips
@@ -723,8 +826,21 @@ impl<C: ExactTest> CollisionPipeline<C> {
             interest: &self.interest,
         };
         self.warmer.release();
-        let (mut update, carried_tally) =
-            rayon::join(|| boxes.update(&back_end), || back_end.run(&mut carried));
+        let carried_done = AtomicBool::new(false);
+        let (mut update, carried_tally) = rayon::join(
+            || {
+                let update = boxes.update(&back_end);
+                if rayon::current_num_threads() > 1 {
+                    help_until(|| carried_done.load(Ordering::Acquire));
+                }
+                update
+            },
+            || {
+                let tally = back_end.run(&mut carried);
+                carried_done.store(true, Ordering::Release);
+                tally
+            },
+        );
         let contact_changes = back_end.into_contact_changes();
         let mut tally = carried_tally;
         tally += update.started_tally;
@@ -780,11 +896,13 @@ impl<C: ExactTest> CollisionPipeline<C> {
         if detail == Detail::TrianglePairs {
             self.fill_missing_triangles();
         }
-        stats.total = frame_start.elapsed();
-        FrameReport {
+        let report = FrameReport {
             colliding: self.colliding_pairs(detail),
             stats,
-        }
+        };
+        let mut report = report;
+        report.stats.total = frame_start.elapsed();
+        report
     }
 
     /// Computes triangle pairs for colliding pairs that were last tested without them.
@@ -976,6 +1094,27 @@ impl PoolWarmer {
     /// Lets the spinning tasks end: the back end's work is about to be handed out.
     fn release(&self) {
         self.back_ends.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+/// Waits for `done` awake: runs the current pool's pending tasks meanwhile, or spins.
+///
+/// Rayon's own waits (at the end of a `join` or a `scope`) put a thread to sleep after a few
+/// microseconds without work, and waking it takes microseconds more, often tens on a virtual
+/// machine: measured in B4, the last of a frame's tests ended 11-15 us before the frame's
+/// parallel part did, on both threads, against 3-5 us waiting this way. Only for waits that end
+/// within a frame: a thread kept spinning from frame to frame was taken off its core by the
+/// host more often (B4 in the README).
+fn help_until(done: impl Fn() -> bool) {
+    while !done() {
+        help_once();
+    }
+}
+
+/// Runs one pending task of the current pool, or spins once if there is none.
+fn help_once() {
+    if rayon::yield_now() != Some(rayon::Yield::Executed) {
+        std::hint::spin_loop();
     }
 }
 

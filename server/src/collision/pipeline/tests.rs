@@ -238,12 +238,13 @@ fn pairs_equal_brute_force_over_thousands_of_random_frames_with_dop_trees() {
     let (split, exact) = pairs_equal_brute_force::<DopTree>(24);
     assert!(
         split * 10 > exact && split * 10 < exact * 9,
-        "{split} of {exact} exact tests on two threads were split"
+        "{split} of {exact} exact tests on several threads were split"
     );
 }
 
-/// Runs a random scene of 30 objects for 2,500 frames, alternately on one and two threads, and
-/// compares every frame's colliding pairs (and every tenth frame's triangle pairs) with brute
+/// Runs a random scene of 30 objects for 2,500 frames, alternately on one thread and on two or
+/// three (more threads than pairs' owner and helper, so that several helpers share a frame's
+/// pairs), and compares every frame's colliding pairs (and every tenth frame's triangle pairs) with brute
 /// force, using the same exact test `C`. The split threshold is low enough for this scene's small
 /// meshes that two-thread frames run both split and unsplit first-hit tests; returns how many
 /// were split and how many ran in all.
@@ -259,9 +260,9 @@ fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) -> (u64, u64) {
     let ids: Vec<ObjectId> = scene.bodies.keys().copied().collect();
     scene.disallowed_object_pair = Some((ids[3], ids[7]));
     pipeline.set_interest(interest_rules((ids[3], ids[7])));
-    let (one_thread, two_threads) = (pool(1), pool(2));
+    let (one_thread, two_threads, three_threads) = (pool(1), pool(2), pool(3));
     let (mut colliding_frames, mut separated_by_plane) = (0, 0);
-    let (mut split_tests, mut two_thread_exact_tests) = (0, 0);
+    let (mut split_tests, mut parallel_exact_tests, mut shared_frames) = (0, 0, 0);
     let mut last_colliding = Vec::new();
     for frame in 0..2500 {
         // Most frames move half the scene (the broad phase re-sorts whole axes); every third
@@ -298,17 +299,22 @@ fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) -> (u64, u64) {
         } else {
             Detail::Pairs
         };
-        let report = if frame % 2 == 0 {
-            one_thread.install(|| pipeline.run_frame(detail))
-        } else {
-            two_threads.install(|| pipeline.run_frame(detail))
+        let threads = match frame % 4 {
+            1 => &two_threads,
+            3 => &three_threads,
+            _ => &one_thread,
         };
+        let report = threads.install(|| pipeline.run_frame(detail));
         let stats = report.stats;
         if frame % 2 == 0 {
             assert_eq!(stats.split_tests, 0, "one thread never splits");
-        } else if detail == Detail::Pairs {
-            split_tests += stats.split_tests;
-            two_thread_exact_tests += stats.exact.pairs_in;
+        } else {
+            // Frames of more pairs than one chunk share them out among the threads.
+            shared_frames += usize::from(stats.separating_plane.pairs_in > PAIRS_PER_TASK as u64);
+            if detail == Detail::Pairs {
+                split_tests += stats.split_tests;
+                parallel_exact_tests += stats.exact.pairs_in;
+            }
         }
         assert!(stats.broad_phase.pairs_out <= stats.broad_phase.pairs_in);
         assert_eq!(stats.interest.pairs_in, stats.broad_phase.pairs_out);
@@ -329,7 +335,11 @@ fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) -> (u64, u64) {
         separated_by_plane > 10_000,
         "the plane stage separated only {separated_by_plane} pairs"
     );
-    (split_tests, two_thread_exact_tests)
+    assert!(
+        shared_frames > 500,
+        "only {shared_frames} frames on several threads shared out their pairs"
+    );
+    (split_tests, parallel_exact_tests)
 }
 
 #[test]
