@@ -516,7 +516,7 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
                 if chunks_remain {
                     tally += self.exact(entry);
                 } else {
-                    shared.defer_exact(&mut **entry);
+                    shared.defer_exact(entry);
                 }
             }
             shared.finish_item();
