@@ -504,13 +504,6 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
             }
             return tally;
         }
-        let warm: f64 = self
-            .slots
-            .iter()
-            .filter_map(|slot| slot.object.as_ref())
-            .map(|o| o.pose.translation.vector.x + o.pose.rotation.w)
-            .sum();
-        std::hint::black_box(warm);
         let shared = SharedPairs::new(entries);
         let helpers_tally = Mutex::new(Tally::default());
         let mut tally = rayon::scope(|scope| {
@@ -924,13 +917,11 @@ impl<C: ExactTest> CollisionPipeline<C> {
         if detail == Detail::TrianglePairs {
             self.fill_missing_triangles();
         }
-        let report = FrameReport {
+        stats.total = frame_start.elapsed();
+        FrameReport {
             colliding: self.colliding_pairs(detail),
             stats,
-        };
-        let mut report = report;
-        report.stats.total = frame_start.elapsed();
-        report
+        }
     }
 
     /// Computes triangle pairs for colliding pairs that were last tested without them.
