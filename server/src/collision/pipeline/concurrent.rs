@@ -7,12 +7,12 @@
 
 use super::{
     CollisionPipeline, Detail, ExactTest, FrameReport, ObjectDesc, ObjectId, PipelineError,
-    check_pose,
+    check_pose, lock,
 };
 use crossbeam_channel::{Receiver, Sender};
 use nalgebra::Isometry3;
 use rayon::ThreadPool;
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
 type Moves = Vec<(ObjectId, Isometry3<f64>)>;
@@ -67,10 +67,7 @@ impl<C: ExactTest + 'static> ConcurrentPipeline<C> {
     /// [`super::FrameStats::rejected_moves`].
     pub fn queue_move(&self, id: ObjectId, pose: Isometry3<f64>) -> Result<(), PipelineError> {
         check_pose(&pose, || format!("{id:?}"))?;
-        self.front
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .push((id, pose));
+        lock(&self.front).push((id, pose));
         Ok(())
     }
 
@@ -133,10 +130,7 @@ fn serve<C: ExactTest>(
     for command in commands {
         match command {
             Command::Frame(detail) => {
-                std::mem::swap(
-                    &mut *front.lock().unwrap_or_else(PoisonError::into_inner),
-                    &mut back,
-                );
+                std::mem::swap(&mut *lock(front), &mut back);
                 let mut rejected = 0;
                 for (id, pose) in back.drain(..) {
                     if pipeline.queue_move(id, pose).is_err() {

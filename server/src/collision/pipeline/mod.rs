@@ -385,18 +385,14 @@ impl<'s, 'e> SharedPairs<'s, 'e> {
 
     /// The next chunk from the front or the back, in flight until [`Self::finish_item`].
     fn claim_chunk(&self, from_front: bool) -> Option<&'s mut [&'e mut PairEntry]> {
-        self.in_flight.fetch_add(1, Ordering::SeqCst);
-        let mut unclaimed = lock(&self.unclaimed);
-        let claimed = if from_front {
-            unclaimed.pop_front()
-        } else {
-            unclaimed.pop_back()
-        };
-        drop(unclaimed);
-        if claimed.is_none() {
-            self.in_flight.fetch_sub(1, Ordering::SeqCst);
-        }
-        claimed
+        self.claim(|| {
+            let mut unclaimed = lock(&self.unclaimed);
+            if from_front {
+                unclaimed.pop_front()
+            } else {
+                unclaimed.pop_back()
+            }
+        })
     }
 
     fn chunks_remain(&self) -> bool {
@@ -410,8 +406,14 @@ impl<'s, 'e> SharedPairs<'s, 'e> {
 
     /// A deferred exact test, in flight until [`Self::finish_item`].
     fn claim_exact(&self) -> Option<&'s mut PairEntry> {
+        self.claim(|| lock(&self.deferred_exacts).pop())
+    }
+
+    /// Runs `take` counted in flight: before it, so that no thread sees nothing in flight while
+    /// another one is taking an item, and after it if it took one, until [`Self::finish_item`].
+    fn claim<T>(&self, take: impl FnOnce() -> Option<T>) -> Option<T> {
         self.in_flight.fetch_add(1, Ordering::SeqCst);
-        let claimed = lock(&self.deferred_exacts).pop();
+        let claimed = take();
         if claimed.is_none() {
             self.in_flight.fetch_sub(1, Ordering::SeqCst);
         }
@@ -428,7 +430,7 @@ impl<'s, 'e> SharedPairs<'s, 'e> {
     }
 }
 
-/// Locks a mutex of the back end's, whose data stay sound if a holder panicked.
+/// Locks a mutex of the pipeline's, whose data stay sound if a holder panicked.
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(PoisonError::into_inner)
 }
@@ -468,8 +470,8 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
     /// Reads every object's pose once, in memory order, on a thread other than the one that
     /// queued the moves: the pre-checks then find in this core's cache the poses they read in
     /// the pairs' scattered order, where each would otherwise wait for the other core's.
-    /// Measured in B4 on two threads: the pre-checks' time 78-84 us against 88-95 us without,
-    /// 72-74 us on one thread.
+    /// Measured in B4 on two threads: the pre-checks' time 78-83 us against 87-91 us without,
+    /// 71-77 us on one thread.
     fn fetch_poses_if_elsewhere(&self) {
         if rayon::current_thread_index() == self.frame_thread {
             return;
@@ -607,10 +609,7 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
         };
         tally.colliding = u64::from(entry.contact.is_some());
         if entry.contact.is_some() != was_colliding {
-            self.contact_changes
-                .lock()
-                .unwrap_or_else(PoisonError::into_inner)
-                .push(entry.pair);
+            lock(&self.contact_changes).push(entry.pair);
         }
         tally.exact_time = start.elapsed();
         tally

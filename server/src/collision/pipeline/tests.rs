@@ -243,11 +243,11 @@ fn pairs_equal_brute_force_over_thousands_of_random_frames_with_dop_trees() {
 }
 
 /// Runs a random scene of 30 objects for 2,500 frames, alternately on one thread and on two or
-/// three (more threads than pairs' owner and helper, so that several helpers share a frame's
-/// pairs), and compares every frame's colliding pairs (and every tenth frame's triangle pairs) with brute
-/// force, using the same exact test `C`. The split threshold is low enough for this scene's small
-/// meshes that two-thread frames run both split and unsplit first-hit tests; returns how many
-/// were split and how many ran in all.
+/// three (so that a frame's pairs are shared by their owner and one or two helpers), and compares
+/// every frame's colliding pairs (and every tenth frame's triangle pairs) with brute force, using
+/// the same exact test `C`. The split threshold is low enough for this scene's small meshes that
+/// frames on several threads run both split and unsplit first-hit tests; returns how many were
+/// split and how many ran in all.
 fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) -> (u64, u64) {
     let mut scene = Scene::<C>::new(seed);
     let mut pipeline = CollisionPipeline::new(PipelineConfig {
