@@ -375,6 +375,30 @@ impl Client {
         Ok(frames)
     }
 
+    /// Waits until a hand frame that `answers` accepts arrives, receiving (and keeping the newest
+    /// of) every frame on the way; `None` on timeout or a handled termination signal. With
+    /// [`InputSample::is_answered_by`] this waits for the answer to one input sample.
+    pub fn wait_for_hand_frame(
+        &mut self,
+        timeout: Duration,
+        answers: impl Fn(&HandFrame) -> bool,
+    ) -> Result<Option<HandFrame>, ClientError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            if self.wait(remaining)? != Wake::Ready {
+                return Ok(None);
+            }
+            let answer = self.receive()?.into_iter().find_map(|frame| match frame {
+                Frame::Hand(hand) if answers(&hand) => Some(hand),
+                _ => None,
+            });
+            if answer.is_some() {
+                return Ok(answer);
+            }
+        }
+    }
+
     /// Receives every queued frame, keeping only the newest of each kind.
     pub fn poll(&mut self) -> Result<Received, ClientError> {
         let mut received = Received::default();

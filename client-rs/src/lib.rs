@@ -28,6 +28,7 @@
 
 mod client;
 mod error;
+pub mod latency;
 pub mod recording;
 mod tap;
 mod wait;

@@ -1,5 +1,5 @@
 //! The `vas-client` tool: watch a server's frames, record and replay input, send samples from
-//! scripts, print the scene, and benchmark the server (latency, soak).
+//! scripts, print the scene. (The latency benchmark and the soak are `vas-bench e2e` and `soak`.)
 
 mod cli;
 
@@ -36,22 +36,6 @@ enum Command {
     SendTracker(cli::send::TrackerArgs),
     /// Send one glove sample.
     SendGlove(cli::send::GloveArgs),
-    /// Run a benchmark against the server.
-    Bench {
-        #[command(subcommand)]
-        benchmark: BenchCommand,
-    },
-    /// Feed the server at a steady rate for a long time; report dropped samples and its memory.
-    Soak(cli::soak::SoakArgs),
-    /// Answer every input sample at once with a hand frame (the raw path of `bench e2e`).
-    #[command(hide = true)]
-    Echo,
-}
-
-#[derive(Debug, Subcommand)]
-enum BenchCommand {
-    /// B7: input-to-answer latency through the server beside the raw iceoryx2 round trip.
-    E2e(cli::e2e::E2eArgs),
 }
 
 fn main() -> ExitCode {
@@ -65,11 +49,6 @@ fn main() -> ExitCode {
         Command::Replay(replay) => cli::replay::run(prefix, &replay),
         Command::SendTracker(tracker) => cli::send::tracker(prefix, &tracker),
         Command::SendGlove(glove) => cli::send::glove(prefix, &glove),
-        Command::Bench {
-            benchmark: BenchCommand::E2e(e2e),
-        } => cli::e2e::run(prefix, &e2e),
-        Command::Soak(soak) => cli::soak::run(prefix, &soak),
-        Command::Echo => cli::echo::run(prefix),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

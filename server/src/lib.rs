@@ -4,7 +4,6 @@
 //! `geometry` ← `collision` ← `sliding`, `grasping` ← `scene` ← `runtime`.
 //! Only `runtime` knows about threads and IPC; every other module is a plain library.
 
-pub mod bench;
 pub mod collision;
 pub mod geometry;
 pub mod grasping;

@@ -5,9 +5,9 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
-use vas_server::bench;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::write_obj;
 use vas_server::runtime;
@@ -39,9 +39,10 @@ enum Command {
     /// Write a procedural test object (unit size, centred at the origin) as an OBJ file.
     Shape {
         /// Which object.
+        #[arg(value_parser = shape_kind())]
         kind: ShapeKind,
         /// About how many triangles.
-        #[arg(long, default_value_t = 10_000, value_parser = bench::triangle_count())]
+        #[arg(long, default_value_t = 10_000, value_parser = triangle_count())]
         triangles: usize,
         /// The OBJ file to write.
         #[arg(long)]
@@ -52,27 +53,6 @@ enum Command {
         /// The scene file.
         file: PathBuf,
     },
-    /// Run a benchmark of BENCHMARKS.md.
-    Bench {
-        #[command(subcommand)]
-        benchmark: BenchCommand,
-    },
-}
-
-#[derive(Debug, Subcommand)]
-enum BenchCommand {
-    /// B1: the tumbling pair (the paper's Figure 3 with --figure).
-    Tumble(bench::tumble::TumbleArgs),
-    /// B2: random poses of one mesh against another (FCL's procedure).
-    Random(bench::random::RandomArgs),
-    /// B3: orbiting spheres, separating plane against GJK (the paper's Figure 4).
-    Orbit(bench::orbit::OrbitArgs),
-    /// B4: objects bouncing in a cube, the whole pipeline against threads (the paper's Figure 5).
-    Bounce(bench::bounce::BounceArgs),
-    /// B5: sliding contact, time per contact point and sliding frame rate.
-    Slide(bench::slide::SlideBenchArgs),
-    /// B6: time per clasp minimisation of the hand against parts of 1k to 50k triangles.
-    Grasp(bench::grasp::GraspArgs),
 }
 
 fn main() -> ExitCode {
@@ -107,14 +87,6 @@ fn main() -> ExitCode {
                         written => written.map_err(Into::into),
                     }
                 }),
-            Command::Bench { benchmark } => match benchmark {
-                BenchCommand::Tumble(args) => bench::tumble::run_cli(&args),
-                BenchCommand::Random(args) => bench::random::run_cli(&args),
-                BenchCommand::Orbit(args) => bench::orbit::run_cli(&args),
-                BenchCommand::Bounce(args) => bench::bounce::run_cli(&args),
-                BenchCommand::Slide(args) => bench::slide::run_bench(&args).map(drop),
-                BenchCommand::Grasp(args) => bench::grasp::run_cli(&args),
-            },
         };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -137,4 +109,20 @@ fn write_shape(kind: ShapeKind, triangles: usize, out: &Path) -> anyhow::Result<
         out.display()
     );
     Ok(())
+}
+
+/// clap's parser of a shape's name, listing the names in `--help`.
+fn shape_kind() -> impl TypedValueParser<Value = ShapeKind> {
+    PossibleValuesParser::new(ShapeKind::names()).map(|name| {
+        name.parse()
+            .expect("the possible values are the kinds' own names")
+    })
+}
+
+/// clap's parser of a procedural shape's triangle count: from 1 to
+/// [`MAX_TRIANGLES`](shapes::MAX_TRIANGLES), as a scene config allows.
+fn triangle_count() -> impl TypedValueParser<Value = usize> {
+    clap::value_parser!(u64)
+        .range(1..=shapes::MAX_TRIANGLES as u64)
+        .map(|count| count as usize)
 }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use vas_client::recording::{InputSample, RecordingHeader, RecordingWriter};
 use vas_protocol::{GloveSample, TrackerSample};
-use vas_server::grasping::script::{Keyframe, sample};
+use vas_server::scene::script::{Keyframe, sample};
 use vas_server::scene::Scene;
 
 use crate::scenarios::Scenario;

@@ -268,6 +268,13 @@ impl Server {
         all.extend_from_slice(args);
         Spawned::start(&binary("vas-client"), &all, stdout)
     }
+
+    /// Runs a `vas-bench` benchmark (its subcommand and arguments) against this server.
+    pub fn bench_tool(&self, args: &[&str], stdout: Stdio) -> Spawned {
+        let mut all = args.to_vec();
+        all.extend_from_slice(&["--prefix", self.prefix.as_str()]);
+        Spawned::start(&binary("vas-bench"), &all, stdout)
+    }
 }
 
 /// The repository's `configs/` directory.

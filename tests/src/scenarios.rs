@@ -2,14 +2,14 @@
 //! offline replay against it, and end-to-end tests can check the live server's output against it.
 //!
 //! The figures follow from the scenes (`configs/`) and the scripts
-//! (`vas_server::grasping::script::RecordedScenario`); `tests/fixtures/README.md` lists the same
+//! (`vas_server::scene::script::RecordedScenario`); `tests/fixtures/README.md` lists the same
 //! table.
 
 use std::path::PathBuf;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use vas_protocol::{EventKind, GraspType};
-use vas_server::grasping::script::RecordedScenario;
+use vas_server::scene::script::RecordedScenario;
 
 /// A grasp or release the replay must produce.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

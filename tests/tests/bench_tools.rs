@@ -1,4 +1,4 @@
-//! The benchmark tools of `vas-client` against a real server: a short `bench e2e` and a short
+//! The benchmarks of `vas-bench` against a real server: a short `e2e` and a short
 //! `soak` produce complete reports. Figures are not checked (speed is for benchmarks, not
 //! tests), only that every sample was measured and the reports hang together.
 
@@ -11,8 +11,17 @@ fn report(path: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("the report is JSON")
 }
 
+/// The SVG figure exists and names every series in its legend.
+fn assert_plot(path: &std::path::Path, series: &[&str]) {
+    let svg = std::fs::read_to_string(path).expect("the figure is written");
+    assert!(svg.starts_with("<svg"), "{}", path.display());
+    for name in series {
+        assert!(svg.contains(name), "{} lacks {name}", path.display());
+    }
+}
+
 fn run_tool(server: &Server, args: &[&str]) {
-    let mut tool = server.client_tool(args, Stdio::null());
+    let mut tool = server.bench_tool(args, Stdio::null());
     let status = tool.wait_exit(PATIENCE).expect("the tool ends");
     assert!(status.success(), "{}", tool.log());
 }
@@ -24,20 +33,23 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
     let dir = tempfile::tempdir().expect("temporary directory");
 
     let e2e_out = dir.path().join("b7.json");
+    let e2e_svg = dir.path().join("b7.svg");
     run_tool(
         &server,
         &[
-            "bench",
             "e2e",
             "--samples",
             "40",
             "--warmup",
             "5",
-            "--out",
+            "--json",
             e2e_out.to_str().expect("utf-8"),
+            "--svg",
+            e2e_svg.to_str().expect("utf-8"),
         ],
     );
     let e2e = report(&e2e_out);
+    assert_plot(&e2e_svg, &["raw", "vas"]);
     let rows = e2e["rows"].as_array().expect("rows");
     let paths: Vec<&str> = rows
         .iter()
@@ -68,6 +80,7 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
     );
 
     let soak_out = dir.path().join("soak.json");
+    let soak_svg = dir.path().join("soak.svg");
     let pid = server.process.id().to_string();
     run_tool(
         &server,
@@ -79,11 +92,14 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
             "2",
             "--server-pid",
             &pid,
-            "--out",
+            "--json",
             soak_out.to_str().expect("utf-8"),
+            "--svg",
+            soak_svg.to_str().expect("utf-8"),
         ],
     );
     let soak = report(&soak_out);
+    assert_plot(&soak_svg, &["resident memory"]);
     for stream in ["tracker", "glove"] {
         let count = &soak[stream];
         assert_eq!(count["sent"], 200, "{soak}");

@@ -1,21 +1,14 @@
 //! The subcommands of the `vas-client` tool.
 
-pub mod e2e;
-pub mod echo;
 pub mod record;
 pub mod replay;
 pub mod send;
-pub mod soak;
-mod stats;
-mod synthetic;
 pub mod watch;
 
 use std::io::{IsTerminal, Write};
-use std::path::Path;
 use std::time::Duration;
 
 use anyhow::Context;
-use serde::Serialize;
 use tracing_subscriber::EnvFilter;
 use vas_client::Client;
 
@@ -55,10 +48,4 @@ pub fn info(prefix: Option<&str>) -> anyhow::Result<()> {
     serde_json::to_writer_pretty(&mut out, &scene)?;
     writeln!(out)?;
     Ok(())
-}
-
-/// Writes `value` as pretty-printed JSON to `path`, naming the file in any error.
-pub fn write_json(path: &Path, value: &impl Serialize) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(value).context("serialising the results")?;
-    std::fs::write(path, text + "\n").with_context(|| format!("writing {}", path.display()))
 }

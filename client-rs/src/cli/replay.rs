@@ -9,8 +9,7 @@ use vas_client::recording::Recording;
 use vas_client::{Client, Frame, Wake};
 use vas_protocol::wall_clock_ns;
 
-use super::send::wait_for_hand_frame;
-use super::stats::LatencySummary;
+use vas_client::latency::LatencySummary;
 
 /// Arguments of `vas-client replay`.
 #[derive(Debug, clap::Args)]
@@ -87,7 +86,7 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
         let stamp = input.stamp();
         let sent_at = Instant::now();
         client.send_input(&input)?;
-        let answer = wait_for_hand_frame(client, timeout, |frame| input.is_answered_by(frame))?;
+        let answer = client.wait_for_hand_frame(timeout, |frame| input.is_answered_by(frame))?;
         match answer {
             Some(frame) => {
                 serde_json::to_writer(&mut out, &Frame::Hand(frame))?;

@@ -1,10 +1,10 @@
 //! `vas-client send-tracker` and `send-glove`: single samples for scripts.
 
 use std::io::Write;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::{Context, bail};
-use vas_client::{Client, Frame, Wake};
+use vas_client::{Client, Frame};
 use vas_protocol::{FLEX_COUNT, GloveSample, HandFrame, TrackerSample, WirePose, wall_clock_ns};
 
 /// Arguments of `vas-client send-tracker`.
@@ -138,32 +138,11 @@ fn report_answer(
         return Ok(());
     }
     let timeout = Duration::from_millis(args.answer_timeout_ms);
-    let frame = wait_for_hand_frame(client, timeout, answers)?
+    let frame = client
+        .wait_for_hand_frame(timeout, answers)?
         .with_context(|| format!("no hand frame answered the sample within {timeout:?}"))?;
     let mut out = std::io::stdout().lock();
     serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
     writeln!(out)?;
     Ok(())
-}
-
-/// Waits until a hand frame that `answers` accepts arrives; `None` on timeout or termination.
-pub fn wait_for_hand_frame(
-    client: &mut Client,
-    timeout: Duration,
-    answers: impl Fn(&HandFrame) -> bool,
-) -> anyhow::Result<Option<HandFrame>> {
-    let deadline = Instant::now() + timeout;
-    loop {
-        let remaining = deadline.saturating_duration_since(Instant::now());
-        if client.wait(remaining)? != Wake::Ready {
-            return Ok(None);
-        }
-        let answer = client.receive()?.into_iter().find_map(|frame| match frame {
-            Frame::Hand(hand) if answers(&hand) => Some(hand),
-            _ => None,
-        });
-        if answer.is_some() {
-            return Ok(answer);
-        }
-    }
 }

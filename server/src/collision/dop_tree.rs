@@ -2810,7 +2810,7 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::bench::tumble::tumble_pose;
+    use crate::collision::tumble::tumble_pose;
     use crate::collision::ObbTree;
     use crate::collision::oracle_tests::{random_pose, random_soup, torus};
 

@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::triangle::triangles_intersect;
 use super::*;
-use crate::bench::tumble::tumble_pose;
+use crate::collision::tumble::tumble_pose;
 use crate::geometry::{TriMesh, shapes};
 
 /// A soup of `n` random triangles of about `size` inside the box [-1, 1]^3.

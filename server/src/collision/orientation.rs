@@ -13,8 +13,6 @@
 //! *generic* DOP (every vertex on exactly three planes), whose normal cones tile the sphere.
 
 use nalgebra::{Matrix3, Vector3};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use thiserror::Error;
 
 /// The orientation-set sizes supported: 6 (box), 14, 18, 24 and 26.
@@ -286,17 +284,31 @@ impl Default for OrientationSet {
     }
 }
 
-/// Vertices of a generic DOP: offsets `1 + small random perturbation` (fixed seed), perturbed
-/// again until every vertex lies on exactly three planes.
+/// A fixed sequence of small offsets in [-0.05, 0.05) (SplitMix64): a generic DOP needs offsets
+/// that are distinct and the same on every run, not statistical quality.
+struct Perturbation(u64);
+
+impl Perturbation {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        let unit = (z >> 11) as f64 / (1u64 << 53) as f64;
+        0.1 * unit - 0.05
+    }
+}
+
+/// Vertices of a generic DOP: offsets `1 + small perturbation` (a fixed pseudo-random sequence),
+/// perturbed again until every vertex lies on exactly three planes.
 fn generic_vertices(axes: &[Vector3<f64>]) -> Vec<GenericVertex> {
     let h = axes.len();
     let k = 2 * h;
     let normal = |i: usize| if i < h { axes[i] } else { -axes[i - h] };
-    let mut rng = ChaCha8Rng::seed_from_u64(0x0d0b);
+    let mut perturbation = Perturbation(0x0d0b);
     for _attempt in 0..1000 {
-        let offsets: Vec<f64> = (0..k)
-            .map(|_| 1.0 + rng.random_range(-0.05..0.05))
-            .collect();
+        let offsets: Vec<f64> = (0..k).map(|_| 1.0 + perturbation.next()).collect();
         let mut vertices = Vec::new();
         let mut degenerate = false;
         'triples: for i in 0..k {
@@ -343,7 +355,8 @@ fn generic_vertices(axes: &[Vector3<f64>]) -> Vec<GenericVertex> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::Rng;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn every_supported_set_has_a_simple_generic_dop() {

@@ -525,9 +525,8 @@ mod tests {
     #[test]
     fn hulls_of_procedural_shapes_and_real_meshes_enclose_them() {
         use crate::geometry::shapes::{self, ShapeKind};
-        use clap::ValueEnum;
         let mut rng = ChaCha8Rng::seed_from_u64(10);
-        for kind in ShapeKind::value_variants() {
+        for kind in &ShapeKind::ALL {
             for triangles in [100, 3000] {
                 let mesh = shapes::build(*kind, triangles);
                 let hull = ConvexHull::of(&mesh);

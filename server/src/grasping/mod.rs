@@ -22,7 +22,6 @@ pub mod hand;
 pub mod model;
 #[cfg(test)]
 mod scenarios;
-pub mod script;
 pub mod segment_mesh;
 #[cfg(test)]
 pub(crate) mod testing;

@@ -13,7 +13,7 @@ use super::collider::{Obstacle, PartGeometry, PartId};
 use super::hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandMode};
 use super::model::tests::right_hand;
 use super::model::{FLEX_COUNT, HandModel};
-use super::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
+use crate::scene::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
 use crate::geometry::TriMesh;
 use crate::geometry::shapes;
 

@@ -383,7 +383,7 @@ mod tests {
     use crate::collision::parry_mesh::{millimetre_pose, millimetre_trimesh};
     use crate::geometry::{TriMesh, shapes};
     use crate::grasping::model::tests::right_hand;
-    use crate::grasping::script::{Keyframe, ScriptedGrasp, open_hand, sample};
+    use crate::scene::script::{Keyframe, ScriptedGrasp, open_hand, sample};
     use crate::grasping::{FLEX_COUNT, GraspParams, GraspType, HandPose};
     use crate::scene::PartTree;
     use crate::sliding::Metaphor;

@@ -549,7 +549,7 @@ mod tests {
     use vas_protocol::{EventKind, InputStamp};
 
     use super::*;
-    use crate::grasping::script::{ScriptedGrasp, sample};
+    use crate::scene::script::{ScriptedGrasp, sample};
     use crate::runtime::frames::Restart;
     use crate::runtime::interaction::Interaction;
 

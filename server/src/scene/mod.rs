@@ -35,6 +35,7 @@
 //! ```
 
 mod params;
+pub mod script;
 
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Write as _;

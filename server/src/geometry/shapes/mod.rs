@@ -12,7 +12,6 @@ use std::f64::consts::{FRAC_PI_4, PI, TAU};
 use std::fmt;
 use std::str::FromStr;
 
-use clap::ValueEnum;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -32,7 +31,7 @@ const DIMENSION_RANGE: (f64, f64) = (1e-6, 1e6);
 const MIN_WALL_FRACTION: f64 = 1e-3;
 
 /// The kinds of procedural shape.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, ValueEnum, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ShapeKind {
     /// A UV sphere (closed).
@@ -62,6 +61,18 @@ pub struct UnknownShapeKind {
 }
 
 impl ShapeKind {
+    /// Every kind.
+    pub const ALL: [ShapeKind; 8] = [
+        ShapeKind::Sphere,
+        ShapeKind::Torus,
+        ShapeKind::Hyperboloid,
+        ShapeKind::Box,
+        ShapeKind::Cylinder,
+        ShapeKind::BoxWithHole,
+        ShapeKind::SheetWithHole,
+        ShapeKind::Pipe,
+    ];
+
     /// The name used on the command line, in configs and in [`fmt::Display`] (kebab-case).
     pub fn name(self) -> &'static str {
         match self {
@@ -76,9 +87,9 @@ impl ShapeKind {
         }
     }
 
-    /// Every kind's name, for error messages.
-    fn names() -> Vec<&'static str> {
-        Self::value_variants().iter().map(|k| k.name()).collect()
+    /// Every kind's name, for error messages and command-line help.
+    pub fn names() -> [&'static str; 8] {
+        Self::ALL.map(Self::name)
     }
 }
 
@@ -92,9 +103,8 @@ impl FromStr for ShapeKind {
     type Err = UnknownShapeKind;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Self::value_variants()
-            .iter()
-            .copied()
+        Self::ALL
+            .into_iter()
             .find(|k| k.name() == s)
             .ok_or_else(|| UnknownShapeKind { name: s.to_owned() })
     }

@@ -12,18 +12,19 @@ use std::fmt;
 use std::time::{Duration, Instant};
 
 use anyhow::{Result, bail};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::Isometry3;
 use serde::Serialize;
 
-use super::report::{
-    LinePlot, Series, Table, TimingSummary, format_number, timer_overhead, write_json,
-    write_svg_line_plot,
+use crate::args::OutputArgs;
+use crate::report::{
+    LinePlot, Series, Table, TimingSummary, format_number, timer_overhead,
 };
-use crate::collision::{
+use vas_server::collision::{
     DopTree, KdopBruteForceTree, MeshCollider, ObbTree, OrientationSet, ParryMesh, QueryStats,
 };
-use crate::geometry::shapes::{self, ShapeKind};
-use crate::geometry::{TriMesh, bounding_sphere_of, parse_mesh_spec};
+use vas_server::collision::tumble::tumble_pose;
+use vas_server::geometry::shapes::{self, ShapeKind};
+use vas_server::geometry::{TriMesh, bounding_sphere_of, parse_mesh_spec};
 
 /// The default distances of B1.
 pub const DEFAULT_DISTANCES: [f64; 9] = [3.0, 2.5, 2.0, 1.75, 1.5, 1.25, 1.0, 0.75, 0.5];
@@ -400,14 +401,6 @@ pub struct TumbleReport {
     pub floor: HarnessFloor,
 }
 
-/// B's pose at step `s` of `steps` at distance `d`.
-pub fn tumble_pose(d: f64, s: usize, steps: usize) -> Isometry3<f64> {
-    let a = std::f64::consts::TAU * s as f64 / steps as f64;
-    let rotation = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a)
-        * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), a);
-    Isometry3::from_parts(Translation3::new(d, 0.0, 0.0), rotation)
-}
-
 /// Runs B1 on meshes `a` and `b` (normalised here).
 pub fn run_tumble(a: &TriMesh, b: &TriMesh, config: &TumbleConfig) -> Result<TumbleReport> {
     if config.steps == 0 || config.distances.is_empty() || config.algos.is_empty() {
@@ -579,7 +572,7 @@ pub fn figure3_plot(points: &[FigurePoint]) -> LinePlot {
     }
 }
 
-/// Command-line arguments of `vas-server bench tumble`.
+/// Command-line arguments of `vas-bench tumble`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct TumbleArgs {
     /// Mesh A (and B unless --mesh-b): a file or shape:KIND:TRIANGLES. With --figure, real
@@ -594,23 +587,19 @@ pub struct TumbleArgs {
     pub steps: Option<usize>,
     /// Distances d, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES,
-          value_parser = super::finite_number)]
+          value_parser = crate::args::finite_number)]
     pub distances: Vec<f64>,
     /// Algorithms to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = Algo::DEFAULT)]
     pub algos: Vec<Algo>,
     /// Number of DOP orientations (6, 14, 18, 24 or 26).
-    #[arg(long, default_value_t = crate::collision::orientation::DEFAULT_K)]
+    #[arg(long, default_value_t = vas_server::collision::orientation::DEFAULT_K)]
     pub k: usize,
     /// Passes over the poses; each query's time is its fastest pass (robust to preemption).
-    #[arg(long, default_value_t = 3, value_parser = super::pass_count())]
+    #[arg(long, default_value_t = 3, value_parser = crate::args::pass_count())]
     pub rounds: usize,
-    /// Write the results as JSON to this file.
-    #[arg(long)]
-    pub json: Option<std::path::PathBuf>,
-    /// Draw an SVG plot: time per query against distance, or Figure 3 with --figure.
-    #[arg(long)]
-    pub svg: Option<std::path::PathBuf>,
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Run the Figure 3 sweep: sphere, hyperboloid and torus at each of --figure-sizes
     /// triangles, plus the --mesh files.
     #[arg(long)]
@@ -626,7 +615,7 @@ impl fmt::Display for Algo {
     }
 }
 
-/// `vas-server bench tumble`: runs B1 (or the Figure 3 sweep), prints the table, writes files.
+/// `vas-bench tumble`: runs B1 (or the Figure 3 sweep), prints the table, writes files.
 pub fn run_cli(args: &TumbleArgs) -> Result<()> {
     let orientations = OrientationSet::new(args.k)?;
     if args.figure {
@@ -662,13 +651,7 @@ pub fn run_cli(args: &TumbleArgs) -> Result<()> {
         floor.sphere_test.mean_us * 1e3,
         floor.sphere_test.pass_mean_us * 1e3,
     );
-    if let Some(path) = &args.json {
-        write_json(path, &report)?;
-    }
-    if let Some(path) = &args.svg {
-        write_svg_line_plot(path, &distance_plot(&report.results))?;
-    }
-    Ok(())
+    args.output.write(&report, || distance_plot(&report.results))
 }
 
 /// The Figure 3 sweep from the command line.
@@ -709,13 +692,7 @@ fn run_figure_cli(args: &TumbleArgs, orientations: OrientationSet) -> Result<()>
         ]);
     }
     print!("{}", table.render());
-    if let Some(path) = &args.json {
-        write_json(path, &points)?;
-    }
-    if let Some(path) = &args.svg {
-        write_svg_line_plot(path, &figure3_plot(&points))?;
-    }
-    Ok(())
+    args.output.write(&points, || figure3_plot(&points))
 }
 
 /// Names the algorithms that disagreed with the first one, and at how many poses.
@@ -774,11 +751,11 @@ fn distance_plot(results: &[AlgoResult]) -> LinePlot {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::oracle_tests::torus;
+    use vas_server::geometry::shapes;
 
     #[test]
     fn tumble_runs_every_algorithm_without_mismatch() {
-        let mesh = torus(0.35, 20, 10);
+        let mesh = shapes::torus(1.0, 0.35, 20, 10);
         let config = TumbleConfig {
             steps: 40,
             distances: vec![2.5, 1.0],
@@ -834,7 +811,7 @@ mod tests {
 
     #[test]
     fn a_turns_untimed_first_query_is_not_counted() {
-        let mesh = torus(0.35, 20, 10).normalized_to_unit_box();
+        let mesh = shapes::torus(1.0, 0.35, 20, 10).normalized_to_unit_box();
         let set = OrientationSet::default();
         let poses: Vec<_> = (0..30).map(|s| tumble_pose(1.0, s, 30)).collect();
         let collider = BuiltCollider::new(Algo::Obbtree, &mesh, &mesh, &set);
@@ -854,7 +831,7 @@ mod tests {
 
     #[test]
     fn non_finite_distances_are_refused() {
-        let mesh = torus(0.35, 8, 4);
+        let mesh = shapes::torus(1.0, 0.35, 8, 4);
         for d in [f64::NAN, f64::INFINITY] {
             let config = TumbleConfig {
                 steps: 4,

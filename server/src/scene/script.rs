@@ -8,12 +8,12 @@ use std::fmt;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
-use super::analysis::{GraspType, PrecisionKind};
-use super::hand::HandInput;
-use super::model::{FLEX_COUNT, FlexVector};
+use crate::grasping::analysis::{GraspType, PrecisionKind};
+use crate::grasping::hand::HandInput;
+use crate::grasping::model::{FLEX_COUNT, FlexVector};
 use crate::geometry::TriMesh;
 use crate::geometry::shapes;
-use crate::scene::{Part, Scene};
+use super::{Part, Scene};
 
 /// A keyframe: where the cart and the tracked hand are, and what the glove says, at a time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -126,18 +126,15 @@ pub struct Milestones {
 
 /// The scripted grasps of the tests and of benchmark B6, for the right hand; named after their
 /// parts on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ScriptedGrasp {
     /// The hand comes down on a handle (a cylinder of radius 1.6 cm, 12 cm long, across the
     /// palm), closes a fist around it, carries it away turning, and opens.
-    #[value(name = "handle")]
     PowerOnHandle,
     /// Thumb and index tips close on a small screw, lift it and open.
-    #[value(name = "screw")]
     TipPinchOfScrew,
     /// The open hand, palm up, comes up under a block, carries it and tips it off.
-    #[value(name = "block")]
     GravityUnderBlock,
 }
 

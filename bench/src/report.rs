@@ -40,11 +40,6 @@ impl Table {
         self.rows.push(row);
     }
 
-    /// The rows pushed so far.
-    pub fn rows(&self) -> &[Vec<String>] {
-        &self.rows
-    }
-
     /// The table as text: header, a rule, then the rows, columns separated by two spaces.
     pub fn render(&self) -> String {
         let mut widths: Vec<usize> = self.headers.iter().map(|h| h.chars().count()).collect();
@@ -202,7 +197,15 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(23, 190, 207),
 ];
 
-/// Draws `plot` into an SVG file of 900 x 600 pixels.
+/// Width and height of a figure, and the width of the legend's column at its right.
+const FIGURE_SIZE: (u32, u32) = (1000, 600);
+const LEGEND_WIDTH: u32 = 240;
+
+/// Draws `plot` into an SVG file: the chart at the left, its legend in a column of its own at
+/// the right (so that it never covers data), each series in its own colour and marker shape.
+///
+/// A logarithmic axis is kept only where the data spans at least a decade: over less, the
+/// logarithmic scale has no tick inside the range to label, and looks linear anyway.
 ///
 /// Fails (naming the file) when there is nothing to draw, when a log axis meets a non-positive
 /// value, or when the file cannot be written.
@@ -216,12 +219,15 @@ pub fn write_svg_line_plot(path: &Path, plot: &LinePlot) -> Result<()> {
     if points.is_empty() {
         bail!("{}: the plot has no finite point to draw", path.display());
     }
-    let x_range = padded_range(points.iter().map(|p| p.0), plot.log_x)
-        .with_context(|| format!("{}: x axis of '{}'", path.display(), plot.title))?;
-    let y_range = padded_range(points.iter().map(|p| p.1), plot.log_y)
-        .with_context(|| format!("{}: y axis of '{}'", path.display(), plot.title))?;
-    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
-    let drawn = match (plot.log_x, plot.log_y) {
+    let axis = |values: Vec<f64>, log: bool, name: &str| {
+        padded_range(&values, log).with_context(|| {
+            format!("{}: {name} axis of '{}'", path.display(), plot.title)
+        })
+    };
+    let (x_range, log_x) = axis(points.iter().map(|p| p.0).collect(), plot.log_x, "x")?;
+    let (y_range, log_y) = axis(points.iter().map(|p| p.1).collect(), plot.log_y, "y")?;
+    let root = SVGBackend::new(path, FIGURE_SIZE).into_drawing_area();
+    let drawn = match (log_x, log_y) {
         (false, false) => draw(&root, plot, x_range, y_range),
         (true, false) => draw(&root, plot, x_range.log_scale(), y_range),
         (false, true) => draw(&root, plot, x_range, y_range.log_scale()),
@@ -232,25 +238,41 @@ pub fn write_svg_line_plot(path: &Path, plot: &LinePlot) -> Result<()> {
         .with_context(|| format!("drawing {}", path.display()))
 }
 
-/// The range spanned by `values`, widened a little so that no point sits on the frame.
-fn padded_range(values: impl Iterator<Item = f64>, log: bool) -> Result<std::ops::Range<f64>> {
+/// The range spanned by `values`, widened a little so that no point sits on the frame, and
+/// whether it is drawn logarithmically (asked for, and spanning at least a decade).
+fn padded_range(values: &[f64], log: bool) -> Result<(std::ops::Range<f64>, bool)> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in values {
+    for &v in values {
         lo = lo.min(v);
         hi = hi.max(v);
     }
-    if log {
-        if lo <= 0.0 {
-            bail!("a logarithmic axis needs positive values, found {lo}");
-        }
-        Ok(lo / 1.25..hi * 1.25)
+    if log && lo <= 0.0 {
+        bail!("a logarithmic axis needs positive values, found {lo}");
+    }
+    if log && hi >= 10.0 * lo {
+        Ok((lo / 1.25..hi * 1.25, true))
     } else {
         let pad = if hi > lo { 0.05 * (hi - lo) } else { 1.0 };
-        Ok(lo - pad..hi + pad)
+        Ok((lo - pad..hi + pad, false))
     }
 }
 
-/// Draws mesh, labels, one line with markers per series, and the legend.
+/// The marker of series `index`: shapes change once the palette's colours are used up, so that
+/// no two series of a plot look alike.
+fn marker<DB: DrawingBackend>(
+    index: usize,
+    at: (i32, i32),
+    color: RGBColor,
+) -> DynElement<'static, DB, (i32, i32)> {
+    let style = color.filled();
+    match (index / PALETTE.len()) % 3 {
+        0 => Circle::new(at, 4, style).into_dyn(),
+        1 => TriangleMarker::new(at, 6, style).into_dyn(),
+        _ => Rectangle::new([(at.0 - 4, at.1 - 4), (at.0 + 4, at.1 + 4)], style).into_dyn(),
+    }
+}
+
+/// Draws mesh, labels, one line with markers per series, and the legend in its own column.
 fn draw<X, Y>(
     root: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
     plot: &LinePlot,
@@ -265,11 +287,12 @@ where
 {
     let err = |e: DrawingAreaErrorKind<std::io::Error>| anyhow::anyhow!("{e}");
     root.fill(&WHITE).map_err(err)?;
-    let mut chart = ChartBuilder::on(root)
-        .caption(&plot.title, ("sans-serif", 22))
+    let (chart_area, legend_area) = root.split_horizontally(FIGURE_SIZE.0 - LEGEND_WIDTH);
+    let mut chart = ChartBuilder::on(&chart_area)
+        .caption(&plot.title, ("sans-serif", 20))
         .margin(15)
         .x_label_area_size(45)
-        .y_label_area_size(70)
+        .y_label_area_size(80)
         .build_cartesian_2d(x, y)
         .map_err(err)?;
     chart
@@ -288,24 +311,28 @@ where
             .collect();
         chart
             .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
-            .map_err(err)?
-            .label(series.name.as_str())
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+            .map_err(err)?;
         chart
-            .draw_series(
-                points
-                    .into_iter()
-                    .map(|p| Circle::new(p, 3, color.filled())),
-            )
+            .draw_series(points.into_iter().map(|p| {
+                EmptyElement::at(p) + marker(index, (0, 0), color)
+            }))
             .map_err(err)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(err)?;
+    for (index, series) in plot.series.iter().enumerate() {
+        let color = PALETTE[index % PALETTE.len()];
+        let row = 60 + 24 * index as i32;
+        legend_area
+            .draw(&PathElement::new([(10, row), (40, row)], color.stroke_width(2)))
+            .map_err(err)?;
+        legend_area.draw(&marker(index, (25, row), color)).map_err(err)?;
+        legend_area
+            .draw(&Text::new(
+                series.name.clone(),
+                (48, row - 7),
+                ("sans-serif", 14).into_font().color(&BLACK),
+            ))
+            .map_err(err)?;
+    }
     Ok(())
 }
 

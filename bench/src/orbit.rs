@@ -13,7 +13,6 @@
 //! with the previous step's direction and simplex (`gjk_warm`), and world bounding boxes (`bbox`).
 //! Timings are per batch of steps (no clock read per query), median over repeats.
 
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
@@ -23,10 +22,11 @@ use parry3d::query::gjk::VoronoiSimplex;
 use parry3d::shape::ConvexPolyhedron;
 use serde::Serialize;
 
-use super::report::{self, LinePlot, Series, Table};
-use crate::collision::broad_phase::Aabb;
-use crate::collision::separating_plane::{PlaneSearch, SeparatingPlane};
-use crate::geometry::{ConvexHull, shapes};
+use crate::args::OutputArgs;
+use crate::report::{self, LinePlot, Series, Table};
+use vas_server::collision::broad_phase::Aabb;
+use vas_server::collision::separating_plane::{PlaneSearch, SeparatingPlane};
+use vas_server::geometry::{ConvexHull, shapes};
 
 /// Centre distances of B3 (touching at 2.0), denser near touching.
 pub const DEFAULT_DISTANCES: [f64; 12] = [
@@ -43,7 +43,7 @@ pub const DEFAULT_ROTATIONS: [f64; 4] = [1.0, 5.0, 15.0, 45.0];
 /// from the wrong-answer bar: "within 0.1 % of touching".
 const TOUCHING_BAND: f64 = 1e-3;
 
-/// Command-line arguments of `vas-server bench orbit`.
+/// Command-line arguments of `vas-bench orbit`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct OrbitArgs {
     /// Steps (queries) per distance, rotation speed and polygon count.
@@ -51,24 +51,20 @@ pub struct OrbitArgs {
     samples: u32,
     /// Centre distances (comma-separated; the spheres touch at 2).
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_DISTANCES,
-          value_parser = super::finite_number)]
+          value_parser = crate::args::finite_number)]
     distances: Vec<f64>,
     /// Polygon counts of the spheres (comma-separated).
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_POLYGONS)]
     polygons: Vec<usize>,
     /// Rotation speeds in degrees per step (comma-separated).
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_ROTATIONS,
-          value_parser = super::finite_number)]
+          value_parser = crate::args::finite_number)]
     rotations: Vec<f64>,
     /// Timed repetitions of each batch; the median is reported.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     repeats: u32,
-    /// Where to write the JSON results.
-    #[arg(long, default_value = "orbit.json")]
-    out: PathBuf,
-    /// Where to draw the SVG plot (time against distance, averaged over rotation speeds).
-    #[arg(long)]
-    svg: Option<PathBuf>,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 /// The algorithms compared.
@@ -452,7 +448,7 @@ pub fn orbit_plot(rows: &[OrbitRow]) -> LinePlot {
     }
 }
 
-/// `vas-server bench orbit`: runs B3, prints the table and the bar, writes JSON (and SVG).
+/// `vas-bench orbit`: runs B3, prints the table and the bar, writes JSON (and SVG).
 pub fn run_cli(args: &OrbitArgs) -> Result<()> {
     let report = run_orbit(args)?;
     println!("{}", orbit_table(&report.rows).render());
@@ -473,11 +469,7 @@ pub fn run_cli(args: &OrbitArgs) -> Result<()> {
         bar.max_wrong_fraction * 100.0,
         bar.wrong_separated
     );
-    report::write_json(&args.out, &report)?;
-    if let Some(svg) = &args.svg {
-        report::write_svg_line_plot(svg, &orbit_plot(&report.rows))?;
-    }
-    Ok(())
+    args.output.write(&report, || orbit_plot(&report.rows))
 }
 
 #[cfg(test)]

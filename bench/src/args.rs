@@ -1,14 +1,67 @@
-//! Benchmark procedures of BENCHMARKS.md, shared by the `vas-server bench` subcommands and tests.
+//! Command-line pieces every benchmark shares: where results go (`--json`, `--svg`), the
+//! parsers of finite numbers and counts, and the connection of the benchmarks that talk to a
+//! running server.
 
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
 use clap::builder::TypedValueParser;
+use serde::Serialize;
+use vas_client::Client;
 
-pub mod bounce;
-pub mod grasp;
-pub mod orbit;
-pub mod random;
-pub mod report;
-pub mod slide;
-pub mod tumble;
+use crate::report::{LinePlot, write_json, write_svg_line_plot};
+
+/// Where a benchmark writes its results besides the table it prints; nothing is written by
+/// default, so a run never litters the working directory.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct OutputArgs {
+    /// Write the results as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Draw the benchmark's figure as an SVG plot to this file.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
+}
+
+impl OutputArgs {
+    /// Writes `results` as JSON and draws `plot()` as SVG, each only where a file was asked for.
+    pub fn write(&self, results: &impl Serialize, plot: impl FnOnce() -> LinePlot) -> anyhow::Result<()> {
+        if let Some(path) = &self.json {
+            write_json(path, results)?;
+        }
+        if let Some(path) = &self.svg {
+            write_svg_line_plot(path, &plot())?;
+        }
+        Ok(())
+    }
+}
+
+/// The server a benchmark talks to: the iceoryx2 prefix it was started with.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct ServerArgs {
+    /// iceoryx2 prefix of the server (its `--prefix`); default: the iceoryx2 configuration's.
+    #[arg(long, value_name = "P")]
+    pub prefix: Option<String>,
+}
+
+/// How long a control request (scene info) may take before a benchmark gives up.
+pub const CONTROL_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// The longest answer timeout the benchmarks accept, in milliseconds (an hour).
+pub const MAX_TIMEOUT_MS: u64 = 3_600_000;
+
+/// Connects with SIGINT and SIGTERM handled, so that long runs end cleanly.
+pub fn connect(prefix: Option<&str>) -> anyhow::Result<Client> {
+    let builder = Client::builder().handle_termination_signals(true);
+    match prefix {
+        Some(prefix) => builder.prefix(prefix),
+        None => builder,
+    }
+    .connect()
+    .context("cannot connect to the vas services")
+}
+
 
 /// Parses a number of a benchmark's command line that must be finite: a NaN or infinite
 /// distance or speed makes the poses meaningless, and the exact arithmetic of the triangle
@@ -32,10 +85,10 @@ pub fn pass_count() -> impl TypedValueParser<Value = usize> {
 }
 
 /// clap's parser of the triangle count of a procedural shape: from 1 to
-/// [`MAX_TRIANGLES`](crate::geometry::shapes::MAX_TRIANGLES), as a scene config allows.
+/// [`MAX_TRIANGLES`](vas_server::geometry::shapes::MAX_TRIANGLES), as a scene config allows.
 pub fn triangle_count() -> impl TypedValueParser<Value = usize> {
     clap::value_parser!(u64)
-        .range(1..=crate::geometry::shapes::MAX_TRIANGLES as u64)
+        .range(1..=vas_server::geometry::shapes::MAX_TRIANGLES as u64)
         .map(|count| count as usize)
 }
 

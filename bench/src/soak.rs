@@ -1,8 +1,7 @@
-//! `vas-client soak`: feeds the server tracker and glove samples at a steady rate for a long
+//! `vas-bench soak`: feeds the server tracker and glove samples at a steady rate for a long
 //! time, counts the samples no hand frame answered, and samples the server's resident memory
 //! every second to show whether it grows.
 
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -12,8 +11,12 @@ use serde::Serialize;
 use vas_client::{Client, Frame, Wake};
 use vas_protocol::{HandFrame, InputStamp, wall_clock_ns};
 
-use super::stats::{LatencySummary, least_squares_slope};
-use super::synthetic;
+use vas_client::latency::LatencySummary;
+
+use crate::args::{OutputArgs, ServerArgs};
+use crate::report::{LinePlot, Series};
+use crate::slope::least_squares_slope;
+use crate::synthetic;
 
 /// How often the server's memory is sampled.
 const RSS_PERIOD: Duration = Duration::from_secs(1);
@@ -28,7 +31,7 @@ const MAX_SAMPLES_PER_STREAM: u64 = 20_000_000;
 /// How often the threads look at each other's progress while waiting.
 const DRAIN_CHECK: Duration = Duration::from_millis(10);
 
-/// Arguments of `vas-client soak`.
+/// Arguments of `vas-bench soak`.
 #[derive(Debug, clap::Args)]
 pub struct SoakArgs {
     /// Samples per second of each input stream (tracker and glove).
@@ -40,9 +43,10 @@ pub struct SoakArgs {
     /// The server's process id: its resident memory (VmRSS) is read every second.
     #[arg(long)]
     server_pid: u32,
-    /// Write the results as JSON to this file.
-    #[arg(long)]
-    out: Option<PathBuf>,
+    #[command(flatten)]
+    output: OutputArgs,
+    #[command(flatten)]
+    server: ServerArgs,
 }
 
 /// Samples sent and answered in one input stream.
@@ -111,7 +115,8 @@ pub struct SoakReport {
 /// This thread paces and sends the samples (sleeping with nanosleep between ticks) and samples
 /// the memory; a second thread, with its own connection, sleeps on its WaitSet for the hand
 /// frames and marks the samples they answer, so that neither job delays the other.
-pub fn run(prefix: Option<&str>, args: &SoakArgs) -> anyhow::Result<()> {
+pub fn run(args: &SoakArgs) -> anyhow::Result<()> {
+    let prefix = args.server.prefix.as_deref();
     let ticks = args.rate * args.seconds;
     if ticks > MAX_SAMPLES_PER_STREAM {
         bail!(
@@ -121,9 +126,9 @@ pub fn run(prefix: Option<&str>, args: &SoakArgs) -> anyhow::Result<()> {
             args.seconds
         );
     }
-    let client = super::connect(prefix)?;
+    let client = crate::args::connect(prefix)?;
     client
-        .scene_info(super::CONTROL_TIMEOUT)
+        .scene_info(crate::args::CONTROL_TIMEOUT)
         .context("no vas server answers on this prefix")?;
     let sent = SentStamps::new(ticks);
     let done = AtomicBool::new(false);
@@ -166,10 +171,7 @@ pub fn run(prefix: Option<&str>, args: &SoakArgs) -> anyhow::Result<()> {
         memory: memory_report(pacing.memory),
     };
     print!("{}", render(&report));
-    if let Some(out) = &args.out {
-        super::write_json(out, &report)?;
-    }
-    Ok(())
+    args.output.write(&report, || plot(&report))
 }
 
 /// What the pacing thread measured.
@@ -252,7 +254,7 @@ fn receive_answers(
     answered: &AtomicU64,
     ready: mpsc::Sender<()>,
 ) -> anyhow::Result<Answers> {
-    let mut client = super::connect(prefix)?;
+    let mut client = crate::args::connect(prefix)?;
     let mut answers = Answers::new(sent.tracker.len());
     // The pacing thread may have ended already; then `done` ends this loop at once.
     let _ = ready.send(());
@@ -282,6 +284,26 @@ fn memory_report(samples: Vec<(f64, u64)>) -> MemoryReport {
         max_kib: samples.iter().map(|sample| sample.1).max().unwrap_or(0),
         growth_kib_per_min: least_squares_slope(&per_minute).ok(),
         samples,
+    }
+}
+
+/// The figure: the server's resident memory over the run.
+fn plot(report: &SoakReport) -> LinePlot {
+    LinePlot {
+        title: format!("soak at {} Hz per stream: the server's memory", report.rate_hz),
+        x_label: "time (s)".into(),
+        y_label: "resident memory (MiB)".into(),
+        log_x: false,
+        log_y: false,
+        series: vec![Series {
+            name: "resident memory".into(),
+            points: report
+                .memory
+                .samples
+                .iter()
+                .map(|&(seconds, kib)| (seconds, kib as f64 / 1024.0))
+                .collect(),
+        }],
     }
 }
 

@@ -14,7 +14,6 @@
 //! slow phases of the machine hit every thread count alike instead of whichever happened to run
 //! during them.
 
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -24,17 +23,18 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::report::{self, LinePlot, Series, Table};
-use crate::collision::interest::GroupId;
-use crate::collision::pipeline::{
+use crate::args::OutputArgs;
+use crate::report::{self, LinePlot, Series, Table};
+use vas_server::collision::interest::GroupId;
+use vas_server::collision::pipeline::{
     CollisionModel, CollisionPipeline, Detail, FrameStats, ObjectDesc, ObjectId, PipelineConfig,
     SPLIT_MIN_BV_TESTS,
 };
-use crate::collision::{DopTree, MeshCollider};
-use crate::geometry::ConvexHull;
-use crate::geometry::shapes::{self, ShapeKind};
+use vas_server::collision::{DopTree, MeshCollider};
+use vas_server::geometry::ConvexHull;
+use vas_server::geometry::shapes::{self, ShapeKind};
 
-/// Command-line arguments of `vas-server bench bounce`.
+/// Command-line arguments of `vas-bench bounce`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BounceArgs {
     /// Number of objects.
@@ -66,12 +66,8 @@ pub struct BounceArgs {
     /// bounding-volume tests (the pipeline's fine-grain threshold).
     #[arg(long, default_value_t = SPLIT_MIN_BV_TESTS)]
     pub split_min_bv_tests: u64,
-    /// Where to write the JSON results.
-    #[arg(long, default_value = "bounce.json")]
-    pub out: PathBuf,
-    /// Where to draw the SVG plot (speed-up against threads).
-    #[arg(long)]
-    pub svg: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// One thread count of B4.
@@ -515,7 +511,7 @@ pub fn bounce_plot(rows: &[BounceRow]) -> LinePlot {
     }
 }
 
-/// `vas-server bench bounce`: runs B4, prints the table, writes JSON (and SVG).
+/// `vas-bench bounce`: runs B4, prints the table, writes JSON (and SVG).
 pub fn run_cli(args: &BounceArgs) -> Result<()> {
     let report = run_bounce(args)?;
     println!(
@@ -523,11 +519,7 @@ pub fn run_cli(args: &BounceArgs) -> Result<()> {
         args.objects, report.triangles_per_object, report.cube_side, args.frames
     );
     println!("{}", bounce_table(&report.rows).render());
-    report::write_json(&args.out, &report)?;
-    if let Some(svg) = &args.svg {
-        report::write_svg_line_plot(svg, &bounce_plot(&report.rows))?;
-    }
-    Ok(())
+    args.output.write(&report, || bounce_plot(&report.rows))
 }
 
 #[cfg(test)]

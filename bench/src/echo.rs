@@ -1,9 +1,9 @@
-//! `vas-client echo` (hidden): answers every tracker and glove sample at once with a hand frame
+//! `vas-bench echo` (hidden): answers every tracker and glove sample at once with a hand frame
 //! carrying its stamp, with no simulation in between.
 //!
 //! It opens the very services a server opens (same payloads, quality of service and paired
 //! event services) and sleeps on a WaitSet as the server does, so that a client measures the
-//! bare iceoryx2 round trip against it. `vas-client bench e2e` starts one in a child process
+//! bare iceoryx2 round trip against it. `vas-bench e2e` starts one in a child process
 //! on a private prefix; tests use it as a stand-in server.
 
 use std::io::Write;

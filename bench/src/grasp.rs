@@ -15,14 +15,15 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
-use super::report::{
-    LinePlot, Series, Table, format_number, median, timer_overhead, write_json, write_svg_line_plot,
+use crate::args::OutputArgs;
+use crate::report::{
+    LinePlot, Series, Table, format_number, median, timer_overhead,
 };
-use crate::grasping::clasp::HandPose;
-use crate::grasping::collider::{Obstacle, PartGeometry};
-use crate::grasping::hand::{GraspEvent, GraspParams, GraspingHand};
-use crate::grasping::model::{FLEX_COUNT, HandModel};
-use crate::grasping::script::{ScriptedGrasp, sample};
+use vas_server::grasping::clasp::HandPose;
+use vas_server::grasping::collider::{Obstacle, PartGeometry};
+use vas_server::grasping::hand::{GraspEvent, GraspParams, GraspingHand};
+use vas_server::grasping::model::{FLEX_COUNT, HandModel};
+use vas_server::scene::script::{ScriptedGrasp, sample};
 
 /// The default triangle counts of the parts.
 pub const DEFAULT_TRIANGLES: [usize; 5] = [1_000, 5_000, 10_000, 20_000, 50_000];
@@ -274,31 +275,41 @@ fn grasp_plot(rows: &[GraspRow]) -> LinePlot {
     }
 }
 
-/// Arguments of `vas-server bench grasp`.
+/// Arguments of `vas-bench grasp`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct GraspArgs {
     /// The hand model.
     #[arg(long, default_value = "configs/hands/right.toml")]
     pub hand: PathBuf,
     /// The scripted grasps to run, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = ScriptedGrasp::ALL)]
+    #[arg(long, value_delimiter = ',', default_values_t = ScriptedGrasp::ALL,
+          value_parser = scripted_grasp())]
     pub parts: Vec<ScriptedGrasp>,
     /// Triangle counts of the parts, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_TRIANGLES,
-          value_parser = super::triangle_count())]
+          value_parser = crate::args::triangle_count())]
     pub triangles: Vec<usize>,
     /// Runs per part and triangle count (the table shows medians).
-    #[arg(long, default_value_t = 5, value_parser = super::pass_count())]
+    #[arg(long, default_value_t = 5, value_parser = crate::args::pass_count())]
     pub repeats: usize,
-    /// Write the results as JSON to this file.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-    /// Draw an SVG plot of the clasp times against triangle count.
-    #[arg(long)]
-    pub svg: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
-/// `vas-server bench grasp`: runs B6, prints the table, writes files.
+/// clap's parser of a scripted grasp by its part's name, listing the names in `--help`.
+fn scripted_grasp() -> impl clap::builder::TypedValueParser<Value = ScriptedGrasp> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(ScriptedGrasp::ALL.map(ScriptedGrasp::part_name)).map(
+        |name| {
+            ScriptedGrasp::ALL
+                .into_iter()
+                .find(|grasp| grasp.part_name() == name)
+                .expect("the possible values are the grasps' own names")
+        },
+    )
+}
+
+/// `vas-bench grasp`: runs B6, prints the table, writes files.
 pub fn run_cli(args: &GraspArgs) -> Result<()> {
     let model = Arc::new(HandModel::load(Path::new(&args.hand))?);
     let config = GraspBenchConfig {
@@ -319,19 +330,18 @@ pub fn run_cli(args: &GraspArgs) -> Result<()> {
             r.part, r.triangles, r.grasp, r.expected
         );
     }
-    if let Some(path) = &args.json {
-        write_json(path, &report)?;
-    }
-    if let Some(path) = &args.svg {
-        write_svg_line_plot(path, &grasp_plot(&report.rows))?;
-    }
-    Ok(())
+    args.output.write(&report, || grasp_plot(&report.rows))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grasping::model::tests::right_hand;
+
+    /// The shipped right hand model.
+    fn right_hand() -> HandModel {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/hands/right.toml");
+        HandModel::load(&path).expect("the right hand model loads")
+    }
 
     #[test]
     fn the_benchmark_times_clasps_and_reports_the_grasp() {

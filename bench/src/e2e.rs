@@ -1,10 +1,10 @@
-//! `vas-client bench e2e`, benchmark B7: the latency from an input sample published by this
+//! `vas-bench e2e`, benchmark B7: the latency from an input sample published by this
 //! process to the hand frame that answers it, beside the bare iceoryx2 round trip measured in
 //! the same run.
 //!
 //! Both paths use the same client code: send a sample, then sleep on the client's WaitSet until
 //! the hand frame carrying the sample's stamp arrives. The `vas` path goes through the server;
-//! the `raw` path through an echo process ([`super::echo`]) that this command starts on a private
+//! the `raw` path through an echo process ([`crate::echo`]) that this command starts on a private
 //! prefix, which opens the same services and answers every tracker sample at once. The two
 //! paths alternate sample by sample, so that both see the same machine load. The first
 //! `--warmup` exchanges of each path (page faults, connection set-up, cold caches) are left out
@@ -17,17 +17,19 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use serde::Serialize;
+
+use crate::args::{OutputArgs, ServerArgs};
+use crate::report::{LinePlot, Series};
 use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Wake};
 use vas_protocol::services::remove_prefix_segment;
 use vas_protocol::wall_clock_ns;
 
-use super::echo::READY_LINE;
-use super::send::wait_for_hand_frame;
-use super::stats::LatencySummary;
-use super::synthetic;
+use crate::echo::READY_LINE;
+use vas_client::latency::LatencySummary;
+use crate::synthetic;
 
-/// Arguments of `vas-client bench e2e`.
+/// Arguments of `vas-bench e2e`.
 #[derive(Debug, clap::Args)]
 pub struct E2eArgs {
     /// Measured exchanges per path, after the warm-up.
@@ -40,11 +42,12 @@ pub struct E2eArgs {
     /// tracker stream; each is renumbered and stamped when sent.
     #[arg(long)]
     recording: Option<PathBuf>,
-    /// Write the results as JSON to this file.
-    #[arg(long)]
-    out: Option<PathBuf>,
+    #[command(flatten)]
+    output: OutputArgs,
+    #[command(flatten)]
+    server: ServerArgs,
     /// How long to wait for each answer before counting the sample unanswered, in ms.
-    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=crate::args::MAX_TIMEOUT_MS))]
     answer_timeout_ms: u64,
 }
 
@@ -58,7 +61,7 @@ pub struct PathRow {
     pub latency: LatencySummary,
 }
 
-/// Everything `bench e2e` reports.
+/// Everything `vas-bench e2e` reports.
 #[derive(Debug, Clone, Serialize)]
 pub struct E2eReport {
     /// The server's scene.
@@ -79,19 +82,20 @@ pub struct E2eReport {
 }
 
 /// Runs the benchmark against the server on `prefix`.
-pub fn run(prefix: Option<&str>, args: &E2eArgs) -> anyhow::Result<()> {
+pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
+    let prefix = args.server.prefix.as_deref();
     let inputs = match &args.recording {
         Some(path) => InputStream::recording(path)?,
         None => InputStream::Synthetic,
     };
-    let mut server = super::connect(prefix)?;
+    let mut server = crate::args::connect(prefix)?;
     let scene = server
-        .scene_info(super::CONTROL_TIMEOUT)
+        .scene_info(crate::args::CONTROL_TIMEOUT)
         .context("no vas server answers on this prefix")?
         .name;
     let echo_prefix = format!("{}raw{}_", prefix.unwrap_or("vas_"), std::process::id());
     let _echo = EchoProcess::spawn(&echo_prefix)?;
-    let mut echo = super::connect(Some(&echo_prefix))?;
+    let mut echo = crate::args::connect(Some(&echo_prefix))?;
     tracing::info!(
         scene,
         samples = args.samples,
@@ -137,10 +141,30 @@ pub fn run(prefix: Option<&str>, args: &E2eArgs) -> anyhow::Result<()> {
         unanswered_vas,
     };
     print!("{}", render(&report));
-    if let Some(out) = &args.out {
-        super::write_json(out, &report)?;
+    args.output.write(&report, || plot(&report))
+}
+
+/// The figure: each path's latency at the median, the 99th percentile and the maximum.
+fn plot(report: &E2eReport) -> LinePlot {
+    LinePlot {
+        title: format!("B7: input to answer, {} ({})", report.scene, report.input),
+        x_label: "percentile".into(),
+        y_label: "latency (us)".into(),
+        log_x: false,
+        log_y: true,
+        series: report
+            .rows
+            .iter()
+            .map(|row| Series {
+                name: row.path.into(),
+                points: vec![
+                    (50.0, row.latency.p50_us),
+                    (99.0, row.latency.p99_us),
+                    (100.0, row.latency.max_us),
+                ],
+            })
+            .collect(),
     }
-    Ok(())
 }
 
 /// Sends `input` stamped now and waits for the hand frame answering it; its round trip, or
@@ -153,7 +177,7 @@ fn round_trip(
     let input = input.with_timestamp(wall_clock_ns());
     let sent_at = Instant::now();
     client.send_input(&input)?;
-    let answer = wait_for_hand_frame(client, timeout, |frame| input.is_answered_by(frame))?;
+    let answer = client.wait_for_hand_frame(timeout, |frame| input.is_answered_by(frame))?;
     let round_trip = sent_at.elapsed();
     if answer.is_none() && client.sleep(Duration::ZERO) == Wake::Terminated {
         bail!("interrupted");
@@ -265,11 +289,11 @@ impl EchoProcess {
     /// How long a stopped echo may take to exit before it is killed.
     const EXIT_PATIENCE: Duration = Duration::from_secs(2);
 
-    /// Starts `vas-client echo` on `prefix` and waits until it is ready.
+    /// Starts `vas-bench echo` on `prefix` and waits until it is ready.
     fn spawn(prefix: &str) -> anyhow::Result<Self> {
         let exe = std::env::current_exe().context("locating the vas-client executable")?;
         let child = Command::new(&exe)
-            .args(["--prefix", prefix, "echo"])
+            .args(["echo", "--prefix", prefix])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .spawn()

@@ -17,15 +17,16 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::report::{
-    LinePlot, Series, Table, format_number, median, write_json, write_svg_line_plot,
+use crate::args::OutputArgs;
+use crate::report::{
+    LinePlot, Series, Table, format_number, median,
 };
-use crate::collision::parry_mesh::ORACLE_SCALE;
-use crate::collision::{DopTree, MeshCollider, ParryMesh, QueryStats};
-use crate::geometry::{TriMesh, shapes};
-use crate::scene::Scene;
-use crate::sliding::world::{Obstacle, PairwiseWorld, SlideBody, WorldStats};
-use crate::sliding::{
+use vas_server::collision::parry_mesh::ORACLE_SCALE;
+use vas_server::collision::{DopTree, MeshCollider, ParryMesh, QueryStats};
+use vas_server::geometry::{TriMesh, shapes};
+use vas_server::scene::Scene;
+use vas_server::sliding::world::{Obstacle, PairwiseWorld, SlideBody, WorldStats};
+use vas_server::sliding::{
     Event, Metaphor, Pose, RestReason, SlideMachine, SlideParams, SlideState, SlideStats,
 };
 
@@ -96,7 +97,8 @@ pub struct RunResult {
     pub contact_time: Duration,
     /// The part of `contact_time` spent in collision detection.
     pub contact_collision_time: Duration,
-    /// The contact tolerance used.
+    /// The contact tolerance used (the tests' measure of "near").
+    #[cfg(test)]
     pub tolerance: f64,
 }
 
@@ -137,6 +139,7 @@ pub fn run(scenario: &Scenario, check: bool, split_long_queries: bool) -> RunRes
         step_time: Duration::ZERO,
         contact_time: Duration::ZERO,
         contact_collision_time: Duration::ZERO,
+        #[cfg(test)]
         tolerance: machine.tolerance(),
     };
     if let Some(oracle) = &oracle {
@@ -243,7 +246,7 @@ pub fn scramble_winding(mesh: &TriMesh, seed: u64) -> TriMesh {
 /// along the great arc.
 pub fn straight_path(from: &Pose, to: &Pose, count: usize) -> Vec<Pose> {
     (1..=count)
-        .map(|i| crate::sliding::motion::interpolate(from, to, i as f64 / count as f64))
+        .map(|i| vas_server::sliding::motion::interpolate(from, to, i as f64 / count as f64))
         .collect()
 }
 
@@ -378,6 +381,7 @@ pub fn pipe_through_sheet(triangles: usize, from_below: bool) -> Scenario {
 }
 
 /// Dimensions of the slide-in scene, metres.
+#[cfg(test)]
 pub mod slide_in {
     /// Width of the unit (along x).
     pub const UNIT_WIDTH: f64 = 0.18;
@@ -392,6 +396,7 @@ pub mod slide_in {
 /// A slide-in unit (a car radio) pushed along -y into a slot whose side walls interfere with it
 /// by [`slide_in::INTERFERENCE`]; with `allowance` the pair has [`slide_in::ALLOWANCE`]. The
 /// oracle tests the walls set back by the allowance when one is given.
+#[cfg(test)]
 pub fn slide_in_unit(allowance: bool) -> Scenario {
     use slide_in::*;
     let unit = shapes::cuboid(Vector3::new(UNIT_WIDTH, 0.15, 0.05), 600);
@@ -485,26 +490,22 @@ pub fn config_scenarios(configs: &Path) -> Result<Vec<Scenario>> {
     Ok(vec![peg, pipe])
 }
 
-/// Options of `vas-server bench slide`.
+/// Options of `vas-bench slide`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SlideBenchArgs {
     /// Triangle counts of the grasped part in the peg-in-hole scene.
     #[arg(long, value_delimiter = ',', default_values_t = [1_000, 5_000, 10_000, 50_000],
-          value_parser = super::triangle_count())]
+          value_parser = crate::args::triangle_count())]
     pub triangles: Vec<usize>,
     /// Runs per scene; the table shows medians.
-    #[arg(long, default_value_t = 5, value_parser = super::pass_count())]
+    #[arg(long, default_value_t = 5, value_parser = crate::args::pass_count())]
     pub runs: usize,
     /// Thread counts to run every scene with (comma-separated; 0 is rayon's default): on more
     /// than one, long collision queries are split across the threads.
     #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2])]
     pub threads: Vec<usize>,
-    /// Write the rows as JSON here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-    /// Draw steps per second against triangles (peg in hole) as SVG here.
-    #[arg(long)]
-    pub svg: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// The folder of the scene configs peg_in_hole.toml and pipe_through_sheet.toml, which are
     /// run too.
     #[arg(long, default_value = "configs")]
@@ -566,7 +567,7 @@ pub fn measure(scenario: &Scenario, runs: usize) -> SlideRow {
     }
 }
 
-/// `vas-server bench slide`: B5 over the sliding scenes; prints the table, writes JSON and SVG.
+/// `vas-bench slide`: B5 over the sliding scenes; prints the table, writes JSON and SVG.
 pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
     let mut scenarios: Vec<Scenario> = args.triangles.iter().map(|&t| peg_in_hole(t)).collect();
     scenarios.push(pipe_through_sheet(5_000, false));
@@ -613,10 +614,7 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
         ]);
     }
     print!("{}", table.render());
-    if let Some(path) = &args.json {
-        write_json(path, &rows)?;
-    }
-    if let Some(path) = &args.svg {
+    args.output.write(&rows, || {
         let series = |threads: usize| Series {
             name: format!("steps_per_s, {threads} thread(s)"),
             points: rows
@@ -625,18 +623,15 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
                 .map(|r| (r.triangles as f64, r.steps_per_s))
                 .collect(),
         };
-        write_svg_line_plot(
-            path,
-            &LinePlot {
-                title: "B5: peg in hole, sliding frames per second".into(),
-                x_label: "triangles of the peg".into(),
-                y_label: "frames per second (collision detection included)".into(),
-                log_x: true,
-                log_y: true,
-                series: args.threads.iter().map(|&t| series(t)).collect(),
-            },
-        )?;
-    }
+        LinePlot {
+            title: "B5: peg in hole, sliding frames per second".into(),
+            x_label: "triangles of the peg".into(),
+            y_label: "frames per second (collision detection included)".into(),
+            log_x: true,
+            log_y: true,
+            series: args.threads.iter().map(|&t| series(t)).collect(),
+        }
+    })?;
     Ok(rows)
 }
 

@@ -8,13 +8,14 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::report::{LinePlot, Series, write_json, write_svg_line_plot};
-use super::tumble::{
+use crate::args::OutputArgs;
+use crate::report::{LinePlot, Series};
+use crate::tumble::{
     Algo, AlgoResult, BuildResult, BuiltCollider, build_results, build_table, print_disagreements,
     results_table, run_poses,
 };
-use crate::collision::OrientationSet;
-use crate::geometry::{TriMesh, parse_mesh_spec};
+use vas_server::collision::OrientationSet;
+use vas_server::geometry::{TriMesh, parse_mesh_spec};
 
 /// The default number of poses of B2.
 pub const DEFAULT_POSES: usize = 10_000;
@@ -110,7 +111,7 @@ pub fn run_random(a: &TriMesh, b: &TriMesh, config: &RandomConfig) -> Result<Ran
     })
 }
 
-/// Command-line arguments of `vas-server bench random`.
+/// Command-line arguments of `vas-bench random`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RandomArgs {
     /// The fixed mesh A: a file or shape:KIND:TRIANGLES.
@@ -129,20 +130,16 @@ pub struct RandomArgs {
     #[arg(long, value_delimiter = ',', default_values_t = Algo::DEFAULT)]
     pub algos: Vec<Algo>,
     /// Number of DOP orientations (6, 14, 18, 24 or 26).
-    #[arg(long, default_value_t = crate::collision::orientation::DEFAULT_K)]
+    #[arg(long, default_value_t = vas_server::collision::orientation::DEFAULT_K)]
     pub k: usize,
     /// Passes over the poses; each query's time is its fastest pass (robust to preemption).
-    #[arg(long, default_value_t = 3, value_parser = super::pass_count())]
+    #[arg(long, default_value_t = 3, value_parser = crate::args::pass_count())]
     pub rounds: usize,
-    /// Write the results as JSON to this file.
-    #[arg(long)]
-    pub json: Option<std::path::PathBuf>,
-    /// Draw an SVG plot of each algorithm's time per query by percentile.
-    #[arg(long)]
-    pub svg: Option<std::path::PathBuf>,
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
-/// `vas-server bench random`: runs B2, prints the table, writes files.
+/// `vas-bench random`: runs B2, prints the table, writes files.
 pub fn run_cli(args: &RandomArgs) -> Result<()> {
     let a = parse_mesh_spec(&args.mesh)?;
     let b = parse_mesh_spec(&args.mesh_b)?;
@@ -162,13 +159,7 @@ pub fn run_cli(args: &RandomArgs) -> Result<()> {
     print!("{}", build_table(&report.build).render());
     println!("mismatches: {}", report.mismatches);
     print_disagreements(&report.results);
-    if let Some(path) = &args.json {
-        write_json(path, &report)?;
-    }
-    if let Some(path) = &args.svg {
-        write_svg_line_plot(path, &percentile_plot(&report.results))?;
-    }
-    Ok(())
+    args.output.write(&report, || percentile_plot(&report.results))
 }
 
 /// Time per query by percentile (log time axis), one curve per algorithm.
@@ -197,7 +188,7 @@ fn percentile_plot(results: &[AlgoResult]) -> LinePlot {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::oracle_tests::torus;
+    use vas_server::geometry::shapes;
 
     #[test]
     fn poses_follow_the_distribution() {
@@ -218,8 +209,8 @@ mod tests {
     #[test]
     fn random_benchmark_agrees_across_algorithms() {
         let scale = |m: TriMesh, s: f64| m.map_vertices(|p| p * s).unwrap();
-        let a = scale(torus(0.35, 30, 12), 2500.0);
-        let b = scale(torus(0.3, 12, 8), 1000.0);
+        let a = scale(shapes::torus(1.0, 0.35, 30, 12), 2500.0);
+        let b = scale(shapes::torus(1.0, 0.3, 12, 8), 1000.0);
         let config = RandomConfig {
             poses: 300,
             seed: 1,

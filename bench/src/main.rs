@@ -1,0 +1,148 @@
+//! `vas-bench`: the benchmarks of BENCHMARKS.md. B1-B6 run the simulation library in this
+//! process; B7 (`e2e`) and the soak talk to a running `vas-server` over iceoryx2. Every
+//! benchmark prints its table and, when asked, writes `--json FILE` and draws `--svg FILE`.
+
+mod args;
+mod bounce;
+mod e2e;
+mod echo;
+mod grasp;
+mod orbit;
+mod random;
+mod report;
+mod slide;
+mod slope;
+mod soak;
+mod synthetic;
+mod tumble;
+
+use std::io::IsTerminal;
+use std::process::ExitCode;
+
+use clap::{Command, CommandFactory, FromArgMatches, Parser, Subcommand};
+use tracing_subscriber::EnvFilter;
+
+/// vas benchmarks: procedures, peers and current figures are in BENCHMARKS.md.
+#[derive(Debug, Parser)]
+#[command(name = "vas-bench", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    benchmark: Benchmark,
+}
+
+#[derive(Debug, Subcommand)]
+enum Benchmark {
+    /// B1: the tumbling pair (the paper's Figure 3 with --figure).
+    #[command(after_long_help = "Columns: algo (algorithm); d (distance of B from A); mean_us, median_us, max_us (time per
+query, each query timed as its fastest of --rounds passes); pass_us (mean of one more pass timed
+as a whole: the figure to read below about 50 ns); hit (fraction of poses in collision);
+bv_tests, realign, tri_tests (mean bounding-volume tests, re-alignments and triangle tests per
+query); doptree_x (mean_us over the DOP-tree's at the same d). Then per algorithm: build_ms
+(tree build) and bytes_per_triangle (all the tree holds). mismatches: poses at which an
+algorithm's answer differs from the first's (must be 0). With --figure: object, triangles,
+algo, mean_us, mismatches per object of the sweep.")]
+    Tumble(tumble::TumbleArgs),
+    /// B2: random poses of one mesh against another (FCL's procedure).
+    #[command(after_long_help = "Columns: algo; mean_us, pass_us, median_us, max_us (time per query, as in `tumble`); hit
+(fraction of poses in collision); bv_tests, realign, tri_tests (mean counts per query);
+doptree_x (mean_us over the DOP-tree's). Then build_ms and bytes_per_triangle per algorithm,
+and the mismatches between the algorithms' answers (must be 0).")]
+    Random(random::RandomArgs),
+    /// B3: orbiting spheres, separating plane against GJK (the paper's Figure 4).
+    #[command(after_long_help = "Columns: algo (plane_cold, plane_cached: the separating-plane pre-check without and with the
+plane of the last query; gjk_cold, gjk_warm: parry's GJK; bbox: a bounding-box test); polygons
+(triangles of each sphere); distance (of the centres; touching at 2); rot_deg (spin per step);
+mean_us (time per query); wrong (wrong 'not separated' answers), clear (of those, where the
+spheres are more than 0.1% of the touching distance apart); wrong_sep (wrong 'separated'
+answers: must be 0); apart (steps at which the spheres are apart); loops (mean hill-climbing
+loops per query of the plane search).")]
+    Orbit(orbit::OrbitArgs),
+    /// B4: objects bouncing in a cube, the whole pipeline against threads (the paper's Figure 5).
+    #[command(after_long_help = "Columns: threads (of the pipeline's pool); objects; mean_frame_us, p99_frame_us (wall time of
+a whole frame); speedup (the first row's mean frame over this row's); box_pairs (pairs whose
+boxes overlap), unseparated (pairs the separating plane left for the exact test), colliding,
+split (exact tests split across threads), per frame; broad_us, plane_us, exact_us (mean time
+per frame of the broad phase, the separating-plane stage and the exact tests).")]
+    Bounce(bounce::BounceArgs),
+    /// B5: sliding contact, time per contact point and sliding frame rate.
+    #[command(after_long_help = "Columns: scene; threads (collision queries may split across them); triangles (of the grasped
+part); contact_points (handled in one run); us_per_contact_excl_cd, us_per_contact_incl_cd
+(median time per contact point, without and with collision detection); steps_per_s (sliding
+frames per second, collision detection included); penetrations (visible poses parry found
+penetrating: must be 0).")]
+    Slide(slide::SlideBenchArgs),
+    /// B6: time per clasp minimisation of the hand against parts of 1k to 50k triangles.
+    #[command(after_long_help = "Columns: part; triangles; mean, p99 and max clasp us (time per clasp minimisation, median over
+--repeats); mean and p99 frame us (the whole grasping frame: clasp, contacts, analysis); steps
+(clasp iterations per frame); checks (segment collision checks per frame); grasp (the type
+the analysis recognised; a warning follows when it is not the expected one).")]
+    Grasp(grasp::GraspArgs),
+    /// B7: input-to-answer latency through a running server beside the raw iceoryx2 round trip.
+    #[command(after_long_help = "Columns: path (raw: the bare iceoryx2 round trip through an echo process; vas: through the
+server); p50_us, p99_us, max_us (from publishing a sample to receiving the hand frame that
+answers it); samples (measured exchanges); unanswered (no answer within the timeout).")]
+    E2e(e2e::E2eArgs),
+    /// Feeds a running server at a steady rate for a long time; reports dropped samples and
+    /// the server's memory.
+    #[command(after_long_help = "Output: per stream the samples sent, answered, superseded (merged into the frame of a newer
+sample of the stream) and dropped; the latency from a sample to its first answer; how late the
+pacing sent samples; the server's resident memory at the start, the end, its maximum and its
+growth in KiB per minute.")]
+    Soak(soak::SoakArgs),
+    /// Answers every input sample at once with a hand frame (the raw path of `e2e`).
+    #[command(hide = true)]
+    Echo(args::ServerArgs),
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .init();
+    let matches = comma_separated_lists(Cli::command()).get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|error| error.exit());
+    let result = match cli.benchmark {
+        Benchmark::Tumble(args) => tumble::run_cli(&args),
+        Benchmark::Random(args) => random::run_cli(&args),
+        Benchmark::Orbit(args) => orbit::run_cli(&args),
+        Benchmark::Bounce(args) => bounce::run_cli(&args),
+        Benchmark::Slide(args) => slide::run_bench(&args).map(drop),
+        Benchmark::Grasp(args) => grasp::run_cli(&args),
+        Benchmark::E2e(args) => e2e::run(&args),
+        Benchmark::Soak(args) => soak::run(&args),
+        Benchmark::Echo(args) => echo::run(args.prefix.as_deref()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Shows every comma-separated list as one in `--help`: its value name ends in `,...` and its
+/// default reads `1,2` (clap would join a list's default values with spaces, which the command
+/// line does not take).
+fn comma_separated_lists(command: Command) -> Command {
+    command.mut_subcommands(|benchmark| {
+        benchmark.mut_args(|arg| {
+            if arg.get_value_delimiter() != Some(',') {
+                return arg;
+            }
+            let name = arg.get_id().as_str().to_uppercase().replace('-', "_");
+            let defaults: Vec<String> = arg
+                .get_default_values()
+                .iter()
+                .map(|value| value.to_string_lossy().into_owned())
+                .collect();
+            let arg = arg.value_name(format!("{name},..."));
+            if defaults.is_empty() {
+                arg
+            } else {
+                arg.default_value(defaults.join(","))
+            }
+        })
+    })
+}
