@@ -1,4 +1,4 @@
-//! Convex hulls with vertex adjacency, for the separating-plane pre-check (PAPER §2.2).
+//! Convex hulls with vertex adjacency, for the separating-plane pre-check (the paper's §2.2).
 //!
 //! The pre-check needs only a hull's vertices and which vertices share an edge: the extremal vertex
 //! along a direction is then found by hill-climbing from a good start, in time that grows with the

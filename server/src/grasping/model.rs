@@ -20,7 +20,8 @@ use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use thiserror::Error;
 
-/// Number of flex values: the CyberGlove's 22 sensors (see the hand notes for their order).
+/// Number of flex values: the CyberGlove's 22 sensors, in the order of
+/// `vas_protocol::FLEX_JOINT_NAMES`.
 pub const FLEX_COUNT: usize = 22;
 
 /// Index of the hand root (the tracked matrix M) among the clasp's variables; the flex values are

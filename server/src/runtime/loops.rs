@@ -135,8 +135,7 @@ impl Loops {
         // The collision pipeline runs its back end on the current rayon pool. Here it gets a pool
         // of one thread, so it tests sequentially: a frame moves a handful of objects, and the
         // pool's idle workers spin and yield for a while after each parallel stage, taking the
-        // cores the other loops need (profiled: a third of the server's time went to
-        // `sched_yield` with the global pool). The loops themselves are the parallelism.
+        // cores the other loops need. The loops themselves are the parallelism.
         let sequential = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .thread_name(|_| "collision".into())

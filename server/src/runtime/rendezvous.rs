@@ -12,12 +12,10 @@
 //!
 //! A mutex and a condition variable suffice for the queue: the hand-off happens at most a few
 //! thousand times a second and the lock is held for a queue push or pop. What costs is waking a
-//! sleeping thread: on the 2-vCPU machine a condition-variable hand-off takes 14 us at the median
-//! and 30 us at the 99th percentile before the receiver runs (a chain of four hand-offs with
-//! 10 us of work each: 112 / 193 us end to end), about as much as the loops' own work. So a loop
-//! that starts on a frame first [`Handoff::announce`]s its output: the next loop wakes while the
+//! sleeping thread, about as much as a loop's own work with nothing in contact. So a loop that
+//! starts on a frame first [`Handoff::announce`]s its output: the next loop wakes while the
 //! frame is being computed and waits for it awake, yielding the processor, for at most
-//! [`ANNOUNCED_WAIT`] (the same chain: 76 / 146 us).
+//! [`ANNOUNCED_WAIT`]; the wake-up overlaps the work instead of adding to it.
 
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering, fence};
@@ -25,17 +23,17 @@ use std::sync::{Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
 /// How long a receiver woken by [`Handoff::announce`] waits awake for the frame before it goes
-/// back to sleep: several times a loop's frame with nothing in contact (10-30 us), so that the
-/// announced frame nearly always arrives within it, and short enough that a long frame (a
-/// 50,000-triangle part in contact takes milliseconds) costs little spinning before the receiver
-/// sleeps and is woken the ordinary way.
+/// back to sleep: several times a loop's frame with nothing in contact, so that the announced
+/// frame nearly always arrives within it, and short enough that a long frame (a 50,000-triangle
+/// part in contact takes milliseconds) costs little spinning before the receiver sleeps and is
+/// woken the ordinary way.
 pub const ANNOUNCED_WAIT: Duration = Duration::from_micros(300);
 
 /// Whether the I/O thread waits awake for the collision loop's verified frames, which come
 /// through a channel that is not a [`Handoff`]. While it waits awake, the collision loop hands a
 /// frame over without waking it through iceoryx2 (a notification costs the collision loop a
-/// system call and the I/O thread a WaitSet wake-up: 15 us at the median on the 2-vCPU machine);
-/// while it sleeps on its WaitSet, the collision loop must wake it.
+/// system call and the I/O thread a WaitSet wake-up); while it sleeps on its WaitSet, the
+/// collision loop must wake it.
 #[derive(Debug, Default)]
 pub struct AwakeWatch(AtomicBool);
 

@@ -158,10 +158,10 @@ impl Part {
 
 /// A part's DOP-tree, built on first use and shared.
 ///
-/// A 50,000-triangle tree takes about 0.4 s to build and 15 MB. The collision, grasping and
-/// sliding loops each test the part, so each built its own tree at every scene start and reset;
-/// now they clone this one (a clone shares the built arrays), parts that share a mesh share its
-/// tree, a reset builds nothing, and checking a config builds none.
+/// A large part's tree takes a noticeable time and memory to build, and the collision, grasping
+/// and sliding loops all test the part: they clone this one (a clone shares the built arrays),
+/// parts that share a mesh share its tree, a reset builds nothing, and checking a config builds
+/// none.
 #[derive(Debug, Clone)]
 pub struct PartTree {
     orientations: usize,
