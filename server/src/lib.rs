@@ -10,3 +10,6 @@ pub mod grasping;
 pub mod runtime;
 pub mod scene;
 pub mod sliding;
+
+#[cfg(test)]
+mod layering;

@@ -89,17 +89,8 @@ fn welding_a_real_soup_connects_its_triangles() {
 }
 
 #[test]
-fn the_large_shared_mesh_loads_when_the_shared_data_is_there() {
-    let path = repository_root().join("../shared/data/meshes/ur5e_upperarm.obj");
-    if !path.exists() {
-        println!(
-            "skipped: {} is not there (the shared data sits beside the repository only on \
-             development machines)",
-            path.display()
-        );
-        return;
-    }
-    let mesh = load_mesh(&path).unwrap();
+fn a_real_cad_part_of_forty_thousand_triangles_loads() {
+    let mesh = load_mesh(&shipped_mesh("ur5e_upperarm.obj")).unwrap();
     assert_eq!(mesh.triangles().len(), 40_124);
     assert!(!EdgeAdjacency::new(&mesh).is_closed());
 }
