@@ -4,14 +4,15 @@
 //! through the server's interaction model, checked by parry ([`offline`]).
 //!
 //! Finding the binaries: a test of this crate cannot use `env!("CARGO_BIN_EXE_...")` (that only
-//! names binaries of the crate under test), so [`binary`] runs `cargo build` for the workspace's
-//! binaries once per test process, with the profile the tests were built with, and takes them
-//! from the same target directory as the test executable. When they are up to date this costs
-//! one cargo invocation; when the sources changed it rebuilds them, so the tests never run a
-//! stale server. The build selects the same targets as `cargo test --workspace` (bins and tests
-//! of every member), so cargo resolves the same dependency features and reuses what the test
-//! run compiled: building only the two binaries would resolve without the dev-dependencies'
-//! features and compile iceoryx2, parry and their build tools a second time.
+//! names binaries of the crate under test), so [`binary`] and [`example`] run `cargo build` for
+//! the workspace's binaries and examples once per test process, with the profile the tests were
+//! built with, and take them from the same target directory as the test executable. When they
+//! are up to date this costs one cargo invocation; when the sources changed it rebuilds them, so
+//! the tests never run a stale server. The build selects the same targets as `cargo test
+//! --workspace` (bins, tests and examples of every member), so cargo resolves the same
+//! dependency features and reuses what the test run compiled: building only the two binaries
+//! would resolve without the dev-dependencies' features and compile iceoryx2, parry and their
+//! build tools a second time.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -32,8 +33,21 @@ pub const PATIENCE: Duration = Duration::from_secs(30);
 ///
 /// Panics (failing the test) if cargo cannot build it: nothing can be tested without it.
 pub fn binary(name: &str) -> PathBuf {
+    target_dir().join(name)
+}
+
+/// The path of an example of a workspace member (`renderer`, `dop_tree_query`), built on first
+/// use with the binaries.
+///
+/// Panics (failing the test) if cargo cannot build it.
+pub fn example(name: &str) -> PathBuf {
+    target_dir().join("examples").join(name)
+}
+
+/// The target directory of this test run's profile, once its binaries and examples are built.
+fn target_dir() -> &'static Path {
     static TARGET_DIR: OnceLock<PathBuf> = OnceLock::new();
-    TARGET_DIR.get_or_init(build_binaries).join(name)
+    TARGET_DIR.get_or_init(build_binaries)
 }
 
 fn build_binaries() -> PathBuf {
@@ -60,12 +74,13 @@ fn build_binaries() -> PathBuf {
             "--workspace",
             "--bins",
             "--tests",
+            "--examples",
         ])
         .status()
         .expect("cargo runs");
     assert!(
         status.success(),
-        "building vas-server and vas-client failed"
+        "building the workspace's binaries and examples failed"
     );
     profile_dir
 }

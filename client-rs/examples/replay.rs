@@ -1,0 +1,97 @@
+//! How to play a recording into the server in lockstep and follow what happens.
+//!
+//! Reads a JSON Lines recording (as `vas-client record` writes it, or one of
+//! `tests/fixtures/`), then sends its samples one at a time, each once the hand frame answering
+//! the previous one arrived, regardless of the recorded times. Prints every event the server
+//! publishes meanwhile (grasp, release, contact begin and end) and, at the end, how many of
+//! each kind. With a server started with `--lockstep`, the output is the same every time.
+//!
+//! ```text
+//! cargo run --release -p vas-server -- run --prefix demo --lockstep --scene configs/peg_insert.toml
+//! cargo run --release -p vas-client --example replay -- --prefix demo tests/fixtures/peg_insert.jsonl
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use clap::Parser;
+use vas_client::recording::Recording;
+use vas_client::{Client, EventKind, Frame, GraspType, HAND_PART_ID, Wake, wall_clock_ns};
+
+/// How long to wait for the answer to a sample.
+const ANSWER_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// Plays a recording in lockstep and prints the events.
+#[derive(Parser)]
+struct Args {
+    /// The server's iceoryx2 prefix (its `--prefix`).
+    #[arg(long)]
+    prefix: Option<String>,
+    /// The recording (JSON Lines).
+    recording: PathBuf,
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = Args::parse();
+    let recording = Recording::load(&args.recording)?;
+    let mut client = Client::connect(args.prefix.as_deref())?;
+    // Waits for the server (it may still be loading its scene): samples sent before it listens
+    // would be lost.
+    let scene = client.scene_info(Duration::from_secs(30))?;
+    if scene.name != recording.header.scene {
+        eprintln!(
+            "warning: recorded against scene {:?}, the server has {:?}",
+            recording.header.scene, scene.name
+        );
+    }
+    let name = |id: u32| match scene.parts.get(id as usize) {
+        Some(part) => part.name.clone(),
+        None if id == HAND_PART_ID => "hand".to_owned(),
+        None => format!("#{id}"),
+    };
+
+    let mut counts = BTreeMap::new();
+    for recorded in &recording.samples {
+        // Stamped now, so that the answer's timestamps measure this replay.
+        let input = recorded.input.with_timestamp(wall_clock_ns());
+        client.send_input(&input)?;
+        let deadline = Instant::now() + ANSWER_TIMEOUT;
+        let mut answered = false;
+        while !answered {
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            if client.wait(remaining)? != Wake::Ready {
+                return Err(format!("no answer to sample {input:?} in time").into());
+            }
+            // The server publishes a frame's events before its hand frame: when the answer
+            // comes, the events it caused have come too.
+            for frame in client.receive()? {
+                match frame {
+                    Frame::Hand(hand) => answered |= input.is_answered_by(&hand),
+                    Frame::Event(event) => {
+                        let kind = EventKind::try_from(event.kind)?;
+                        *counts.entry(format!("{kind:?}")).or_insert(0) += 1;
+                        let grasp = GraspType::try_from(event.grasp_type)?;
+                        println!(
+                            "event frame={} kind={kind:?} part={:?} other={:?} grasp={grasp:?}",
+                            event.frame,
+                            name(event.part),
+                            name(event.other)
+                        );
+                    }
+                    Frame::Parts(_) | Frame::Force(_) => {}
+                }
+            }
+        }
+    }
+    let counts: Vec<String> = counts
+        .iter()
+        .map(|(kind, n)| format!("{kind}={n}"))
+        .collect();
+    println!(
+        "replayed samples={} events: {}",
+        recording.samples.len(),
+        counts.join(" ")
+    );
+    Ok(())
+}

@@ -1,0 +1,243 @@
+//! The examples of `client-rs/examples/` and `server/examples/`, run as their READMEs run them:
+//! each client example against a real `vas-server` on its own prefix, the server example on its
+//! own. Each must end successfully within [`PATIENCE`] and print what it is there to show.
+
+use std::io::{BufRead, BufReader};
+use std::process::Stdio;
+use std::time::Instant;
+
+use vas_client::recording::Recording;
+use vas_client::{Frame, Wake};
+use vas_tests::{PATIENCE, Server, Spawned, configs_dir, example, fixtures_dir, tracker};
+
+/// Runs the example `name` with `args`, and returns its stdout lines once it exited
+/// successfully.
+fn run_example(name: &str, args: &[&str]) -> Vec<String> {
+    let mut process = Spawned::start(&example(name), args, Stdio::piped());
+    let stdout = process.take_stdout().expect("piped");
+    let lines: Vec<String> = BufReader::new(stdout)
+        .lines()
+        .map_while(Result::ok)
+        .collect();
+    let status = process
+        .wait_exit(PATIENCE)
+        .unwrap_or_else(|| panic!("the example {name} still runs after {PATIENCE:?}"));
+    assert!(
+        status.success(),
+        "the example {name} failed with {status}:\n{}",
+        process.log()
+    );
+    lines
+}
+
+/// The value of `key=` in a line of `key=value` words (the value ends at the next space, or at
+/// the closing bracket of a list).
+fn field<'a>(line: &'a str, key: &str) -> &'a str {
+    let start = line
+        .find(&format!(" {key}="))
+        .unwrap_or_else(|| panic!("no {key}= in {line:?}"))
+        + key.len()
+        + 2;
+    let rest = &line[start..];
+    let end = if rest.starts_with('[') {
+        rest.find(']').expect("a closed list") + 1
+    } else {
+        rest.find(' ').unwrap_or(rest.len())
+    };
+    &rest[..end]
+}
+
+/// Parses a printed `[x, y, z]`.
+fn floats(list: &str) -> Vec<f64> {
+    list.trim_matches(['[', ']'])
+        .split(", ")
+        .map(|value| value.parse().expect("a number"))
+        .collect()
+}
+
+/// Whether a printed list is `expected` to 1e-12.
+fn close(list: &str, expected: &[f64]) -> bool {
+    let values = floats(list);
+    values.len() == expected.len()
+        && values
+            .iter()
+            .zip(expected)
+            .all(|(v, e)| (v - e).abs() < 1e-12)
+}
+
+#[test]
+fn the_renderer_example_prints_every_part_of_the_scene_and_the_hand() {
+    let mut server = Server::start("ex_renderer");
+    let mut client = server.connect();
+    let scene = client.scene_info(PATIENCE).expect("scene info");
+    // A hand frame for the renderer to find in the hand stream's history when it connects.
+    let sample = tracker(1, [0.05, -0.1, 1.2]);
+    client.send_tracker(&sample).expect("send");
+    let deadline = Instant::now() + PATIENCE;
+    loop {
+        assert!(Instant::now() < deadline, "no answer to the tracker sample");
+        assert_eq!(
+            client.wait(PATIENCE).expect("wait"),
+            Wake::Ready,
+            "no frame"
+        );
+        let frames = client.receive().expect("receive");
+        if frames
+            .iter()
+            .any(|frame| matches!(frame, Frame::Hand(hand) if hand.tracker == sample.stamp()))
+        {
+            break;
+        }
+    }
+
+    let lines = run_example("renderer", &["--prefix", server.prefix(), "--frames", "5"]);
+    assert_eq!(
+        lines[0],
+        format!("scene {:?} parts={}", scene.name, scene.parts.len())
+    );
+    let parts_frames: Vec<u64> = lines
+        .iter()
+        .filter(|line| line.starts_with("parts "))
+        .map(|line| field(line, "frame").parse().expect("a frame number"))
+        .collect();
+    assert!(!parts_frames.is_empty(), "{lines:#?}");
+    assert!(
+        parts_frames.windows(2).all(|pair| pair[0] < pair[1]),
+        "{parts_frames:?}"
+    );
+    let part_lines: Vec<&String> = lines.iter().filter(|l| l.starts_with("part ")).collect();
+    assert_eq!(
+        part_lines.len(),
+        parts_frames.len() * scene.parts.len(),
+        "every parts frame lists every part: {lines:#?}"
+    );
+    for part in &scene.parts {
+        let line = part_lines
+            .iter()
+            .find(|line| field(line, "name") == format!("{:?}", part.name))
+            .unwrap_or_else(|| panic!("{} is not printed: {lines:#?}", part.name));
+        assert_eq!(field(line, "id"), part.id.to_string());
+        // Nothing moves the parts: they are where the scene put them.
+        let pose = part.initial_pose;
+        assert!(close(field(line, "position"), &pose.position), "{line}");
+        assert!(close(field(line, "rotation"), &pose.rotation), "{line}");
+    }
+    let hand = lines
+        .iter()
+        .find(|line| line.starts_with("hand "))
+        .unwrap_or_else(|| panic!("no hand line: {lines:#?}"));
+    assert!(
+        close(field(hand, "position"), &sample.hand.position),
+        "{hand}"
+    );
+    assert_eq!(field(hand, "grasp"), "None");
+    assert_eq!(field(hand, "touching"), "none");
+}
+
+#[test]
+fn the_send_input_example_prints_an_answer_to_every_sample() {
+    let mut server = Server::start("ex_send_input");
+    server.connect();
+    let lines = run_example(
+        "send_input",
+        &["--prefix", server.prefix(), "--samples", "8"],
+    );
+    assert_eq!(lines[0], "scene \"demo\"");
+    let answers: Vec<&String> = lines.iter().filter(|l| l.starts_with("answer ")).collect();
+    assert_eq!(answers.len(), 8, "{lines:#?}");
+    let mut frames = Vec::new();
+    for (step, answer) in answers.iter().enumerate() {
+        let stream = if step % 2 == 0 { "tracker" } else { "glove" };
+        assert_eq!(field(answer, "input"), stream, "{answer}");
+        assert_eq!(field(answer, "seq"), (step / 2 + 1).to_string(), "{answer}");
+        frames.push(
+            field(answer, "frame")
+                .parse::<u64>()
+                .expect("a frame number"),
+        );
+    }
+    assert!(
+        frames.windows(2).all(|pair| pair[0] < pair[1]),
+        "{frames:?}"
+    );
+    // The hand moved along x, and its fingers bent.
+    let x = |line: &str| floats(field(line, "position"))[0];
+    let bend = |line: &str| field(line, "bend").parse::<f64>().expect("a number");
+    let (first, last) = (answers[0], answers[answers.len() - 1]);
+    assert!(x(last) > x(first), "{first}\n{last}");
+    assert_eq!(bend(first), 0.0, "{first}");
+    assert!(bend(last) > 0.3, "{last}");
+}
+
+#[test]
+fn the_replay_example_prints_the_grasp_and_release_of_the_peg() {
+    let scene = configs_dir().join("peg_insert.toml");
+    let fixture = fixtures_dir().join("peg_insert.jsonl");
+    let samples = Recording::load(&fixture)
+        .expect("the fixture loads")
+        .samples
+        .len();
+    let mut server = Server::start_with(
+        "ex_replay",
+        &["--lockstep", "--scene", scene.to_str().expect("utf-8")],
+    );
+    server.connect();
+    let fixture = fixture.to_str().expect("utf-8");
+    let lines = run_example("replay", &["--prefix", server.prefix(), fixture]);
+
+    let held: Vec<String> = lines
+        .iter()
+        .filter(|line| line.starts_with("event "))
+        .filter(|line| matches!(field(line, "kind"), "Grasp" | "Release"))
+        .map(|line| {
+            let kind = field(line, "kind");
+            format!("{kind} {} {}", field(line, "part"), field(line, "grasp"))
+        })
+        .collect();
+    assert_eq!(
+        held,
+        ["Grasp \"peg\" Power", "Release \"peg\" None"],
+        "{lines:#?}"
+    );
+    let summary = lines.last().expect("output");
+    assert!(
+        summary.starts_with(&format!("replayed samples={samples} events: ")),
+        "{summary}"
+    );
+    for count in ["Grasp=1", "Release=1"] {
+        assert!(summary.split(' ').any(|word| word == count), "{summary}");
+    }
+}
+
+#[test]
+fn the_dop_tree_example_finds_pairs_at_the_crossing_pose_only() {
+    let lines = run_example("dop_tree_query", &[]);
+    let triangles: u32 = field(&lines[0], "triangles").parse().expect("a count");
+    // The pose lines, each with the pair lines that follow it.
+    let mut poses: Vec<(&str, bool, usize, Vec<[u32; 2]>)> = Vec::new();
+    for line in &lines[1..] {
+        if line.starts_with("pose ") {
+            poses.push((
+                field(line, "name"),
+                field(line, "intersects").parse().expect("a bool"),
+                field(line, "pairs").parse().expect("a count"),
+                Vec::new(),
+            ));
+        } else {
+            let pair = [field(line, "a"), field(line, "b")].map(|i| i.parse().expect("an index"));
+            poses.last_mut().expect("a pose line first").3.push(pair);
+        }
+    }
+    assert_eq!(poses.len(), 2, "{lines:#?}");
+    let (name, intersects, count, pairs) = &poses[0];
+    assert_eq!((*name, *intersects, *count), ("apart", false, 0));
+    assert!(pairs.is_empty());
+    let (name, intersects, count, pairs) = &poses[1];
+    assert_eq!((*name, *intersects), ("crossing", true));
+    assert!(*count > 0);
+    assert_eq!(pairs.len(), *count);
+    assert!(
+        pairs.iter().flatten().all(|&index| index < triangles),
+        "{pairs:?}"
+    );
+}
