@@ -26,7 +26,11 @@ pub struct OutputArgs {
 
 impl OutputArgs {
     /// Writes `results` as JSON and draws `plot()` as SVG, each only where a file was asked for.
-    pub fn write(&self, results: &impl Serialize, plot: impl FnOnce() -> LinePlot) -> anyhow::Result<()> {
+    pub fn write(
+        &self,
+        results: &impl Serialize,
+        plot: impl FnOnce() -> LinePlot,
+    ) -> anyhow::Result<()> {
         if let Some(path) = &self.json {
             write_json(path, results)?;
         }
@@ -61,7 +65,6 @@ pub fn connect(prefix: Option<&str>) -> anyhow::Result<Client> {
     .connect()
     .context("cannot connect to the vas services")
 }
-
 
 /// Parses a number of a benchmark's command line that must be finite: a NaN or infinite
 /// distance or speed makes the poses meaningless, and the exact arithmetic of the triangle

@@ -26,8 +26,8 @@ use vas_protocol::services::remove_prefix_segment;
 use vas_protocol::wall_clock_ns;
 
 use crate::echo::READY_LINE;
-use vas_client::latency::LatencySummary;
 use crate::synthetic;
+use vas_client::latency::LatencySummary;
 
 /// Arguments of `vas-bench e2e`.
 #[derive(Debug, clap::Args)]
@@ -177,7 +177,7 @@ fn round_trip(
     let input = input.with_timestamp(wall_clock_ns());
     let sent_at = Instant::now();
     client.send_input(&input)?;
-    let answer = client.wait_for_hand_frame(timeout, |frame| input.is_answered_by(frame))?;
+    let answer = client.wait_for_hand_frame(timeout, |frame| input.is_answered_by(frame), drop)?;
     let round_trip = sent_at.elapsed();
     if answer.is_none() && client.sleep(Duration::ZERO) == Wake::Terminated {
         bail!("interrupted");

@@ -16,9 +16,7 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
 use crate::args::OutputArgs;
-use crate::report::{
-    LinePlot, Series, Table, format_number, median, timer_overhead,
-};
+use crate::report::{LinePlot, Series, Table, format_number, median, timer_overhead};
 use vas_server::grasping::clasp::HandPose;
 use vas_server::grasping::collider::{Obstacle, PartGeometry};
 use vas_server::grasping::hand::{GraspEvent, GraspParams, GraspingHand};

@@ -33,61 +33,77 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Benchmark {
     /// B1: the tumbling pair (the paper's Figure 3 with --figure).
-    #[command(after_long_help = "Columns: algo (algorithm); d (distance of B from A); mean_us, median_us, max_us (time per
+    #[command(
+        after_long_help = "Columns: algo (algorithm); d (distance of B from A); mean_us, median_us, max_us (time per
 query, each query timed as its fastest of --rounds passes); pass_us (mean of one more pass timed
 as a whole: the figure to read below about 50 ns); hit (fraction of poses in collision);
 bv_tests, realign, tri_tests (mean bounding-volume tests, re-alignments and triangle tests per
 query); doptree_x (mean_us over the DOP-tree's at the same d). Then per algorithm: build_ms
 (tree build) and bytes_per_triangle (all the tree holds). mismatches: poses at which an
 algorithm's answer differs from the first's (must be 0). With --figure: object, triangles,
-algo, mean_us, mismatches per object of the sweep.")]
+algo, mean_us, mismatches per object of the sweep."
+    )]
     Tumble(tumble::TumbleArgs),
     /// B2: random poses of one mesh against another (FCL's procedure).
-    #[command(after_long_help = "Columns: algo; mean_us, pass_us, median_us, max_us (time per query, as in `tumble`); hit
+    #[command(
+        after_long_help = "Columns: algo; mean_us, pass_us, median_us, max_us (time per query, as in `tumble`); hit
 (fraction of poses in collision); bv_tests, realign, tri_tests (mean counts per query);
 doptree_x (mean_us over the DOP-tree's). Then build_ms and bytes_per_triangle per algorithm,
-and the mismatches between the algorithms' answers (must be 0).")]
+and the mismatches between the algorithms' answers (must be 0)."
+    )]
     Random(random::RandomArgs),
     /// B3: orbiting spheres, separating plane against GJK (the paper's Figure 4).
-    #[command(after_long_help = "Columns: algo (plane_cold, plane_cached: the separating-plane pre-check without and with the
+    #[command(
+        after_long_help = "Columns: algo (plane_cold, plane_cached: the separating-plane pre-check without and with the
 plane of the last query; gjk_cold, gjk_warm: parry's GJK; bbox: a bounding-box test); polygons
 (triangles of each sphere); distance (of the centres; touching at 2); rot_deg (spin per step);
 mean_us (time per query); wrong (wrong 'not separated' answers), clear (of those, where the
 spheres are more than 0.1% of the touching distance apart); wrong_sep (wrong 'separated'
 answers: must be 0); apart (steps at which the spheres are apart); loops (mean hill-climbing
-loops per query of the plane search).")]
+loops per query of the plane search)."
+    )]
     Orbit(orbit::OrbitArgs),
     /// B4: objects bouncing in a cube, the whole pipeline against threads (the paper's Figure 5).
-    #[command(after_long_help = "Columns: threads (of the pipeline's pool); objects; mean_frame_us, p99_frame_us (wall time of
+    #[command(
+        after_long_help = "Columns: threads (of the pipeline's pool); objects; mean_frame_us, p99_frame_us (wall time of
 a whole frame); speedup (the first row's mean frame over this row's); box_pairs (pairs whose
 boxes overlap), unseparated (pairs the separating plane left for the exact test), colliding,
 split (exact tests split across threads), per frame; broad_us, plane_us, exact_us (mean time
-per frame of the broad phase, the separating-plane stage and the exact tests).")]
+per frame of the broad phase, the separating-plane stage and the exact tests)."
+    )]
     Bounce(bounce::BounceArgs),
     /// B5: sliding contact, time per contact point and sliding frame rate.
-    #[command(after_long_help = "Columns: scene; threads (collision queries may split across them); triangles (of the grasped
+    #[command(
+        after_long_help = "Columns: scene; threads (collision queries may split across them); triangles (of the grasped
 part); contact_points (handled in one run); us_per_contact_excl_cd, us_per_contact_incl_cd
 (median time per contact point, without and with collision detection); steps_per_s (sliding
 frames per second, collision detection included); penetrations (visible poses parry found
-penetrating: must be 0).")]
+penetrating: must be 0)."
+    )]
     Slide(slide::SlideBenchArgs),
     /// B6: time per clasp minimisation of the hand against parts of 1k to 50k triangles.
-    #[command(after_long_help = "Columns: part; triangles; mean, p99 and max clasp us (time per clasp minimisation, median over
+    #[command(
+        after_long_help = "Columns: part; triangles; mean, p99 and max clasp us (time per clasp minimisation, median over
 --repeats); mean and p99 frame us (the whole grasping frame: clasp, contacts, analysis); steps
 (clasp iterations per frame); checks (segment collision checks per frame); grasp (the type
-the analysis recognised; a warning follows when it is not the expected one).")]
+the analysis recognised; a warning follows when it is not the expected one)."
+    )]
     Grasp(grasp::GraspArgs),
     /// B7: input-to-answer latency through a running server beside the raw iceoryx2 round trip.
-    #[command(after_long_help = "Columns: path (raw: the bare iceoryx2 round trip through an echo process; vas: through the
+    #[command(
+        after_long_help = "Columns: path (raw: the bare iceoryx2 round trip through an echo process; vas: through the
 server); p50_us, p99_us, max_us (from publishing a sample to receiving the hand frame that
-answers it); samples (measured exchanges); unanswered (no answer within the timeout).")]
+answers it); samples (measured exchanges); unanswered (no answer within the timeout)."
+    )]
     E2e(e2e::E2eArgs),
     /// Feeds a running server at a steady rate for a long time; reports dropped samples and
     /// the server's memory.
-    #[command(after_long_help = "Output: per stream the samples sent, answered, superseded (merged into the frame of a newer
+    #[command(
+        after_long_help = "Output: per stream the samples sent, answered, superseded (merged into the frame of a newer
 sample of the stream) and dropped; the latency from a sample to its first answer; how late the
 pacing sent samples; the server's resident memory at the start, the end, its maximum and its
-growth in KiB per minute.")]
+growth in KiB per minute."
+    )]
     Soak(soak::SoakArgs),
     /// Answers every input sample at once with a hand frame (the raw path of `e2e`).
     #[command(hide = true)]

@@ -159,7 +159,8 @@ pub fn run_cli(args: &RandomArgs) -> Result<()> {
     print!("{}", build_table(&report.build).render());
     println!("mismatches: {}", report.mismatches);
     print_disagreements(&report.results);
-    args.output.write(&report, || percentile_plot(&report.results))
+    args.output
+        .write(&report, || percentile_plot(&report.results))
 }
 
 /// Time per query by percentile (log time axis), one curve per algorithm.

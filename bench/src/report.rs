@@ -220,9 +220,8 @@ pub fn write_svg_line_plot(path: &Path, plot: &LinePlot) -> Result<()> {
         bail!("{}: the plot has no finite point to draw", path.display());
     }
     let axis = |values: Vec<f64>, log: bool, name: &str| {
-        padded_range(&values, log).with_context(|| {
-            format!("{}: {name} axis of '{}'", path.display(), plot.title)
-        })
+        padded_range(&values, log)
+            .with_context(|| format!("{}: {name} axis of '{}'", path.display(), plot.title))
     };
     let (x_range, log_x) = axis(points.iter().map(|p| p.0).collect(), plot.log_x, "x")?;
     let (y_range, log_y) = axis(points.iter().map(|p| p.1).collect(), plot.log_y, "y")?;
@@ -313,18 +312,25 @@ where
             .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
             .map_err(err)?;
         chart
-            .draw_series(points.into_iter().map(|p| {
-                EmptyElement::at(p) + marker(index, (0, 0), color)
-            }))
+            .draw_series(
+                points
+                    .into_iter()
+                    .map(|p| EmptyElement::at(p) + marker(index, (0, 0), color)),
+            )
             .map_err(err)?;
     }
     for (index, series) in plot.series.iter().enumerate() {
         let color = PALETTE[index % PALETTE.len()];
         let row = 60 + 24 * index as i32;
         legend_area
-            .draw(&PathElement::new([(10, row), (40, row)], color.stroke_width(2)))
+            .draw(&PathElement::new(
+                [(10, row), (40, row)],
+                color.stroke_width(2),
+            ))
             .map_err(err)?;
-        legend_area.draw(&marker(index, (25, row), color)).map_err(err)?;
+        legend_area
+            .draw(&marker(index, (25, row), color))
+            .map_err(err)?;
         legend_area
             .draw(&Text::new(
                 series.name.clone(),

@@ -18,9 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use crate::args::OutputArgs;
-use crate::report::{
-    LinePlot, Series, Table, format_number, median,
-};
+use crate::report::{LinePlot, Series, Table, format_number, median};
 use vas_server::collision::parry_mesh::ORACLE_SCALE;
 use vas_server::collision::{DopTree, MeshCollider, ParryMesh, QueryStats};
 use vas_server::geometry::{TriMesh, shapes};

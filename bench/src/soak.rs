@@ -290,7 +290,10 @@ fn memory_report(samples: Vec<(f64, u64)>) -> MemoryReport {
 /// The figure: the server's resident memory over the run.
 fn plot(report: &SoakReport) -> LinePlot {
     LinePlot {
-        title: format!("soak at {} Hz per stream: the server's memory", report.rate_hz),
+        title: format!(
+            "soak at {} Hz per stream: the server's memory",
+            report.rate_hz
+        ),
         x_label: "time (s)".into(),
         y_label: "resident memory (MiB)".into(),
         log_x: false,

@@ -16,13 +16,11 @@ use nalgebra::Isometry3;
 use serde::Serialize;
 
 use crate::args::OutputArgs;
-use crate::report::{
-    LinePlot, Series, Table, TimingSummary, format_number, timer_overhead,
-};
+use crate::report::{LinePlot, Series, Table, TimingSummary, format_number, timer_overhead};
+use vas_server::collision::tumble::tumble_pose;
 use vas_server::collision::{
     DopTree, KdopBruteForceTree, MeshCollider, ObbTree, OrientationSet, ParryMesh, QueryStats,
 };
-use vas_server::collision::tumble::tumble_pose;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{TriMesh, bounding_sphere_of, parse_mesh_spec};
 
@@ -651,7 +649,8 @@ pub fn run_cli(args: &TumbleArgs) -> Result<()> {
         floor.sphere_test.mean_us * 1e3,
         floor.sphere_test.pass_mean_us * 1e3,
     );
-    args.output.write(&report, || distance_plot(&report.results))
+    args.output
+        .write(&report, || distance_plot(&report.results))
 }
 
 /// The Figure 3 sweep from the command line.

@@ -13,7 +13,7 @@
 use std::time::Duration;
 
 use clap::Parser;
-use vas_client::{Client, GraspType, HandFrame, HandSegment, Wake};
+use vas_client::{Client, GraspType, HandSegment, Wake};
 
 /// Prints the scene's parts and hand as the server moves them.
 #[derive(Parser)]
@@ -29,11 +29,11 @@ struct Args {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     // With the signals handled, Ctrl-C ends the loop below and the client leaves cleanly.
-    let mut builder = Client::builder().handle_termination_signals(true);
-    if let Some(prefix) = &args.prefix {
-        builder = builder.prefix(prefix);
-    }
-    let mut client = builder.connect()?;
+    let builder = Client::builder().handle_termination_signals(true);
+    let mut client = match &args.prefix {
+        Some(prefix) => builder.prefix(prefix).connect()?,
+        None => builder.connect()?,
+    };
 
     // Once per scene: what each part id is (a real renderer loads `mesh_source` here). The
     // answer also tells that the server is up (it may still be loading its scene).
@@ -48,44 +48,38 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Wake::Terminated => break,
         }
         let received = client.poll()?;
-        if received.parts == 0 && received.hand == 0 {
-            continue; // only events or force frames: nothing to draw
-        }
         if let Some(frame) = client.latest_parts().filter(|_| received.parts > 0) {
             println!("parts frame={}", frame.header.frame);
             for part in &frame.parts {
-                let name = scene
-                    .parts
-                    .get(part.id as usize)
-                    .map_or("?", |p| p.name.as_str());
+                let name = scene.parts.get(part.id as usize).map_or("?", |p| &p.name);
+                let (position, rotation) = (part.position, part.rotation);
                 println!(
-                    "part id={} name={name:?} position={:?} rotation={:?}",
-                    part.id, part.position, part.rotation
+                    "part id={} name={name:?} position={position:?} rotation={rotation:?}",
+                    part.id
                 );
             }
         }
         if let Some(hand) = client.latest_hand().filter(|_| received.hand > 0) {
-            print_hand(hand);
+            let grasp =
+                GraspType::try_from(hand.grasp_type).map_or("?".into(), |g| format!("{g:?}"));
+            let touching: Vec<String> = HandSegment::ALL
+                .iter()
+                .filter(|segment| hand.touching & segment.bit() != 0)
+                .map(|segment| format!("{segment:?}"))
+                .collect();
+            let (position, rotation) = (hand.root.position, hand.root.rotation);
+            println!(
+                "hand frame={} position={position:?} rotation={rotation:?} grasp={grasp} touching={}",
+                hand.frame,
+                if touching.is_empty() {
+                    "none".to_owned()
+                } else {
+                    touching.join(",")
+                }
+            );
         }
-        drawn += 1;
+        // A wake-up for events or force frames alone draws nothing.
+        drawn += u64::from(received.parts > 0 || received.hand > 0);
     }
     Ok(())
-}
-
-fn print_hand(hand: &HandFrame) {
-    let grasp = GraspType::try_from(hand.grasp_type).map_or("unknown".into(), |g| format!("{g:?}"));
-    let segments: Vec<String> = HandSegment::ALL
-        .iter()
-        .filter(|segment| hand.touching & segment.bit() != 0)
-        .map(|segment| format!("{segment:?}"))
-        .collect();
-    let touching = if segments.is_empty() {
-        "none".to_owned()
-    } else {
-        segments.join(",")
-    };
-    println!(
-        "hand frame={} position={:?} rotation={:?} grasp={grasp} touching={touching}",
-        hand.frame, hand.root.position, hand.root.rotation
-    );
 }

@@ -13,11 +13,11 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use clap::Parser;
 use vas_client::recording::Recording;
-use vas_client::{Client, EventKind, Frame, GraspType, HAND_PART_ID, Wake, wall_clock_ns};
+use vas_client::{Client, EventKind, Frame, GraspType, HAND_PART_ID, wall_clock_ns};
 
 /// How long to wait for the answer to a sample.
 const ANSWER_TIMEOUT: Duration = Duration::from_secs(10);
@@ -56,32 +56,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // Stamped now, so that the answer's timestamps measure this replay.
         let input = recorded.input.with_timestamp(wall_clock_ns());
         client.send_input(&input)?;
-        let deadline = Instant::now() + ANSWER_TIMEOUT;
-        let mut answered = false;
-        while !answered {
-            let remaining = deadline.saturating_duration_since(Instant::now());
-            if client.wait(remaining)? != Wake::Ready {
-                return Err(format!("no answer to sample {input:?} in time").into());
-            }
-            // The server publishes a frame's events before its hand frame: when the answer
-            // comes, the events it caused have come too.
-            for frame in client.receive()? {
-                match frame {
-                    Frame::Hand(hand) => answered |= input.is_answered_by(&hand),
-                    Frame::Event(event) => {
-                        let kind = EventKind::try_from(event.kind)?;
-                        *counts.entry(format!("{kind:?}")).or_insert(0) += 1;
-                        let grasp = GraspType::try_from(event.grasp_type)?;
-                        println!(
-                            "event frame={} kind={kind:?} part={:?} other={:?} grasp={grasp:?}",
-                            event.frame,
-                            name(event.part),
-                            name(event.other)
-                        );
-                    }
-                    Frame::Parts(_) | Frame::Force(_) => {}
+        // The server publishes a frame's events before its hand frame: when the answer comes,
+        // the events the sample caused have come too.
+        let mut events = Vec::new();
+        let answer = client.wait_for_hand_frame(
+            ANSWER_TIMEOUT,
+            |hand| input.is_answered_by(hand),
+            |frame| {
+                if let Frame::Event(event) = frame {
+                    events.push(event);
                 }
-            }
+            },
+        )?;
+        for event in events {
+            let kind = EventKind::try_from(event.kind)?;
+            *counts.entry(format!("{kind:?}")).or_insert(0) += 1;
+            let grasp = GraspType::try_from(event.grasp_type)?;
+            println!(
+                "event frame={} kind={kind:?} part={:?} other={:?} grasp={grasp:?}",
+                event.frame,
+                name(event.part),
+                name(event.other)
+            );
+        }
+        if answer.is_none() {
+            return Err(format!("no answer to sample {input:?} in time").into());
         }
     }
     let counts: Vec<String> = counts

@@ -10,13 +10,12 @@
 //! cargo run --release -p vas-client --example send_input -- --prefix demo --samples 10
 //! ```
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use clap::Parser;
 use vas_client::recording::InputSample;
 use vas_client::{
-    Client, FLEX_COUNT, Frame, GloveSample, GraspType, HandFrame, TrackerSample, Wake, WirePose,
-    wall_clock_ns,
+    Client, FLEX_COUNT, GloveSample, GraspType, TrackerSample, WirePose, wall_clock_ns,
 };
 
 /// How long to wait for the answer to a sample.
@@ -71,7 +70,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             })
         };
         client.send_input(&input)?;
-        let answer = wait_for_answer(&mut client, &input)?;
+        let answer = client
+            .wait_for_hand_frame(ANSWER_TIMEOUT, |hand| input.is_answered_by(hand), drop)?
+            .ok_or_else(|| format!("no answer to {input:?} within {ANSWER_TIMEOUT:?}"))?;
         let stream = match input {
             InputSample::Tracker(_) => "tracker",
             InputSample::Glove(_) => "glove",
@@ -86,25 +87,4 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     Ok(())
-}
-
-/// Receives frames until the hand frame answering `input` arrives.
-fn wait_for_answer(
-    client: &mut Client,
-    input: &InputSample,
-) -> Result<HandFrame, Box<dyn std::error::Error>> {
-    let deadline = Instant::now() + ANSWER_TIMEOUT;
-    loop {
-        let remaining = deadline.saturating_duration_since(Instant::now());
-        if client.wait(remaining)? != Wake::Ready {
-            return Err(format!("no answer to {input:?} within {ANSWER_TIMEOUT:?}").into());
-        }
-        for frame in client.receive()? {
-            if let Frame::Hand(hand) = frame
-                && input.is_answered_by(&hand)
-            {
-                return Ok(hand);
-            }
-        }
-    }
 }

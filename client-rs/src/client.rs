@@ -375,13 +375,16 @@ impl Client {
         Ok(frames)
     }
 
-    /// Waits until a hand frame that `answers` accepts arrives, receiving (and keeping the newest
-    /// of) every frame on the way; `None` on timeout or a handled termination signal. With
-    /// [`InputSample::is_answered_by`] this waits for the answer to one input sample.
+    /// Waits until a hand frame that `answers` accepts arrives and returns it; `None` on timeout
+    /// or a handled termination signal. Every other frame received meanwhile goes to `others`,
+    /// in [`Client::receive`]'s order, so that the events a sample caused reach the caller before
+    /// the answer to it (pass `drop` to ignore them). With [`InputSample::is_answered_by`] this
+    /// waits for the answer to one input sample.
     pub fn wait_for_hand_frame(
         &mut self,
         timeout: Duration,
         answers: impl Fn(&HandFrame) -> bool,
+        mut others: impl FnMut(Frame),
     ) -> Result<Option<HandFrame>, ClientError> {
         let deadline = Instant::now() + timeout;
         loop {
@@ -389,10 +392,13 @@ impl Client {
             if self.wait(remaining)? != Wake::Ready {
                 return Ok(None);
             }
-            let answer = self.receive()?.into_iter().find_map(|frame| match frame {
-                Frame::Hand(hand) if answers(&hand) => Some(hand),
-                _ => None,
-            });
+            let mut answer = None;
+            for frame in self.receive()? {
+                match frame {
+                    Frame::Hand(hand) if answer.is_none() && answers(&hand) => answer = Some(hand),
+                    other => others(other),
+                }
+            }
             if answer.is_some() {
                 return Ok(answer);
             }

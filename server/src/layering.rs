@@ -204,7 +204,10 @@ fn module_files(dir: &Path) -> Vec<PathBuf> {
             Some("mod.rs") => file.parent().expect("a folder").to_owned(),
             _ => file.with_extension(""),
         };
-        for words in code.split(';').map(|item| item.split_whitespace().collect::<Vec<_>>()) {
+        for words in code
+            .split(';')
+            .map(|item| item.split_whitespace().collect::<Vec<_>>())
+        {
             if let [.., "mod", name] = words.as_slice()
                 && !test_modules.iter().any(|test| test == name)
             {
@@ -250,13 +253,20 @@ fn an_upward_path_is_found_wherever_it_is_written() {
         "pub(crate) fn g(x: &crate::sliding::SlideParams) {}",
     ];
     for source in upward {
-        assert_eq!(upward_references("collision", source, false).len(), 1, "{source}");
+        assert_eq!(
+            upward_references("collision", source, false).len(),
+            1,
+            "{source}"
+        );
     }
     assert_eq!(
         upward_references("geometry", "use super::collision::DopTree;", true),
         ["collision"]
     );
-    assert_eq!(upward_references("sliding", "use crate::grasping::HandModel;", false), ["grasping"]);
+    assert_eq!(
+        upward_references("sliding", "use crate::grasping::HandModel;", false),
+        ["grasping"]
+    );
 }
 
 #[test]

@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 
 use vas_client::recording::{InputSample, RecordingHeader, RecordingWriter};
 use vas_protocol::{GloveSample, TrackerSample};
-use vas_server::scene::script::{Keyframe, sample};
 use vas_server::scene::Scene;
+use vas_server::scene::script::{Keyframe, sample};
 
 use crate::scenarios::Scenario;
 

@@ -241,3 +241,17 @@ fn the_dop_tree_example_finds_pairs_at_the_crossing_pose_only() {
         "{pairs:?}"
     );
 }
+
+#[test]
+fn the_readme_shows_the_renderer_example_as_it_is() {
+    let root = configs_dir().join("..");
+    let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
+    let example = std::fs::read_to_string(root.join("client-rs/examples/renderer.rs"))
+        .expect("the renderer example");
+    let shown = readme
+        .split_once("<!-- renderer.rs -->\n```rust\n")
+        .and_then(|(_, rest)| rest.split_once("```\n<!-- /renderer.rs -->"))
+        .map(|(code, _)| code)
+        .expect("the README's renderer block");
+    assert_eq!(shown, example, "README.md's renderer block differs from the example");
+}

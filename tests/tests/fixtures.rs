@@ -5,8 +5,8 @@
 use std::fs;
 
 use vas_client::recording::Recording;
-use vas_server::scene::script::RecordedScenario;
 use vas_server::scene::Scene;
+use vas_server::scene::script::RecordedScenario;
 use vas_tests::fixtures::write_fixture;
 use vas_tests::offline::{self, OfflineRun};
 use vas_tests::scenarios::{EXPECTED, Scenario};

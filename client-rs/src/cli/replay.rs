@@ -17,8 +17,8 @@ pub struct ReplayArgs {
     /// The recording to play (JSON Lines, as `vas-client record` writes).
     file: PathBuf,
     /// Send one sample, wait for the hand frame answering it, then send the next, regardless of
-    /// the recorded times; prints each answer as a JSON line, the same every time but for the
-    /// timestamps.
+    /// the recorded times; prints the events each sample caused and then its answer as JSON
+    /// lines, the same every time but for the timestamps.
     #[arg(long)]
     lockstep: bool,
     /// In lockstep, how long to wait for each answer before going on without it, in ms.
@@ -86,7 +86,20 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
         let stamp = input.stamp();
         let sent_at = Instant::now();
         client.send_input(&input)?;
-        let answer = client.wait_for_hand_frame(timeout, |frame| input.is_answered_by(frame))?;
+        let mut events = Vec::new();
+        let answer = client.wait_for_hand_frame(
+            timeout,
+            |frame| input.is_answered_by(frame),
+            |frame| {
+                if let Frame::Event(_) = frame {
+                    events.push(frame);
+                }
+            },
+        )?;
+        for event in &events {
+            serde_json::to_writer(&mut out, event)?;
+            writeln!(out)?;
+        }
         match answer {
             Some(frame) => {
                 serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
@@ -97,7 +110,7 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
                 ));
             }
             None => {
-                tracing::warn!(seq = stamp.seq, "no answer (rejected input?)");
+                tracing::warn!(seq = stamp.seq, "no answer within the timeout");
                 unanswered += 1;
             }
         }

@@ -139,7 +139,7 @@ fn report_answer(
     }
     let timeout = Duration::from_millis(args.answer_timeout_ms);
     let frame = client
-        .wait_for_hand_frame(timeout, answers)?
+        .wait_for_hand_frame(timeout, answers, drop)?
         .with_context(|| format!("no hand frame answered the sample within {timeout:?}"))?;
     let mut out = std::io::stdout().lock();
     serde_json::to_writer(&mut out, &Frame::Hand(frame))?;

@@ -13,9 +13,9 @@ use super::collider::{Obstacle, PartGeometry, PartId};
 use super::hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandMode};
 use super::model::tests::right_hand;
 use super::model::{FLEX_COUNT, HandModel};
-use crate::scene::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
 use crate::geometry::TriMesh;
 use crate::geometry::shapes;
+use crate::scene::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
 
 /// Input samples per second of the scripted trajectories (a tracker and glove at 1 kHz).
 const RATE: f64 = 1000.0;

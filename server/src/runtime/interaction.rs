@@ -383,9 +383,9 @@ mod tests {
     use crate::collision::parry_mesh::{millimetre_pose, millimetre_trimesh};
     use crate::geometry::{TriMesh, shapes};
     use crate::grasping::model::tests::right_hand;
-    use crate::scene::script::{Keyframe, ScriptedGrasp, open_hand, sample};
     use crate::grasping::{FLEX_COUNT, GraspParams, GraspType, HandPose};
     use crate::scene::PartTree;
+    use crate::scene::script::{Keyframe, ScriptedGrasp, open_hand, sample};
     use crate::sliding::Metaphor;
     use crate::sliding::motion::pose_distance;
 

@@ -548,9 +548,9 @@ mod tests {
     use vas_protocol::{EventKind, InputStamp};
 
     use super::*;
-    use crate::scene::script::{ScriptedGrasp, sample};
     use crate::runtime::frames::Restart;
     use crate::runtime::interaction::Interaction;
+    use crate::scene::script::{ScriptedGrasp, sample};
 
     /// Input samples per second.
     const RATE: f64 = 1000.0;

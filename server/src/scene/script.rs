@@ -8,12 +8,12 @@ use std::fmt;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
 
+use super::{Part, Scene};
+use crate::geometry::TriMesh;
+use crate::geometry::shapes;
 use crate::grasping::analysis::{GraspType, PrecisionKind};
 use crate::grasping::hand::HandInput;
 use crate::grasping::model::{FLEX_COUNT, FlexVector};
-use crate::geometry::TriMesh;
-use crate::geometry::shapes;
-use super::{Part, Scene};
 
 /// A keyframe: where the cart and the tracked hand are, and what the glove says, at a time.
 #[derive(Debug, Clone, Copy, PartialEq)]
