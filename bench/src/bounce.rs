@@ -233,9 +233,8 @@ fn models(triangles: usize) -> Vec<Arc<CollisionModel<DopTree>>> {
 ///
 /// A block of frames runs inside the pool (`ThreadPool::install` around the whole block), so the
 /// thread that queues the moves and runs each frame is one of the pool's workers, as the
-/// server's collision loop is. Handing every frame to the pool from outside added to each frame
-/// the hand-over to a pool thread, which is not the pipeline's work: measured in B4, about 100 us
-/// on one thread (391-418 against 289-301 us) and little on two.
+/// server's collision loop is. Handing every frame to the pool from outside would add to each
+/// frame the hand-over to a pool thread, which is not the pipeline's work.
 struct Contender {
     threads: usize,
     pool: rayon::ThreadPool,

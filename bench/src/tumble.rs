@@ -146,7 +146,7 @@ pub struct AlgoResult {
     /// Mean time per query, microseconds.
     pub mean_us: f64,
     /// Mean time per query of one more pass over the poses timed as a whole, microseconds: the
-    /// clock advances in steps of about 10 ns here, so per-query times of a few tens of
+    /// clock advances in steps of several nanoseconds, so per-query times of a few tens of
     /// nanoseconds are rounded by up to half their size; a whole pass is not.
     pub pass_mean_us: f64,
     /// Median time per query, microseconds.
@@ -234,10 +234,9 @@ pub struct BuildResult {
 /// Each collider runs the whole pose sequence on its own, as a user of one library would and as
 /// the peers' figures were measured (each peer on the same procedure): a collider's queries
 /// follow one another, so an algorithm that carries memory from one query to the next finds it
-/// in the caches, and none of them finds the caches filled by another algorithm's queries. (Run
-/// pose by pose in turns, parry's 0.3-0.9 ms queries between two DOP-tree queries evicted the
-/// DOP-tree's memory and trees: on the 50k torus at d = 1.25 its mean was 2.48 us, against
-/// 1.26 us run on its own, in one session.)
+/// in the caches, and none of them finds the caches filled by another algorithm's queries (run
+/// pose by pose in turns, a slow peer's queries between two DOP-tree queries evict the DOP-tree's
+/// memory and trees).
 ///
 /// The sequences are run `rounds` times, the colliders taking turns round by round in rotated
 /// order, and each pose's time is its fastest round: on a shared machine a query preempted by
@@ -321,11 +320,9 @@ pub fn run_poses(
 ///
 /// The turn starts with one untimed query at the last pose, which on the closed tumbling path is
 /// the one just before the first: the first timed query then finds the caches and the query's
-/// own memory as in the middle of a continuous run. Without it, every turn's first query paid for
-/// caches emptied by the other algorithms' turns: on the 50k torus that one query was the
-/// maximum of the whole sequence for the DOP-tree and the OBB-tree alike at d = 2.0 (104-121
-/// us, where run on its own the DOP-tree's maximum stayed at 22-83 us), a cost of the benchmark
-/// taking turns, not of the algorithm. On random poses (B2) it is one more random query.
+/// own memory as in the middle of a continuous run. Without it, every turn's first query would
+/// pay for caches emptied by the other algorithms' turns, a cost of the benchmark taking turns,
+/// not of the algorithm. On random poses (B2) it is one more random query.
 fn run_turn(
     query: &Query,
     poses: &[Isometry3<f64>],
