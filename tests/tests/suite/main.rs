@@ -1,0 +1,10 @@
+//! The end-to-end tests, in one test binary so that the workspace links it once: the real
+//! `vas-server`, `vas-client` and `vas-bench` binaries and the examples, each test on its own
+//! iceoryx2 prefix.
+
+mod bench_tools;
+mod end_to_end;
+mod examples;
+mod faults;
+mod fixtures;
+mod replays;
