@@ -3,8 +3,8 @@
 //!
 //! It opens the very services a server opens (same payloads, quality of service and paired
 //! event services) and sleeps on a WaitSet as the server does, so that a client measures the
-//! bare iceoryx2 round trip against it. `vas-bench e2e` starts one in a child process
-//! on a private prefix; tests use it as a stand-in server.
+//! bare iceoryx2 round trip against it. `vas-bench e2e` starts one in a child process on a
+//! private prefix.
 
 use std::io::Write;
 use std::time::Duration;
