@@ -2810,9 +2810,9 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::bench::tumble::tumble_pose;
     use crate::collision::ObbTree;
     use crate::collision::oracle_tests::{random_pose, random_soup, torus};
+    use crate::collision::tumble::tumble_pose;
 
     /// Every corner of every node's triangles, with the node.
     fn node_corners(tree: &DopTree) -> impl Iterator<Item = (usize, Point3<f64>)> + '_ {

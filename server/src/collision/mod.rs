@@ -16,6 +16,7 @@ pub mod parry_mesh;
 pub mod pipeline;
 pub mod separating_plane;
 pub mod triangle;
+pub mod tumble;
 
 use std::ops::AddAssign;
 
