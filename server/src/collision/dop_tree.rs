@@ -51,8 +51,8 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use nalgebra::{Isometry3, Matrix3, Point3, UnitQuaternion, Vector3};
 
-use super::obb_tree::OrientedBox;
 use super::orientation::OrientationSet;
+use super::oriented_box::OrientedBox;
 use super::triangle::{Triangle, triangles_intersect};
 use super::{MeshCollider, QueryStats};
 use crate::geometry::{TriMesh, bounding_box_of, bounding_sphere_of};
