@@ -19,12 +19,9 @@
 //! instead of before it (see [`CollisionPipeline::run_frame`]); and the traversal of a
 //! pair expected to be expensive is itself split across the threads (fine grain; see
 //! [`PipelineConfig::split_min_bv_tests`]).
-//! [`ConcurrentPipeline`] runs the whole pipeline on a thread of its own.
 
-mod concurrent;
 mod exact;
 
-pub use concurrent::ConcurrentPipeline;
 pub use exact::ExactTest;
 
 use super::QueryStats;
@@ -126,9 +123,6 @@ pub enum PipelineError {
     /// More objects than ids can name.
     #[error("the pipeline is full")]
     Full,
-    /// The pipeline thread of a [`ConcurrentPipeline`] has stopped.
-    #[error("the collision pipeline thread has stopped")]
-    Closed,
 }
 
 /// How much a frame should report about colliding pairs.
@@ -172,8 +166,6 @@ pub struct FrameStats {
     pub split_tests: u64,
     /// Work counters of the exact tests.
     pub exact_work: QueryStats,
-    /// Queued moves refused because their object was gone (by [`ConcurrentPipeline`]).
-    pub rejected_moves: u64,
     /// Wall time of the whole frame.
     pub total: Duration,
 }
