@@ -1,13 +1,16 @@
 //! The pipeline against brute force: every pair of the scene tested exactly, each frame.
 
+use super::back_end::PAIRS_PER_TASK;
 use super::*;
+use crate::collision::interest::GroupId;
 use crate::collision::{DopTree, ParryMesh};
-use crate::geometry::{Point, TriMesh};
-use nalgebra::{Translation3, UnitQuaternion};
+use crate::geometry::{ConvexHull, Point, TriMesh};
+use nalgebra::{Translation3, UnitQuaternion, Vector3};
 use parry3d::shape::Ball;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// An ellipsoid with half-axes `axes`, bent into a banana when `bend` is non-zero (so that its
 /// hull is looser than the mesh).
