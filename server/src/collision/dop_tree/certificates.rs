@@ -110,7 +110,7 @@ impl Certificates {
     /// The tree bound of pair `j` with the other tree's centre at `centre`:
     /// `expiry + direction . centre`.
     #[inline(always)]
-    pub(super) fn tree_bound(&self, j: usize, centre: &Vector3<f64>) -> f64 {
+    fn tree_bound(&self, j: usize, centre: &Vector3<f64>) -> f64 {
         let [dx, dy, dz] = &self.directions;
         self.expiry[j]
             + f64::from(dx[j]) * centre.x
@@ -141,7 +141,7 @@ impl Certificates {
     /// (callgrind, B1's bunny at d = 1.5: 720 against 1,400 a scan).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn flagged_avx2(
+    pub(super) fn flagged_avx2(
         &self,
         centre: &Vector3<f64>,
         threshold: f64,
