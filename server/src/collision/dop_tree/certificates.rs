@@ -90,7 +90,7 @@ impl Certificates {
     /// counted from).
     ///
     /// The tree bound is checked for every pair, the node bound only where the tree bound fails
-    /// (a few pairs per query: on B1's bunny at d = 1.5, about 6 of a front of 120).
+    /// (usually a few pairs per query).
     pub(super) fn flagged(
         &self,
         centre: &Vector3<f64>,
@@ -135,10 +135,9 @@ impl Certificates {
         }
     }
 
-    /// [`Self::flagged`] with the tree bounds of four pairs at a time in AVX2 registers, and
-    /// their comparisons packed into a bit mask: with the node bounds only where needed, half the
-    /// instructions of bounds computed into arrays for chunks of 32 pairs and compared there
-    /// (callgrind, B1's bunny at d = 1.5: 720 against 1,400 a scan).
+    /// [`Self::flagged`] with the tree bounds of four pairs at a time in AVX2 registers and their
+    /// comparisons packed into a bit mask, so that the node bounds, computed one at a time, are
+    /// reached only for the lanes that failed.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn flagged_avx2(

@@ -1,5 +1,16 @@
 //! The front: the node pairs at which the walks since the last one from the roots ended, each
 //! separated pair with a certificate that stays valid until the motion may have closed its gap.
+//!
+//! A certificate is a direction, fixed in A's or in B's frame, along which the other tree's
+//! triangles lay at least a gap beyond this tree's. Motion changes that gap by at most the other
+//! tree's centre moving along the direction plus the turn times its radius, so the certificate
+//! holds while `gap + direction . (centre now - centre then) - radius * (turn since)` stays
+//! positive: sliding along a surface (a peg down its hole) leaves the certificates across the gap
+//! intact, however far it goes. The same holds with the moving node's own centre and radius: that
+//! bound costs more but survives turning (the tree's radius times even a small turn soon exceeds
+//! a small gap), so it is checked wherever the tree's bound fails. A query takes out only the
+//! pairs both bounds may have expired, by a scan of packed arrays ([`Certificates`]): fronts hold
+//! up to tens of thousands of pairs, where a scan beats a priority queue's scattered accesses.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -8,19 +19,8 @@ use super::separation::Ending;
 use super::traverse::FrontPair;
 use super::tree::DopTree;
 
-/// The node pairs at which the traversals since the last one from the roots ended.
-///
-/// A separated pair carries a certificate: a direction, fixed in A's or in B's frame, along which
-/// the other tree's triangles lay at least a gap beyond this tree's. Motion changes that gap by at
-/// most the other tree's centre moving along the direction plus the turn times its radius, so a
-/// certificate is still valid while `gap + direction . (centre now - centre then) - radius *
-/// (turn since)` stays positive: sliding along a surface (the peg down its hole) leaves the
-/// certificates across the gap intact, however far it goes. The same holds with the moving
-/// node's own centre and radius instead of its tree's: that bound costs more to evaluate but
-/// survives turning (the tree's radius times even a small turn soon exceeds a small gap), so it
-/// is checked wherever the tree's bound fails. A query takes out only the pairs both bounds
-/// may have expired (a scan of packed arrays: the fronts hold up to tens of thousands of pairs,
-/// where a scan beats a priority queue's scattered accesses).
+/// The node pairs at which the traversals since the last one from the roots ended: the separated
+/// ones with their certificates (see the module's doc), and the pairs of leaves to test again.
 #[derive(Default)]
 pub(super) struct Front {
     /// Separated pairs, per frame of the certificate's direction (A's, B's).
@@ -38,9 +38,9 @@ pub(super) struct Front {
     /// dropped for a fresh one.
     pub(super) fresh_len: Option<usize>,
     /// Whether the last query that advanced the front without a hit tested again less than
-    /// [`STEADY_DUE_SHARE`](super::pair_memory::STEADY_DUE_SHARE) of it: most certificates hold
-    /// (sliding), so extra pairs cost little more than their scan and the front may grow further
-    /// before a fresh one pays off.
+    /// `STEADY_DUE_SHARE` of it (see `pair_memory`): most certificates hold (sliding), so extra
+    /// pairs cost little more than their scan and the front may grow further before a fresh one
+    /// pays off.
     pub(super) steady: bool,
 }
 

@@ -65,10 +65,8 @@ const WITNESS_SEARCH_LEVELS: u32 = 4;
 /// touches where the last one did.
 const WITNESS_KEPT_MISSES: u32 = 1;
 
-/// Largest front walked before the roots' probes when it proved the last query apart: scanning
-/// it costs about what the probes cost (on the 50k torus of B1, whose fronts hold hundreds to
-/// thousands of pairs, walking them first made the queries at d = 1.5 and 1.75, most of them far
-/// apart, 40-75 % slower).
+/// Largest front walked before the roots' probes when it proved the last query apart: scanning a
+/// larger one costs more than the probes it would save.
 const FRONT_FIRST_MAX_PAIRS: usize = 128;
 
 /// A carried front is used while B moved by at most this fraction of the smaller bounding radius
@@ -90,7 +88,7 @@ const FRONT_SLACK_PAIRS: usize = 64;
 
 thread_local! {
     /// Boxed, so that taking a memory out of its slot and putting it back moves a pointer, not
-    /// the memory's few hundred bytes (a query far apart costs tens of nanoseconds in all).
+    /// the memory's few hundred bytes: a query far apart does little else.
     static PAIR_MEMORIES: RefCell<Vec<Option<Box<PairMemory>>>> =
         const { RefCell::new(Vec::new()) };
 }
@@ -120,11 +118,9 @@ impl PairMemory {
 
     /// Takes the memory as [`Self::take`] does, unless the remembered proof that the roots are
     /// apart still holds with B at `b_to_a` (its bounding centre at `centre_b`): then the memory
-    /// records the query as [`Self::first_hit`] would have, in its slot, and `None` says the
-    /// trees are apart. A query far apart then costs the bounding-sphere test and the proof's
-    /// check (a few nanoseconds), not the memory's trip out of its slot and back. Where the
-    /// proof fails, [`Self::first_hit`] checks it once more: a few nanoseconds on a query that
-    /// goes on to test nodes.
+    /// records the query in its slot as [`Self::first_hit`] would have, and `None` says the trees
+    /// are apart, without the memory's trip out of its slot and back. (Where the proof fails,
+    /// [`Self::first_hit`] checks it again: cheap beside the node tests that follow.)
     pub(super) fn take_unless_apart(
         a: &DopTree,
         b: &DopTree,
@@ -199,8 +195,7 @@ impl PairMemory {
             return true;
         }
         // Near a pair apart, the probes of the roots usually fail again where they failed last
-        // time, and the front settles the query alone (on the bunny at d = 2.0 of B1, the failed
-        // probes took about 40 % of a query's time).
+        // time, and the front settles the query alone.
         if self.apart_by_front
             && self.front.len() <= FRONT_FIRST_MAX_PAIRS
             && self.witness.is_none()
@@ -425,12 +420,9 @@ impl PairMemory {
     }
 
     /// Whether a query at `pair`'s pose is far ([`motion_since`]) from the last query's. A
-    /// first-hit query far from both the front's pose and the last query's is detached: no
-    /// motion connects it to the queries before, nor likely to the next one (the trees are
-    /// shared by several pairs of objects, as in a scene of many copies of a few parts, or the
-    /// poses are random). It walks from the roots without recording a front and leaves the old
-    /// one as it is: on B4's scene, recording the front, with the box tests that tighten it, was
-    /// about a quarter of the exact stage's instructions (callgrind).
+    /// first-hit query far from both the front's pose and the last query's is detached (trees
+    /// shared by many pairs of objects, or random poses): no motion connects it to the queries
+    /// around it, so it walks from the roots without paying for a front, and leaves the old one.
     fn far_from_last_query<const K: usize>(&self, pair: &LazyPair<'_, K>) -> bool {
         self.last_query.is_some_and(|last| {
             let rotation = last.rotation.to_rotation_matrix();

@@ -10,9 +10,8 @@ use super::tree::DopTree;
 use crate::collision::QueryStats;
 
 /// Depth to which the parallel traversal splits the node-pair tree into rayon tasks (up to
-/// 2^depth tasks). Measured: a first-hit query of a few microseconds gets slower in parallel
-/// (task hand-over costs more than the work); the split pays for long traversals such as all
-/// pairs of two meshes in deep contact.
+/// 2^depth tasks). The split pays only for long traversals (all pairs of two meshes in deep
+/// contact); on a short query the tasks' hand-over costs more than the work.
 pub(super) const PARALLEL_DEPTH: u32 = 6;
 
 /// A split query walks the remembered front in parallel only from this many due pairs: below,

@@ -205,7 +205,8 @@ pub(super) type ConeHints = [u8; MAX_K];
 pub(super) const MAX_K: usize = 26;
 
 thread_local! {
-    pub(super) static CONE_HINTS: std::cell::Cell<ConeHints> = const { std::cell::Cell::new([u8::MAX; MAX_K]) };
+    pub(super) static CONE_HINTS: std::cell::Cell<ConeHints> =
+        const { std::cell::Cell::new([u8::MAX; MAX_K]) };
     static REVERSE_CONE_HINTS: std::cell::Cell<ConeHints> =
         const { std::cell::Cell::new([u8::MAX; MAX_K]) };
 }

@@ -19,18 +19,13 @@ use crate::collision::triangle::Triangle;
 const PLANE_TEST_MAX_TRIANGLES: usize = 16;
 
 /// Largest node, in triangles, whose pair with another such node is tested with their oriented
-/// boxes when their DOPs overlap, in walks that record a front. Near contact a small patch of a
-/// smooth surface is nearly flat, and its box is thin across it where any DOP of fixed axes
-/// is as wide as the patch along most of them: on the 50k torus of B1 the first query after a
-/// contact phase opened 1,100-1,200 node pairs down to the leaves with the DOPs alone. Above
-/// this size a box test (about 30 ns) rarely separates what the DOPs did not.
+/// boxes when their DOPs overlap, in walks that record a front: a small patch is thin across its
+/// box, not its DOP; above this size a box test rarely separates what the DOPs did not.
 pub(super) const BOX_TEST_MAX_TRIANGLES: usize = 64;
 
 /// The same bound in walks that record no front (a detached query's, the search around an old
 /// witness): there a box test only prunes, and most of these walks end on a hit, where the boxes
-/// on the way down overlap. On B4's scene the exact stage ran 140 million instructions with boxes
-/// of up to 64 triangles in such walks, 127 million with this bound and 115 million with none
-/// (callgrind, 210 frames); with none, the worst query of B2 (fcl_env against fcl_rob) doubled.
+/// on the way down overlap; small boxes still pay on the worst queries (see BENCHMARKS.md, B2).
 pub(super) const PLAIN_BOX_TEST_MAX_TRIANGLES: usize = 8;
 
 /// How [`TreePair::face_separation`] measures the extent of an inner node along a leaf's face

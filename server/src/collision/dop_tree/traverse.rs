@@ -388,9 +388,9 @@ impl<R> TreePair<'_, R> {
     }
 
     /// The overlap slack of a node pair: the least `a_i + e_i` over the axes, negative exactly
-    /// when some axis separates them (and then minus a lower bound on their distance). B's node is re-aligned unless cached for this query; when
-    /// the method tests both ways and A's axes do not separate, A's node re-aligned into B's
-    /// frame is tested against B's axes too.
+    /// when some axis separates them (and then minus a lower bound on their distance). B's node
+    /// is re-aligned unless cached for this query; when the method tests both ways and A's axes
+    /// do not separate, A's node re-aligned into B's frame is tested against B's axes too.
     #[inline(always)]
     fn slack<const K: usize, const FUSED: bool>(
         &self,
@@ -411,7 +411,7 @@ impl<R> TreePair<'_, R> {
         stats.bv_tests += 1;
         let along_a = overlap_slack(da, e);
         // Only pairs that A's axes barely fail to separate are worth B's axes: deep overlaps
-        // are rarely separated by them (measured).
+        // are rarely separated by them.
         let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
         if along_a < 0.0 || along_a > REVERSE_TEST_SLACK * (na.size + nb.size) {
             return forward(along_a);

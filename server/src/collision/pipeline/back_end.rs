@@ -71,9 +71,9 @@ impl Tally {
     }
 }
 
-/// Pairs a thread of the back end claims at a time: a pre-check costs about 0.25 us, so much
-/// smaller chunks would let the claims dominate, and much larger ones would leave a thread idle
-/// behind a chunk that happens to hold several exact tests.
+/// Pairs a thread of the back end claims at a time: pre-checks are cheap, so much smaller chunks
+/// would let the claims dominate, and much larger ones would leave a thread idle behind a chunk
+/// that happens to hold several exact tests.
 pub(super) const PAIRS_PER_TASK: usize = 8;
 
 /// A frame's pairs shared out among the pool's threads.
@@ -84,10 +84,9 @@ pub(super) const PAIRS_PER_TASK: usize = 8;
 /// common list that every thread takes from one at a time, so that no thread is left working
 /// alone at the end for more than one exact test.
 ///
-/// Measured in B4 on two threads against rayon's parallel iterator over the same chunks: claiming
-/// from both ends keeps most pairs on the core that tested them at the last frame (the
-/// pre-checks' time 89-90 us against 93-94 claiming all from the front), and a thread that runs
-/// out of work waits awake (see [`help_until`]).
+/// Claiming from both ends keeps most pairs on the core that tested them at the last frame, and a
+/// thread that runs out of work waits awake (see [`help_once`]), where rayon's parallel iterator
+/// would put it to sleep.
 struct SharedPairs<'s, 'e> {
     unclaimed: Mutex<VecDeque<&'s mut [&'e mut PairEntry]>>,
     deferred_exacts: Mutex<Vec<&'s mut PairEntry>>,
@@ -192,8 +191,6 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
     /// Reads every object's pose once, in memory order, on a thread other than the one that
     /// queued the moves: the pre-checks then find in this core's cache the poses they read in
     /// the pairs' scattered order, where each would otherwise wait for the other core's.
-    /// Measured in B4 on two threads: the pre-checks' time 78-83 us against 87-91 us without,
-    /// 71-77 us on one thread.
     fn fetch_poses_if_elsewhere(&self) {
         if rayon::current_thread_index() == self.frame_thread {
             return;
@@ -217,9 +214,8 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
     /// results in its entry, and returns what the tests add up to.
     ///
     /// The calling thread and one task for each other thread of the pool take the pairs from a
-    /// [`SharedPairs`], and the caller returns once every pair is tested: exact tests cost from one
-    /// to tens of microseconds, against a quarter of one for a pre-check, so the last ones are
-    /// shared out one at a time.
+    /// [`SharedPairs`], and the caller returns once every pair is tested: an exact test costs far
+    /// more than a pre-check, so the last ones are shared out one at a time.
     pub(super) fn run(&self, entries: &mut [&mut PairEntry]) -> Tally {
         if rayon::current_num_threads() == 1 || entries.len() <= PAIRS_PER_TASK {
             let mut tally = self.pre_check(entries);

@@ -9,7 +9,8 @@ use crate::collision::interest::InterestMatrix;
 use std::time::{Duration, Instant};
 
 /// The bounding-box stage of a frame, with what it reads: the half of
-/// [`CollisionPipeline::run_frame`] that runs beside the back end's carried pairs.
+/// [`CollisionPipeline::run_frame`](super::CollisionPipeline::run_frame) that runs beside the
+/// back end's carried pairs.
 pub(super) struct BoxStage<'a, C> {
     pub(super) broad_phase: &'a mut SweepAndPrune,
     pub(super) slots: &'a [Slot<C>],

@@ -64,21 +64,9 @@ pub struct PipelineConfig {
 
 /// Default of [`PipelineConfig::split_min_bv_tests`].
 ///
-/// Deciding by the number of pairs (split when fewer pairs than threads reach the exact test)
-/// split the cheap first-hit tests that make up a sparse frame, and those got several times
-/// slower: a split traversal hands rayon tasks over and wakes the idle threads, and even on one
-/// thread it takes 1.1-1.6 times as long as the sequential one. Measured on two threads, one
-/// DOP-tree pair at a time (500 to 8,000 triangles, random near-contact poses and pegs in holes),
-/// with the threads asleep beforehand as between frames: a first hit after 30-130
-/// bounding-volume tests took 4.7-5.8 us sequential and 19-24 us split; the split still lost at
-/// 1,000-4,000 tests (about 1.6 times the sequential time) and won only beyond about 5,000 tests
-/// (0.65-0.95 of the sequential time). A bounding-volume test costs 0.025-0.04 us in a long
-/// traversal, and a pair's work changes little from one frame to the next (coherence), so the
-/// previous test's count predicts the next one's time; 8,192 (about 200 us of traversal) splits
-/// only where the split was measured to win. Those figures are for a split walk from the roots;
-/// a split test now keeps the pair's front and splits only a long walk from it (see
-/// [`DopTree::intersects_parallel`](crate::collision::DopTree::intersects_parallel)), so the
-/// bound errs on the side of not splitting.
+/// A split traversal hands tasks over and wakes idle threads, so it pays only for long tests; a
+/// pair's work changes little from frame to frame, so its last test's count predicts the next
+/// one's cost. The bound sits where splitting starts to win, erring towards not splitting.
 pub const SPLIT_MIN_BV_TESTS: u64 = 8192;
 
 impl Default for PipelineConfig {
@@ -326,9 +314,8 @@ impl<C: ExactTest> CollisionPipeline<C> {
     ///
     /// The pair table holds only pairs of interest: the interest matrix judges a pair when its
     /// overlap starts and when the rules change, not at every frame. The back end tests the
-    /// table's entries in place. Both keep the serial parts of a frame short: on two threads, a
-    /// serial pass over the pairs costs more than on one, each entry having been written last by
-    /// the other core (B4 in the README).
+    /// table's entries in place. Both keep the serial parts of a frame short: on several threads,
+    /// a serial pass over the pairs waits for entries last written by other cores.
     pub fn run_frame(&mut self, detail: Detail) -> FrameReport {
         let frame_start = Instant::now();
         let moved = self.queue.len() as u64;

@@ -8,13 +8,10 @@ use std::time::{Duration, Instant};
 /// Keeps the other threads of the current rayon pool awake from a frame's first queued move until
 /// the frame's back end starts.
 ///
-/// A pool thread asleep between frames took 23-31 us to take up the back end once a two-thread
-/// frame handed it work (measured in B4). Woken by the first move but left idle, it often fell
-/// asleep again while the moves were queued: its first pair came 6.7-26 us after the back end's
-/// start (means over the frames of seven runs), against 1.4-1.9 us in most runs when it waited
-/// awake. So it is handed a task that spins until the back end starts, or [`WARM_SPIN_LIMIT`]
-/// passes (a frame that is queued but not run soon). Only from inside a pool of several threads:
-/// elsewhere there is no pool of the pipeline's to wake.
+/// A thread asleep between frames is slow to take up the back end, and one woken by the first
+/// move but left idle often falls asleep again while the moves are queued. So it is handed a task
+/// that spins until the back end starts, or [`WARM_SPIN_LIMIT`] passes (a frame queued but not
+/// run soon). Only from inside a pool of several threads: elsewhere there is none to wake.
 #[derive(Default)]
 pub(super) struct PoolWarmer {
     /// Counts the back ends started: a spinning task stops when it changes.
@@ -58,11 +55,9 @@ impl PoolWarmer {
 /// Waits for `done` awake: runs the current pool's pending tasks meanwhile, or spins.
 ///
 /// Rayon's own waits (at the end of a `join` or a `scope`) put a thread to sleep after a few
-/// microseconds without work, and waking it takes microseconds more, often tens on a virtual
-/// machine: measured in B4, the last of a frame's tests ended 11-15 us before the frame's
-/// parallel part did, on both threads, against 3-5 us waiting this way. Only for waits that end
-/// within a frame: a thread kept spinning from frame to frame was taken off its core by the
-/// host more often (B4 in the README).
+/// microseconds without work, and waking it takes longer than a frame's tail of work. Only for
+/// waits that end within a frame: a thread kept spinning from frame to frame is taken off its
+/// core by the host more often.
 pub(super) fn help_until(done: impl Fn() -> bool) {
     while !done() {
         help_once();
