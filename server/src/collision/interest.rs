@@ -73,11 +73,6 @@ impl InterestMatrix {
         self.disallowed_objects.insert(ordered(a, b));
     }
 
-    /// Undoes [`InterestMatrix::disallow_objects`].
-    pub fn allow_objects(&mut self, a: ObjectId, b: ObjectId) {
-        self.disallowed_objects.remove(&ordered(a, b));
-    }
-
     /// Drops every rule naming `object` (called when it leaves the scene).
     pub fn forget_object(&mut self, object: ObjectId) {
         self.disallowed_objects

@@ -12,6 +12,7 @@ pub mod interest;
 pub mod kdop_bruteforce;
 pub mod obb_tree;
 pub mod orientation;
+mod oriented_box;
 pub mod parry_mesh;
 pub mod pipeline;
 pub mod separating_plane;

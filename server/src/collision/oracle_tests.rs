@@ -8,8 +8,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::triangle::triangles_intersect;
+use super::tumble::tumble_pose;
 use super::*;
-use crate::collision::tumble::tumble_pose;
 use crate::geometry::{TriMesh, shapes};
 
 /// A soup of `n` random triangles of about `size` inside the box [-1, 1]^3.

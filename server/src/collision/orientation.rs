@@ -18,12 +18,9 @@ use thiserror::Error;
 /// The orientation-set sizes supported: 6 (box), 14, 18, 24 and 26.
 pub const SUPPORTED_K: [usize; 5] = [6, 14, 18, 24, 26];
 
-/// The default number of orientations: the fastest in the tumbling benchmark here. Measured over
-/// the 50k torus, the bunny and the UR5e upper arm (DOP-tree alone, distances where the trees
-/// get near, geometric mean of the time per query against k = 18's): 14 is 16% faster on the
-/// torus but 41% slower on the arm, 24 is 13% and 56% slower there, 26 is 3-6% slower on all
-/// three, and 6 is 1.4-2.4 times slower. Fewer slots make re-alignment and set-up cheaper; too
-/// few leave the re-aligned DOPs loose where a long part lies at a slant.
+/// The default number of orientations: the fastest over the meshes of the tumbling benchmark
+/// (see BENCHMARKS.md, B1). Fewer slots make re-alignment and set-up cheaper; too few leave the
+/// re-aligned DOPs loose where a long part lies at a slant.
 pub const DEFAULT_K: usize = 18;
 
 /// Why an orientation set could not be made.

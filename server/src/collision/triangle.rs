@@ -115,7 +115,7 @@ pub fn triangles_intersect(t1: &Triangle, t2: &Triangle) -> bool {
 }
 
 /// `corners` rotated left by `shift` (< 3): written out, since the slice method is a call to a
-/// general routine (about 70 instructions per rotation, 4 % of B1's queries on the bunny).
+/// general routine, costly on this hot path.
 fn rotated<T: Copy>(corners: [T; 3], shift: usize) -> [T; 3] {
     [
         corners[shift],

@@ -1,13 +1,16 @@
 //! The pipeline against brute force: every pair of the scene tested exactly, each frame.
 
+use super::back_end::PAIRS_PER_TASK;
 use super::*;
+use crate::collision::interest::GroupId;
 use crate::collision::{DopTree, ParryMesh};
-use crate::geometry::{Point, TriMesh};
-use nalgebra::{Translation3, UnitQuaternion};
+use crate::geometry::{ConvexHull, Point, TriMesh};
+use nalgebra::{Translation3, UnitQuaternion, Vector3};
 use parry3d::shape::Ball;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// An ellipsoid with half-axes `axes`, bent into a banana when `bend` is non-zero (so that its
 /// hull is looser than the mesh).
@@ -340,69 +343,6 @@ fn pairs_equal_brute_force<C: ExactTest + 'static>(seed: u64) -> (u64, u64) {
         "only {shared_frames} frames on several threads shared out their pairs"
     );
     (split_tests, parallel_exact_tests)
-}
-
-#[test]
-fn concurrent_runner_gives_the_same_reports_as_the_pipeline() {
-    let mut scene = Scene::<DopTree>::new(22);
-    let mut serial = CollisionPipeline::new(PipelineConfig::default());
-    for _ in 0..25 {
-        scene.add(&mut serial);
-    }
-    // The same objects, added in the same order, get the same ids.
-    let mut twin = CollisionPipeline::new(PipelineConfig::default());
-    for body in scene.bodies.values() {
-        twin.add(ObjectDesc {
-            model: Arc::clone(&body.model),
-            pose: body.pose,
-            group: GroupId(body.group),
-            is_static: body.is_static,
-        })
-        .unwrap();
-    }
-    let pool = Arc::new(pool(2));
-    let concurrent = ConcurrentPipeline::spawn(twin, Some(pool)).unwrap();
-    for frame in 0..300 {
-        for (id, pose) in scene.step(0.5) {
-            serial.queue_move(id, pose).unwrap();
-            concurrent.queue_move(id, pose).unwrap();
-        }
-        let detail = if frame % 7 == 0 {
-            Detail::TrianglePairs
-        } else {
-            Detail::Pairs
-        };
-        concurrent.request_frame(detail).unwrap();
-        let expected = sorted_triangles(serial.run_frame(detail));
-        let report = concurrent.receive_report().unwrap();
-        assert_eq!(report.stats.rejected_moves, 0);
-        assert_eq!(sorted_triangles(report), expected, "frame {frame}");
-    }
-    let first = *scene.bodies.keys().next().unwrap();
-    concurrent.remove(first).unwrap();
-    concurrent.queue_move(first, Isometry3::identity()).unwrap();
-    concurrent.request_frame(Detail::Pairs).unwrap();
-    assert_eq!(concurrent.receive_report().unwrap().stats.rejected_moves, 1);
-    // A new object placed across another one collides with it in the next frame.
-    let host = scene.bodies.values().nth(3).unwrap();
-    let guest = concurrent
-        .add(ObjectDesc {
-            model: Arc::clone(&host.model),
-            pose: host.pose * Translation3::new(0.05, 0.03, 0.02),
-            group: GroupId(host.group),
-            is_static: false,
-        })
-        .unwrap();
-    assert_eq!(guest.index(), first.index(), "the freed slot is reused");
-    concurrent.request_frame(Detail::Pairs).unwrap();
-    let report = concurrent.receive_report().unwrap();
-    assert!(
-        report
-            .colliding
-            .iter()
-            .any(|pair| pair.a == guest || pair.b == guest)
-    );
-    assert_eq!(concurrent.shutdown().len(), 25);
 }
 
 #[test]

@@ -1,0 +1,35 @@
+//! The DOP-tree: a bounding-volume tree of k-DOPs over a triangle mesh, and the simultaneous
+//! traversal of two such trees with lazy O(k) re-alignment (the paper's §2.1).
+//!
+//! A newcomer can read the files in the order a query uses them:
+//! - `tree`: the tree's layout and its public API ([`DopTree`]); `build` makes it, and
+//!   `node_bounds` holds the sphere and the box each node keeps besides its DOP;
+//! - `query`: a query's entry and the stages it goes through;
+//! - `pair_memory`: what the last queries of the same two trees left (temporal coherence), with
+//!   the `front` where the last walk ended and the `certificates` that keep its pairs apart;
+//! - `root_separation`: the cheap proof that the two roots are apart;
+//! - `realign`: B's nodes mapped into A's orientations in O(k), cached per query;
+//! - `traverse`: the depth-first walk over node pairs; `separation`: the tests beyond the DOPs
+//!   and the certificates they leave; `parallel`: the walk split across threads.
+
+mod build;
+mod certificates;
+mod front;
+mod node_bounds;
+mod pair_memory;
+mod parallel;
+mod query;
+mod realign;
+mod root_separation;
+mod separation;
+mod traverse;
+mod tree;
+
+pub use tree::{DEFAULT_LEAF_SIZE, DopTree};
+
+// The k-DOP tree re-aligned by brute force runs the same traversal with its own re-alignment.
+pub(crate) use realign::{Realign, rounding_margin};
+pub(crate) use traverse::TreePair;
+
+#[cfg(test)]
+mod tests;
