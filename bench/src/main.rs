@@ -3,6 +3,7 @@
 //! benchmark prints its table and, when asked, writes `--json FILE` and draws `--svg FILE`.
 
 mod args;
+mod baselines;
 mod bounce;
 mod e2e;
 mod echo;

@@ -107,6 +107,34 @@ pub(crate) fn brute_force_pairs(
     pairs
 }
 
+/// Whether any triangle pair intersects, by testing every pair whose boxes overlap: exhaustive
+/// like [`brute_force_pairs`] and sharing nothing with the trees but the triangle test, fast
+/// enough for meshes of thousands of triangles (B's boxes are sorted along x, so each triangle
+/// of A meets only the boxes of its own x-range).
+pub(crate) fn brute_force_hit(a: &TriMesh, b: &TriMesh, b_to_a: &Isometry3<f64>) -> bool {
+    let bounds = |t: &[Point3<f64>; 3]| {
+        let lo = t[0].coords.inf(&t[1].coords).inf(&t[2].coords);
+        let hi = t[0].coords.sup(&t[1].coords).sup(&t[2].coords);
+        (lo, hi)
+    };
+    let mut moved: Vec<_> = (0..b.triangles().len())
+        .map(|j| {
+            let t = b.triangle(j).map(|p| b_to_a * p);
+            (bounds(&t), t)
+        })
+        .collect();
+    moved.sort_unstable_by(|x, y| x.0.0.x.total_cmp(&y.0.0.x));
+    (0..a.triangles().len()).any(|i| {
+        let ta = a.triangle(i);
+        let (lo, hi) = bounds(&ta);
+        let end = moved.partition_point(|((b_lo, _), _)| b_lo.x <= hi.x);
+        moved[..end].iter().any(|((b_lo, b_hi), tb)| {
+            (0..3).all(|axis| b_hi[axis] >= lo[axis] && b_lo[axis] <= hi[axis])
+                && triangles_intersect(&ta, tb)
+        })
+    })
+}
+
 /// True when moving B by `epsilon` in some direction changes the brute-force answer.
 fn near_touching(a: &TriMesh, b: &TriMesh, pose: &Isometry3<f64>, epsilon: f64) -> bool {
     let answer = !brute_force_pairs(a, b, pose).is_empty();
@@ -142,8 +170,6 @@ fn check_all(a: &TriMesh, b: &TriMesh, poses: usize, reach: f64, seed: u64) -> u
             )
         })
         .collect();
-    let brute = (KdopBruteForceTree::build(a), KdopBruteForceTree::build(b));
-    let obb = (ObbTree::build(a), ObbTree::build(b));
     let parry = (ParryMesh::build(a), ParryMesh::build(b));
     let mut colliding = 0;
     let mut parry_disagreements = 0;
@@ -164,17 +190,11 @@ fn check_all(a: &TriMesh, b: &TriMesh, poses: usize, reach: f64, seed: u64) -> u
         let mut pairs = Vec::new();
         da.intersecting_pairs_parallel(db, &pose, &mut pairs, &mut stats);
         assert_eq!(sorted(pairs), expected, "parallel pairs");
-        assert_eq!(brute.0.intersects(&brute.1, &pose, &mut stats), hit, "kdop");
-        let mut pairs = Vec::new();
-        brute
-            .0
-            .intersecting_pairs(&brute.1, &pose, &mut pairs, &mut stats);
-        assert_eq!(sorted(pairs), expected, "kdop pairs");
-        assert_eq!(obb.0.intersects(&obb.1, &pose, &mut stats), hit, "obb");
-        let mut pairs = Vec::new();
-        obb.0
-            .intersecting_pairs(&obb.1, &pose, &mut pairs, &mut stats);
-        assert_eq!(sorted(pairs), expected, "obb pairs");
+        assert_eq!(
+            brute_force_hit(a, b, &pose),
+            hit,
+            "the filtered brute force"
+        );
         if parry.0.intersects(&parry.1, &pose, &mut stats) != hit {
             assert!(
                 near_touching(a, b, &pose, 1e-4),
@@ -217,16 +237,12 @@ fn tori_agree_with_brute_force_and_parry() {
 
 #[test]
 fn identical_touching_copies_collide() {
-    // Two copies at the identity share every triangle: every algorithm must report contact.
+    // Two copies at the identity share every triangle: the tree must report contact.
     let mesh = torus(0.35, 12, 6);
     let mut stats = QueryStats::default();
     let id = Isometry3::identity();
     let dop = DopTree::build(&mesh);
     assert!(dop.intersects(&dop, &id, &mut stats));
-    let obb = ObbTree::build(&mesh);
-    assert!(obb.intersects(&obb, &id, &mut stats));
-    let brute = KdopBruteForceTree::build(&mesh);
-    assert!(brute.intersects(&brute, &id, &mut stats));
     assert!(stats.tri_tests > 0 && stats.bv_tests > 0 && stats.realignments > 0);
 }
 
@@ -613,17 +629,16 @@ fn peg_sliding_down_a_hole(steps: usize, seed: u64) -> Vec<(usize, Isometry3<f64
 }
 
 #[test]
-fn split_sliding_queries_agree_with_the_obb_tree() {
+fn split_sliding_queries_agree_with_brute_force() {
     // A peg rocked slowly from one side of its hole to the other while it goes down: each step
     // is small enough for the query to carry the front, and the contact switches sides, far
     // from the last witness, so only a complete front finds it. The meshes are large enough for
     // hundreds of the front's pairs to be due, so that the queries split their walks across
-    // two threads (from the front and from the roots). An OBB-tree, which shares nothing with
-    // them but the triangle test, is the oracle.
+    // two threads (from the front and from the roots). The filtered brute force, which shares
+    // nothing with them but the triangle test, is the oracle.
     let peg = shapes::cylinder(0.44, 1.5, 6_000);
     let block = shapes::box_with_hole(2.0, 1.0, 0.5, 3_000);
     let (dp, db) = (DopTree::build(&peg), DopTree::build(&block));
-    let (op, ob) = (ObbTree::build(&peg), ObbTree::build(&block));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
@@ -640,7 +655,7 @@ fn split_sliding_queries_agree_with_the_obb_tree() {
             let off = 0.07 * (step as f64 * 0.15).sin();
             let centre = Vector3::new(off, 0.3 * off, 0.6 - 0.002 * step as f64);
             let q = Isometry3::from_parts(Translation3::from(centre), rotation);
-            let expected = ob.intersects(&op, &q, &mut QueryStats::default());
+            let expected = brute_force_hit(&block, &peg, &q);
             assert_both_ways(
                 DopTree::intersects_parallel,
                 (&db, &dp),

@@ -12,17 +12,17 @@ const PARALLEL_SLACK: f64 = 1e-6;
 /// A box fitted to a set of triangles: the OBB-tree's bounding volume, and the DOP-tree's second
 /// test near the leaves (`dop_tree::NodeBox`).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct OrientedBox {
+pub struct OrientedBox {
     /// Box axes as columns, in the mesh frame, by decreasing variance of the triangles.
-    pub(crate) axes: Matrix3<f64>,
-    pub(crate) center: Vector3<f64>,
+    pub axes: Matrix3<f64>,
+    pub center: Vector3<f64>,
     /// Half side lengths along the axes.
-    pub(crate) extents: Vector3<f64>,
+    pub extents: Vector3<f64>,
 }
 
 impl OrientedBox {
     /// The box fitted to the triangles `subset` of `triangles`.
-    pub(crate) fn fit(triangles: &[Triangle], subset: &[u32]) -> Self {
+    pub fn fit(triangles: &[Triangle], subset: &[u32]) -> Self {
         let axes = Self::fitted_axes(triangles, subset);
         let (lo, hi) = Self::local_range(&axes, triangles, subset);
         let scale = hi.abs().max().max(lo.abs().max());
@@ -36,7 +36,7 @@ impl OrientedBox {
 
     /// The axes of the box fitted to the triangles `subset`, as columns: the eigenvectors of
     /// their area-weighted covariance, by decreasing variance.
-    pub(crate) fn fitted_axes(triangles: &[Triangle], subset: &[u32]) -> Matrix3<f64> {
+    pub fn fitted_axes(triangles: &[Triangle], subset: &[u32]) -> Matrix3<f64> {
         // Area-weighted second moments of the triangles as surfaces.
         let mut area_sum = 0.0;
         let mut mean = Vector3::zeros();
@@ -64,7 +64,7 @@ impl OrientedBox {
 
     /// The lowest and highest projections of the corners of the triangles `subset` on each of
     /// `axes` (columns).
-    pub(crate) fn local_range(
+    pub fn local_range(
         axes: &Matrix3<f64>,
         triangles: &[Triangle],
         subset: &[u32],
@@ -80,7 +80,7 @@ impl OrientedBox {
     }
 
     /// The box's projection on `direction` (in its own frame) plus `offset`.
-    pub(crate) fn projection(&self, direction: &Vector3<f64>, offset: f64) -> (f64, f64) {
+    pub fn projection(&self, direction: &Vector3<f64>, offset: f64) -> (f64, f64) {
         let centre = self.center.dot(direction) + offset;
         let radius = (0..3)
             .map(|i| self.extents[i] * self.axes.column(i).dot(direction).abs())
@@ -91,7 +91,7 @@ impl OrientedBox {
     /// The 15-axis separating-axis test of this box against `other` posed by (rotation,
     /// translation) in this box's mesh frame: an axis, in that frame and not normalised, along
     /// which the boxes' projections are disjoint, or `None` when none of the 15 is.
-    pub(crate) fn separating_axis(
+    pub fn separating_axis(
         &self,
         other: &OrientedBox,
         rotation: &Matrix3<f64>,

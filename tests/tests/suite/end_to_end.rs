@@ -436,7 +436,10 @@ fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
             frame
         })
         .collect();
-    let answers = frames.iter().filter(|frame| frame.get("hand").is_some()).count();
+    let answers = frames
+        .iter()
+        .filter(|frame| frame.get("hand").is_some())
+        .count();
     let status = replay.wait_exit(PATIENCE).expect("the replay ends");
     assert!(status.success(), "{}", replay.log());
     assert!(

@@ -27,9 +27,10 @@ mod tree;
 
 pub use tree::{DEFAULT_LEAF_SIZE, DopTree};
 
-// The k-DOP tree re-aligned by brute force runs the same traversal with its own re-alignment.
-pub(crate) use realign::{Realign, rounding_margin};
-pub(crate) use traverse::TreePair;
+// The traversal is generic over how B's nodes are re-aligned, so that another method (the
+// benchmarks' k-DOP tree re-aligned by brute force) runs the very same walk.
+pub use realign::{Realign, rounding_margin};
+pub use traverse::TreePair;
 
 #[cfg(test)]
 mod tests;

@@ -13,7 +13,7 @@ use crate::collision::QueryStats;
 ///
 /// The result is stored *opposite*: `out[i]` is the support of B's node along `-n_i`, so that the
 /// nodes are disjoint along axis i exactly when `a[i] + out[i] < 0`.
-pub(crate) trait Realign<const K: usize>: Sync {
+pub trait Realign<const K: usize>: Sync {
     /// Writes the re-aligned offsets of node `node` of `b`.
     /// With `FUSED`, multiply-adds are fused (only where the CPU has FMA, or they become calls).
     fn realign<const FUSED: bool>(&self, b: &DopTree, node: usize, out: &mut [f32; K]);
@@ -126,7 +126,7 @@ impl<const K: usize> AffineRealign<K> {
 }
 
 /// A margin that bounds the `f32` rounding of re-aligned offsets of magnitude up to `scale`.
-pub(crate) fn rounding_margin(scale: f64) -> f32 {
+pub fn rounding_margin(scale: f64) -> f32 {
     (scale * 64.0 * f32::EPSILON as f64) as f32
 }
 

@@ -20,7 +20,7 @@ use crate::collision::QueryStats;
 use crate::collision::triangle::{Triangle, triangles_intersect};
 
 /// One query between two DOP-trees: B's pose in A's frame and the re-alignment method.
-pub(crate) struct TreePair<'a, R> {
+pub struct TreePair<'a, R> {
     pub(super) a: &'a DopTree,
     pub(super) b: &'a DopTree,
     pub(super) rotation: Matrix3<f64>,
@@ -78,7 +78,7 @@ pub(super) struct Found {
 impl<'a, R> TreePair<'a, R> {
     /// Prepares a query of `b` posed at `b_to_a` in `a`'s frame; `realigner` is made from the
     /// rotation and translation.
-    pub(crate) fn new(
+    pub fn new(
         a: &'a DopTree,
         b: &'a DopTree,
         b_to_a: &Isometry3<f64>,
@@ -142,7 +142,7 @@ impl<'a, R> TreePair<'a, R> {
 impl<R> TreePair<'_, R> {
     /// Runs the query from the root pair, sequentially or split across threads. Returns the
     /// first pair of leaves found with intersecting triangles (node indices of A and B), if any.
-    pub(crate) fn run<const ALL: bool, const K: usize>(
+    pub fn run<const ALL: bool, const K: usize>(
         &self,
         stats: &mut QueryStats,
         out: &mut Vec<[u32; 2]>,

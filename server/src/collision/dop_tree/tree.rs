@@ -106,7 +106,7 @@ impl DopTree {
     }
 
     /// The `k` offsets of node `index`.
-    pub(crate) fn node_offsets(&self, index: usize) -> &[f32] {
+    pub fn node_offsets(&self, index: usize) -> &[f32] {
         &self.offsets[index * self.k..(index + 1) * self.k]
     }
 
@@ -125,7 +125,7 @@ impl DopTree {
     }
 
     /// Largest absolute offset of any node.
-    pub(crate) fn max_abs_offset(&self) -> f32 {
+    pub fn max_abs_offset(&self) -> f32 {
         self.max_abs_offset
     }
 

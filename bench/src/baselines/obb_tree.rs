@@ -10,10 +10,10 @@
 
 use nalgebra::{Isometry3, Point3};
 
-use super::oriented_box::OrientedBox;
-use super::triangle::{Triangle, triangles_intersect};
-use super::{MeshCollider, QueryStats};
-use crate::geometry::TriMesh;
+use vas_server::collision::oriented_box::OrientedBox;
+use vas_server::collision::triangle::{Triangle, triangles_intersect};
+use vas_server::collision::{MeshCollider, QueryStats};
+use vas_server::geometry::TriMesh;
 
 /// A node: an oriented box; a leaf (`count > 0`) owns triangles `first..first + count`, an inner
 /// node has children `first` and `first + 1`.
@@ -42,11 +42,6 @@ pub struct ObbTree {
 }
 
 impl ObbTree {
-    /// Number of nodes.
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
-
     /// Heap bytes used by the tree.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<ObbNode>()

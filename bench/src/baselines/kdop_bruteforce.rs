@@ -9,10 +9,10 @@
 
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
-use super::dop_tree::{DopTree, Realign, TreePair, rounding_margin};
-use super::orientation::OrientationSet;
-use super::{MeshCollider, QueryStats};
-use crate::geometry::TriMesh;
+use vas_server::collision::dop_tree::{DopTree, Realign, TreePair, rounding_margin};
+use vas_server::collision::orientation::OrientationSet;
+use vas_server::collision::{MeshCollider, QueryStats};
+use vas_server::geometry::TriMesh;
 
 /// A DOP-tree queried with brute-force (vertex transform) re-alignment.
 #[derive(Debug, Clone)]
