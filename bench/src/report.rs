@@ -294,10 +294,17 @@ where
         .y_label_area_size(80)
         .build_cartesian_2d(x, y)
         .map_err(err)?;
+    // A few labels per axis, written as the tables write numbers: a logarithmic axis over a
+    // decade or two would otherwise label every minor tick, one over the other.
+    let tick = |value: &f64| format_number(*value);
     chart
         .configure_mesh()
         .x_desc(plot.x_label.as_str())
         .y_desc(plot.y_label.as_str())
+        .x_labels(8)
+        .y_labels(8)
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
         .draw()
         .map_err(err)?;
     for (index, series) in plot.series.iter().enumerate() {

@@ -136,6 +136,8 @@ pub struct InputStats {
     pub glove_samples_clamped: u64,
     /// Flex values clamped into the joint limits, over all glove samples.
     pub glove_values_clamped: u64,
+    /// Tracker samples rejected for a position beyond [`MAX_POSITION_M`](crate::MAX_POSITION_M).
+    pub tracker_rejected_out_of_range: u64,
 }
 
 impl InputStats {
@@ -143,6 +145,7 @@ impl InputStats {
     pub fn rejected(&self) -> u64 {
         self.tracker_rejected_non_finite
             + self.tracker_rejected_quaternion
+            + self.tracker_rejected_out_of_range
             + self.glove_rejected_non_finite
     }
 }
@@ -176,7 +179,7 @@ pub struct PartDescription {
 /// One flat type for every request kind: the fields a kind does not use are zero. Every response
 /// carries the scene summary and the input counters, so any request doubles as a status query.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("vas::control::ControlResponse::v1")]
+#[type_name("vas::control::ControlResponse::v2")]
 #[repr(C)]
 pub struct ControlResponse {
     /// A [`ControlStatus`] code.

@@ -21,6 +21,12 @@ pub const FLEX_COUNT: usize = 22;
 /// quaternions are renormalised.
 pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-3;
 
+/// The largest accepted magnitude of a position coordinate, in metres: a thousand kilometres,
+/// far beyond any workspace, and small enough that every pose derived from accepted ones (the
+/// cart and the hand combined, a segment placed on the hand) stays finite, also in the single
+/// precision of the collision structures.
+pub const MAX_POSITION_M: f64 = 1e6;
+
 /// One 6-DOF tracker report: the hand root and the cart (navigation) pose.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
 #[type_name("vas::input::TrackerSample::v1")]
@@ -61,6 +67,14 @@ pub enum InputRejection {
     NonFinite {
         /// The offending field, e.g. `hand.position` or `flex[3]`.
         field: &'static str,
+    },
+    /// A position coordinate is finite but beyond [`MAX_POSITION_M`].
+    #[error("{field} is beyond {MAX_POSITION_M} m (found {value})")]
+    OutOfRange {
+        /// The offending field, `hand.position` or `cart.position`.
+        field: &'static str,
+        /// The coordinate received.
+        value: f64,
     },
     /// A rotation is not a unit quaternion within [`UNIT_QUATERNION_TOLERANCE`].
     #[error("{field} is not a unit quaternion (norm {norm})")]
@@ -139,6 +153,12 @@ fn validate_pose(
     if !pose.position.iter().all(|v| v.is_finite()) {
         return Err(InputRejection::NonFinite {
             field: position_field,
+        });
+    }
+    if let Some(&value) = pose.position.iter().find(|v| v.abs() > MAX_POSITION_M) {
+        return Err(InputRejection::OutOfRange {
+            field: position_field,
+            value,
         });
     }
     if !pose.rotation.iter().all(|v| v.is_finite()) {

@@ -60,7 +60,7 @@ pub use control::{
 };
 pub use input::{
     FLEX_COUNT, FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, GloveSample, GloveTarget, InputRejection,
-    TrackerSample, TrackerTarget, UNIT_QUATERNION_TOLERANCE,
+    MAX_POSITION_M, TrackerSample, TrackerTarget, UNIT_QUATERNION_TOLERANCE,
 };
 pub use output::{
     EventKind, ForceFrame, GraspType, HAND_PART_ID, HandFrame, HandSegment, InputStamp,

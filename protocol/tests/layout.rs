@@ -44,9 +44,9 @@ fn control_types_keep_their_layout() {
     assert_layout::<WireText<MAX_PATH_BYTES>>(516, 4);
     assert_layout::<WireText<MAX_STATUS_MESSAGE_BYTES>>(260, 4);
     assert_layout::<ControlRequest>(524, 4);
-    assert_layout::<InputStats>(56, 8);
+    assert_layout::<InputStats>(64, 8);
     assert_layout::<PartDescription>(720, 8);
-    assert_layout::<ControlResponse>(1640, 8);
+    assert_layout::<ControlResponse>(1648, 8);
     assert_eq!(offset_of!(ControlResponse, part), 600);
     assert_eq!(offset_of!(ControlResponse, stats), 1320);
 }
@@ -88,7 +88,7 @@ fn payload_type_names_are_versioned() {
             "vas::output::SimEvent::v1",
             "vas::output::ForceFrame::v1",
             "vas::control::ControlRequest::v1",
-            "vas::control::ControlResponse::v1",
+            "vas::control::ControlResponse::v2",
         ]
     );
 }

@@ -231,12 +231,13 @@ fn replay_inputs(
     inputs: &[HandInput],
     rejected: usize,
 ) -> Result<OfflineRun, OfflineError> {
-    let hand_file = scene
-        .hand
-        .as_ref()
-        .ok_or_else(|| OfflineError::NoHand(scene.name.clone()))?;
-    let model =
-        Arc::new(HandModel::load(hand_file).map_err(|e| OfflineError::Hand(e.to_string()))?);
+    let model = Arc::clone(
+        &scene
+            .hand
+            .as_ref()
+            .ok_or_else(|| OfflineError::NoHand(scene.name.clone()))?
+            .model,
+    );
     let first = inputs.first().ok_or(OfflineError::NoTracker)?;
     let params = scene.params.grasp();
     let hand = GraspingHand::new(

@@ -79,6 +79,11 @@ impl InterestMatrix {
             .retain(|&(a, b)| a != object && b != object);
     }
 
+    /// How many groups the matrix has rows for: one more than the highest group id of a rule.
+    pub fn group_count(&self) -> usize {
+        self.group_count
+    }
+
     /// True when the pair must be tested.
     pub fn is_interesting(&self, a: &InterestKey, b: &InterestKey) -> bool {
         if a.is_static && b.is_static {

@@ -70,6 +70,43 @@ pub enum GeometryError {
     },
 }
 
+/// The largest mesh file read: 4 GiB, more than a 20-million-triangle binary STL.
+pub const MAX_MESH_FILE_BYTES: u64 = 4 << 30;
+
+/// The largest config file (scene, hand model) read: 16 MiB.
+pub const MAX_CONFIG_FILE_BYTES: u64 = 16 << 20;
+
+/// Reads a whole file of at most `limit` bytes, refusing anything but a regular file: a FIFO
+/// would block the reader until a writer comes (forever, for a server's I/O thread), and a
+/// device such as `/dev/zero` never ends. Symbolic links are followed to what they name.
+pub fn read_regular_file(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+    use std::io::Read;
+    let kind = std::fs::metadata(path)?.file_type();
+    if !kind.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "not a regular file (a directory, FIFO, socket or device)",
+        ));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(limit + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(io::Error::new(
+            io::ErrorKind::FileTooLarge,
+            format!("larger than the {limit} bytes a file may have"),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// [`read_regular_file`] for UTF-8 text.
+pub fn read_regular_text(path: &Path, limit: u64) -> io::Result<String> {
+    String::from_utf8(read_regular_file(path, limit)?)
+        .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
+
 /// Loads a triangle mesh from an `.obj` or `.stl` (binary or ASCII) file, chosen by extension.
 ///
 /// All objects and groups of an OBJ file become one mesh that keeps the file's vertex sharing;
@@ -89,10 +126,11 @@ pub fn load_mesh(path: &Path) -> Result<TriMesh, GeometryError> {
             });
         }
     };
-    let bytes = std::fs::read(path).map_err(|source| GeometryError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes =
+        read_regular_file(path, MAX_MESH_FILE_BYTES).map_err(|source| GeometryError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
     let (vertices, triangles) = parse(&bytes).map_err(|reason| GeometryError::Parse {
         path: path.to_owned(),
         reason,

@@ -47,6 +47,14 @@ pub enum MeshError {
         /// Index of the offending vertex.
         index: usize,
     },
+    /// A vertex coordinate is finite but beyond [`MAX_COORDINATE`].
+    #[error("vertex {index} has a coordinate of {value}, beyond {MAX_COORDINATE}")]
+    CoordinateTooLarge {
+        /// Index of the offending vertex.
+        index: usize,
+        /// The coordinate.
+        value: f64,
+    },
     /// A triangle refers to a vertex that does not exist.
     #[error(
         "triangle {triangle} refers to vertex {vertex}, but there are only {vertex_count} vertices"
@@ -64,7 +72,13 @@ pub enum MeshError {
     TooManyVertices(usize),
 }
 
-/// An indexed triangle mesh with finite coordinates and no degenerate triangles.
+/// The largest magnitude of a mesh coordinate. What is derived from coordinates (extents,
+/// squared lengths and their squares, single-precision bounds of the collision structures)
+/// stays finite below it; a kilometre-sized part in micrometres still fits.
+pub const MAX_COORDINATE: f64 = 1e9;
+
+/// An indexed triangle mesh with finite coordinates within [`MAX_COORDINATE`] and no degenerate
+/// triangles.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriMesh {
     vertices: Vec<Point>,
@@ -81,7 +95,8 @@ pub struct CleanupReport {
 impl TriMesh {
     /// Builds a mesh, checking coordinates and indices and dropping degenerate triangles.
     ///
-    /// Fails if a coordinate is not finite, an index is out of range, or no triangle is left.
+    /// Fails if a coordinate is not finite or beyond [`MAX_COORDINATE`], an index is out of
+    /// range, or no triangle is left.
     pub fn new(
         vertices: Vec<Point>,
         triangles: Vec<[u32; 3]>,
@@ -94,6 +109,14 @@ impl TriMesh {
             .position(|v| !v.coords.iter().all(|c| c.is_finite()))
         {
             return Err(MeshError::NonFiniteVertex { index });
+        }
+        if let Some((index, value)) = vertices.iter().enumerate().find_map(|(index, v)| {
+            v.coords
+                .iter()
+                .find(|c| c.abs() > MAX_COORDINATE)
+                .map(|&value| (index, value))
+        }) {
+            return Err(MeshError::CoordinateTooLarge { index, value });
         }
         for (triangle, t) in triangles.iter().enumerate() {
             if let Some(&vertex) = t.iter().find(|&&i| i as usize >= vertices.len()) {

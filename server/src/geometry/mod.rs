@@ -9,6 +9,8 @@ pub mod weld;
 
 pub use adjacency::EdgeAdjacency;
 pub use hull::{ConvexHull, HullSource};
-pub use io::{GeometryError, load_mesh, parse_mesh_spec, write_obj};
+pub use io::{
+    GeometryError, MAX_CONFIG_FILE_BYTES, load_mesh, parse_mesh_spec, read_regular_text, write_obj,
+};
 pub use mesh::{CleanupReport, MeshError, Point, TriMesh, bounding_box_of, bounding_sphere_of};
 pub use weld::weld;

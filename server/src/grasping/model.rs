@@ -675,10 +675,11 @@ impl HandModel {
 }
 
 fn read_hand_file(path: &Path) -> Result<HandFile, HandConfigError> {
-    let text = std::fs::read_to_string(path).map_err(|source| HandConfigError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::geometry::read_regular_text(path, crate::geometry::MAX_CONFIG_FILE_BYTES)
+        .map_err(|source| HandConfigError::Io {
+            file: path.to_path_buf(),
+            source,
+        })?;
     toml::from_str(&text).map_err(|source| HandConfigError::Syntax {
         file: path.to_path_buf(),
         source: Box::new(source),

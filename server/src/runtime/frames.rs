@@ -10,7 +10,7 @@ use super::interaction::HeldPart;
 use super::rendezvous::{Coalesce, Work};
 use super::verify::HandBodies;
 use crate::grasping::{
-    GraspEvent, GraspType, GraspingHand, HandFrame, HandInput, HandModel, HandPose, PartId,
+    GraspEvent, GraspType, GraspingHand, HandFrame, HandInput, HandPose, PartId,
 };
 use crate::scene::Scene;
 use crate::sliding::{Metaphor, Wrench};
@@ -168,22 +168,19 @@ pub struct Restart {
 /// Why a scene's hand could not be set up.
 #[derive(Debug, thiserror::Error)]
 pub enum HandSetupError {
-    /// The hand model file is invalid.
-    #[error(transparent)]
-    Model(#[from] crate::grasping::HandConfigError),
     /// A segment's collision mesh could not be built.
     #[error("the hand model's segment meshes cannot be built: {0}")]
     Segments(String),
 }
 
 impl Restart {
-    /// Everything the loops need to start over on `scene`: the hand model it names (if any)
-    /// loaded, validated and built, parked flat at the origin.
+    /// Everything the loops need to start over on `scene`: the hand model it names (if any,
+    /// loaded and validated with the scene) built, parked flat at the origin.
     pub fn new(scene: Arc<Scene>, epoch: u64) -> Result<Restart, HandSetupError> {
         let (hand, hand_bodies) = match &scene.hand {
             None => (None, None),
-            Some(path) => {
-                let model = Arc::new(HandModel::load(path)?);
+            Some(scene_hand) => {
+                let model = Arc::clone(&scene_hand.model);
                 let params = scene.params.grasp();
                 let parked = HandPose {
                     root: Isometry3::identity(),

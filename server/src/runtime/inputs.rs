@@ -39,6 +39,9 @@ impl Inputs {
                     InputRejection::NotUnitQuaternion { .. } => {
                         self.stats.tracker_rejected_quaternion += 1;
                     }
+                    InputRejection::OutOfRange { .. } => {
+                        self.stats.tracker_rejected_out_of_range += 1;
+                    }
                 }
                 Err(rejection)
             }
@@ -172,6 +175,30 @@ mod tests {
         let root = frame.input.cart * frame.input.tracker;
         assert!((root.translation.vector - turned.translation.vector).norm() < 1e-12);
         assert!(root.rotation.angle_to(&turned.rotation) < 1e-9);
+    }
+
+    #[test]
+    fn positions_whose_combination_would_overflow_are_rejected_and_counted() {
+        // Each coordinate finite, their sum infinite: the combined root was once published as
+        // [null, null, null].
+        let mut inputs = Inputs::default();
+        inputs
+            .apply_tracker(&tracker(1, at(0.1, 0.0, 1.0), WirePose::IDENTITY))
+            .expect("valid");
+        let far = tracker(2, at(1e308, 1e308, 1e308), at(1e308, 1e308, 1e308));
+        assert!(matches!(
+            inputs.apply_tracker(&far),
+            Err(InputRejection::OutOfRange { value, .. }) if value == 1e308
+        ));
+        let stats = inputs.stats();
+        assert_eq!(
+            (stats.tracker_accepted, stats.tracker_rejected_out_of_range),
+            (1, 1)
+        );
+        assert_eq!(stats.rejected(), 1);
+        let root = inputs.frame().input.cart * inputs.frame().input.tracker;
+        assert!(root.translation.vector.iter().all(|c| c.is_finite()));
+        assert!((root.translation.vector - Vector3::new(0.1, 0.0, 1.0)).norm() < 1e-12);
     }
 
     #[test]

@@ -20,17 +20,12 @@ use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOU
 
 use super::frames::{CandidateFrame, Event, VerifiedFrame, VerifiedPart, wire_grasp};
 use crate::collision::DopTree;
-use crate::collision::interest::GroupId;
 use crate::collision::pipeline::{
     CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
 };
 use crate::geometry::{ConvexHull, TriMesh};
 use crate::grasping::{FlexVector, GraspEvent, GraspingHand, HandModel, PartId};
 use crate::scene::Scene;
-
-/// The collision group of the hand's segments: one of their own, never tested among themselves
-/// (neighbouring segments touch at their joints by design).
-const HAND_GROUP: GroupId = GroupId(u16::MAX - 1);
 
 /// How often a frame is checked again after putting objects back before every moved object is
 /// put back (a put-back object is free where it was, so the second pass settles all but chains
@@ -111,8 +106,12 @@ impl Verifier {
                     .expect("a validated scene's poses are valid and its parts fit")
             })
             .collect();
+        // The hand's segments get a group of their own, never tested among themselves
+        // (neighbouring segments touch at their joints by design): the one after the scene's,
+        // so that the interest matrix stays as small as the scene's groups.
+        let hand_group = scene.groups.spare_id();
         let mut interest = scene.interest_matrix(&parts);
-        interest.disallow_groups(HAND_GROUP, HAND_GROUP);
+        interest.disallow_groups(hand_group, hand_group);
         let hand = hand.map(|bodies| {
             let poses = bodies.model.segment_poses(&[0.0; vas_protocol::FLEX_COUNT]);
             let segments = bodies
@@ -125,7 +124,7 @@ impl Verifier {
                         .add(ObjectDesc {
                             model: model(mesh, tree),
                             pose,
-                            group: HAND_GROUP,
+                            group: hand_group,
                             is_static: false,
                         })
                         .expect("segment poses of a flat hand are valid")
@@ -525,6 +524,12 @@ mod tests {
         assert_eq!(hand.geometry().tree(0).orientations().k(), k);
         assert_eq!(scene.parts[0].tree().orientations().k(), k);
         let mut verifier = Verifier::new(scene, Some(HandBodies::of(model, &hand)));
+        // One group more than the scene's, for the hand: the matrix stays tiny (a group id near
+        // u16::MAX once made it 4 GiB of address space).
+        assert_eq!(
+            verifier.pipeline.interest().group_count(),
+            scene.groups.names.len() + 1
+        );
         let poses: Vec<_> = scene.parts.iter().map(|part| part.pose).collect();
         let above = Isometry3::from(Translation3::new(0.0, 0.0, 0.3));
         let mut free = candidate(poses.clone());

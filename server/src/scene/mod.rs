@@ -51,8 +51,10 @@ use crate::collision::interest::{GroupId, InterestMatrix};
 use crate::collision::pipeline::ObjectId;
 use crate::collision::{DopTree, OrientationSet};
 use crate::geometry::shapes::ShapeSpec;
-use crate::geometry::{GeometryError, Point, TriMesh, load_mesh};
-use crate::grasping::PartGeometry;
+use crate::geometry::{
+    GeometryError, MAX_CONFIG_FILE_BYTES, Point, TriMesh, load_mesh, read_regular_text,
+};
+use crate::grasping::{HandModel, PartGeometry};
 use params::Problem;
 pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates};
 
@@ -112,14 +114,23 @@ pub struct Scene {
     pub source: PathBuf,
     /// The parts; a part's id is its index here.
     pub parts: Vec<Part>,
-    /// The hand model file, resolved against the scene's folder; it exists.
-    pub hand: Option<PathBuf>,
+    /// The hand model the scene names, loaded and validated with it.
+    pub hand: Option<SceneHand>,
     /// Parameters of the algorithms.
     pub params: AlgorithmParams,
     /// Rates of the runtime loops.
     pub rates: Rates,
     /// The collision interest groups.
     pub groups: Groups,
+}
+
+/// The hand model of a scene: its file, resolved against the scene's folder, and the model.
+#[derive(Debug, Clone)]
+pub struct SceneHand {
+    /// The hand model file.
+    pub path: PathBuf,
+    /// The model loaded from it.
+    pub model: Arc<HandModel>,
 }
 
 /// One part of a scene.
@@ -212,6 +223,12 @@ impl Groups {
         )
     }
 
+    /// A collision group of no part: the one after the scene's groups (the hand's segments get
+    /// it). Loading caps a scene's groups below `u16::MAX`.
+    pub fn spare_id(&self) -> GroupId {
+        GroupId(u16::try_from(self.names.len()).expect("a scene has fewer than u16::MAX groups"))
+    }
+
     /// True unless the config lists the pair of groups (in either order) as not of interest.
     pub fn of_interest(&self, a: &str, b: &str) -> bool {
         let pair = sorted_pair(a, b);
@@ -289,10 +306,11 @@ impl Scene {
     /// Loads and validates the scene config at `path`. Mesh paths (and the hand model) are
     /// relative to the config's folder.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-            file: path.to_owned(),
-            source,
-        })?;
+        let text =
+            read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| SceneError::Read {
+                file: path.to_owned(),
+                source,
+            })?;
         let file: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Syntax {
             file: path.to_owned(),
             message: describe_toml_error(&text, &e),
@@ -419,7 +437,7 @@ impl Scene {
             "hand: {}",
             self.hand
                 .as_ref()
-                .map_or("none".to_owned(), |h| h.display().to_string())
+                .map_or("none".to_owned(), |h| h.path.display().to_string())
         );
         s
     }
@@ -489,6 +507,16 @@ impl Loader<'_> {
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
+        if names.len() >= usize::from(u16::MAX) {
+            return Err(self.invalid(
+                "parts",
+                format!(
+                    "name {} collision groups; at most {} fit",
+                    names.len(),
+                    u16::MAX - 1
+                ),
+            ));
+        }
         let mut not_of_interest = Vec::with_capacity(file.groups.not_of_interest.len());
         for (index, [a, b]) in file.groups.not_of_interest.iter().enumerate() {
             if let Some(unknown) = [a, b].into_iter().find(|g| !names.contains(g)) {
@@ -518,16 +546,17 @@ impl Loader<'_> {
             }
         }
 
+        // Loaded here, so that whatever loads a scene (check-scene, run, a load-scene request)
+        // refuses a broken hand model the same way.
         let hand = match file.hand {
             Some(hand) => {
-                let resolved = self.folder.join(&hand);
-                if !resolved.is_file() {
-                    return Err(self.invalid(
-                        "hand",
-                        format!("hand model file {} does not exist", resolved.display()),
-                    ));
-                }
-                Some(resolved)
+                let path = self.folder.join(&hand);
+                let model = HandModel::load(&path)
+                    .map_err(|error| self.invalid("hand", error.to_string()))?;
+                Some(SceneHand {
+                    path,
+                    model: Arc::new(model),
+                })
             }
             None => None,
         };
@@ -555,10 +584,16 @@ impl Loader<'_> {
         if part.group.trim().is_empty() {
             return Err(self.invalid(key("group"), "must not be empty"));
         }
-        if let Some(c) = part.position.iter().find(|c| !c.is_finite()) {
+        // The bound of tracker input: every pose derived from a part's stays finite.
+        let limit = vas_protocol::MAX_POSITION_M;
+        if let Some(c) = part
+            .position
+            .iter()
+            .find(|c| !c.is_finite() || c.abs() > limit)
+        {
             return Err(self.invalid(
                 key("position"),
-                format!("coordinates must be finite, not {c}"),
+                format!("coordinates must be finite and within {limit} m, not {c}"),
             ));
         }
         let rotation = match part.rotation {

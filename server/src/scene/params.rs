@@ -70,14 +70,18 @@ impl Default for Rates {
 /// Highest accepted loop rate (10 kHz, well above haptic rates of 1 kHz).
 const MAX_RATE_HZ: f64 = 10_000.0;
 
-/// Checks that a value is a positive finite number of at most `max`.
-fn within(key: &str, value: f64, max: f64, unit: &str) -> Result<(), Problem> {
-    if value.is_finite() && value > 0.0 && value <= max {
+/// Lowest accepted loop rate: a frame every ten seconds (a rate whose period no timer can
+/// hold, such as 1e-300 Hz, would pass a mere positivity check and fail when the loops start).
+const MIN_RATE_HZ: f64 = 0.1;
+
+/// Checks that a value is a finite number in `[min, max]`.
+fn within(key: &str, value: f64, (min, max): (f64, f64), unit: &str) -> Result<(), Problem> {
+    if value.is_finite() && (min..=max).contains(&value) {
         Ok(())
     } else {
         Err(Problem {
             key: key.to_owned(),
-            reason: format!("must be positive and at most {max} {unit}, not {value}"),
+            reason: format!("must be between {min} and {max} {unit}, not {value}"),
         })
     }
 }
@@ -116,7 +120,7 @@ impl AlgorithmParams {
 }
 
 impl Rates {
-    /// Checks that every rate is positive, finite and at most 10 kHz.
+    /// Checks that every rate is finite, at least 0.1 Hz and at most 10 kHz.
     pub(crate) fn validate(&self) -> Result<(), Problem> {
         [
             ("rates.publish_hz", self.publish_hz),
@@ -125,7 +129,7 @@ impl Rates {
             ("rates.grasping_hz", self.grasping_hz),
         ]
         .into_iter()
-        .try_for_each(|(key, value)| within(key, value, MAX_RATE_HZ, "Hz"))
+        .try_for_each(|(key, value)| within(key, value, (MIN_RATE_HZ, MAX_RATE_HZ), "Hz"))
     }
 }
 

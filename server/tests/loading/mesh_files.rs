@@ -349,3 +349,45 @@ proptest! {
         }
     }
 }
+
+/// Runs `load` on another thread and returns its error message; fails the test if it takes
+/// longer than a patient timeout (a FIFO once blocked its reader forever) or succeeds.
+fn refusal_within_a_timeout<T: Send + 'static, E: std::fmt::Display + Send + 'static>(
+    load: impl FnOnce() -> Result<T, E> + Send + 'static,
+) -> String {
+    let (sender, receiver) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = sender.send(load().err().map(|error| error.to_string()));
+    });
+    receiver
+        .recv_timeout(std::time::Duration::from_secs(30))
+        .expect("the load ended")
+        .expect("the load was refused")
+}
+
+#[test]
+fn only_regular_files_are_read() {
+    let dir = scratch("not_regular");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("folder.obj")).unwrap();
+    let fifo = dir.join("pipe.obj");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+    let zero = dir.join("zero.obj");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    for path in [fifo.clone(), zero, dir.join("folder.obj")] {
+        let message = refusal_within_a_timeout(move || load_mesh(&path));
+        assert!(message.contains("not a regular file"), "{message}");
+    }
+    let scene_fifo = dir.join("scene.toml");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&scene_fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+    let message = refusal_within_a_timeout(move || vas_server::scene::Scene::load(&scene_fifo));
+    assert!(message.contains("not a regular file"), "{message}");
+}

@@ -196,7 +196,7 @@ mesh = "models/bunny.obj"
 movable = true
 "#,
     );
-    write(&dir, "hand.toml", "# a hand model\n");
+    std::fs::copy(configs().join("hands/right.toml"), dir.join("hand.toml")).unwrap();
     let scene = Scene::load(&path).unwrap();
     let original = load_mesh(&bunny).unwrap();
     let [one, two, three] = [0, 1, 2].map(|i| &scene.parts[i]);
@@ -215,7 +215,10 @@ movable = true
     assert!((two.pose.rotation.angle() - std::f64::consts::FRAC_PI_2).abs() < 1e-6);
     assert!((two.pose.rotation.quaternion().norm() - 1.0).abs() < 1e-15);
     assert_eq!(three.group, "default");
-    assert_eq!(scene.hand, Some(dir.join("hand.toml")));
+    assert_eq!(
+        scene.hand.as_ref().map(|hand| hand.path.clone()),
+        Some(dir.join("hand.toml"))
+    );
     assert_eq!(scene.params.dop_orientations, 26);
     // Parts with one mesh share one tree (built once, on first use), with the scene's
     // orientations.
@@ -449,7 +452,7 @@ fn inconsistent_parts_are_refused() {
     refused(
         "missing_hand",
         &format!("name = \"s\"\nhand = \"hands/left.toml\"\n{PEG}"),
-        &["hand", "hands/left.toml", "does not exist"],
+        &["hand", "hands/left.toml", "No such file"],
     );
     refused("not_toml", "name = \n", &["line 1"]);
 }
@@ -601,4 +604,67 @@ fn unknown_parts_in_the_interest_matrix_are_refused() {
         &format!("name = \"s\"\n[groups]\nparts_not_of_interest = [[\"peg\", \"peg\"]]\n{PEG}"),
         &["groups.parts_not_of_interest[0]", "twice"],
     );
+}
+
+/// Scenes whose derived values would overflow: a scale that makes the mesh's coordinates huge
+/// (once accepted, then a NaN bound killed the server), a vertex at 1e308, a part placed out of
+/// any workspace, a rate whose period no timer holds, and an empty hand model file: each is
+/// refused at load with its key, so that check-scene, run and load-scene refuse it alike.
+#[test]
+fn scenes_whose_derived_values_would_overflow_are_refused() {
+    let dir = scratch_dir("overflow");
+    write(&dir, "far.obj", "v 0 0 0\nv 1 0 0\nv 1e308 1 0\nf 1 2 3\n");
+    write(&dir, "unit.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write(&dir, "empty_hand.toml", "");
+    let part =
+        |extra: &str| format!("name = \"s\"\n[[parts]]\nname = \"p\"\nmovable = true\n{extra}\n");
+    for (test, contents, needles) in [
+        (
+            "huge_scale",
+            part("mesh = \"unit.obj\"\nscale = 1e300"),
+            &["parts[0].mesh", "beyond"][..],
+        ),
+        (
+            "scale_1e120",
+            part("mesh = \"unit.obj\"\nscale = 1e120"),
+            &["parts[0].mesh", "beyond"],
+        ),
+        (
+            "far_vertex",
+            part("mesh = \"far.obj\""),
+            &["parts[0].mesh", "beyond"],
+        ),
+        (
+            "far_part",
+            part("mesh = \"unit.obj\"\nposition = [1e300, 0, 0]"),
+            &["parts[0].position", "within"],
+        ),
+        (
+            "slow_publish",
+            format!(
+                "{}[rates]\npublish_hz = 1e-300\n",
+                part("mesh = \"unit.obj\"")
+            ),
+            &["rates.publish_hz"],
+        ),
+        (
+            "empty_hand",
+            format!(
+                "hand = \"empty_hand.toml\"\n{}",
+                part("mesh = \"unit.obj\"")
+            ),
+            &["hand"],
+        ),
+    ] {
+        let path = write(&dir, &format!("{test}.toml"), &contents);
+        let message = Scene::load(&path)
+            .expect_err("the scene must be refused")
+            .to_string();
+        for needle in needles {
+            assert!(
+                message.contains(needle),
+                "{test}: {needle:?} not in: {message}"
+            );
+        }
+    }
 }
