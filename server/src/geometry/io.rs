@@ -107,6 +107,30 @@ pub fn read_regular_text(path: &Path, limit: u64) -> io::Result<String> {
         .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
 }
 
+/// The longest excerpt of a file that an error message quotes, in characters.
+const MAX_EXCERPT_CHARS: usize = 120;
+
+/// A config's TOML error in one line: the line number, the offending line (cut to
+/// [`MAX_EXCERPT_CHARS`], so that a file of one 50 MB line does not come back as a 50 MB
+/// message) and the parser's reason.
+pub fn describe_toml_error(text: &str, error: &toml::de::Error) -> String {
+    let reason = error.message().trim();
+    match error.span() {
+        Some(span) => {
+            let start = span.start.min(text.len());
+            let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+            let line_number = text[..start].matches('\n').count() + 1;
+            let line = text[line_start..].lines().next().unwrap_or("").trim();
+            let mut excerpt: String = line.chars().take(MAX_EXCERPT_CHARS).collect();
+            if excerpt.len() < line.len() {
+                excerpt.push('…');
+            }
+            format!("line {line_number} (`{excerpt}`): {reason}")
+        }
+        None => reason.to_owned(),
+    }
+}
+
 /// Loads a triangle mesh from an `.obj` or `.stl` (binary or ASCII) file, chosen by extension.
 ///
 /// All objects and groups of an OBJ file become one mesh that keeps the file's vertex sharing;
@@ -148,6 +172,31 @@ pub fn load_mesh(path: &Path) -> Result<TriMesh, GeometryError> {
         );
     }
     Ok(mesh)
+}
+
+/// A binary STL (one that does not begin as ASCII STL does) must hold exactly the triangles its
+/// header counts: the reader stops at the count, so a count smaller than the data would drop
+/// triangles silently.
+fn check_binary_stl_length(bytes: &[u8]) -> Result<(), String> {
+    /// The header's 80 bytes and the triangle count's 4; then 50 bytes a triangle.
+    const HEADER: usize = 84;
+    const TRIANGLE: usize = 50;
+    if bytes.starts_with(b"solid") || bytes.len() < HEADER {
+        return Ok(());
+    }
+    let count = u32::from_le_bytes(bytes[80..HEADER].try_into().expect("four bytes"));
+    let expected = (count as usize)
+        .checked_mul(TRIANGLE)
+        .and_then(|data| data.checked_add(HEADER));
+    if expected.is_some_and(|expected| bytes.len() > expected) {
+        return Err(format!(
+            "not a valid STL file: its header counts {count} triangles, but it holds {} bytes, \
+             room for {} triangles",
+            bytes.len(),
+            (bytes.len() - HEADER) / TRIANGLE
+        ));
+    }
+    Ok(())
 }
 
 /// Vertices and triangles as a file gives them, before [`TriMesh::new`] checks them.
@@ -202,6 +251,7 @@ fn parse_obj(bytes: &[u8]) -> Result<RawMesh, String> {
 
 /// Parses binary or ASCII STL with stl_io (which merges bit-identical vertices).
 fn parse_stl(bytes: &[u8]) -> Result<RawMesh, String> {
+    check_binary_stl_length(bytes)?;
     let stl = stl_io::read_stl(&mut Cursor::new(bytes))
         .map_err(|e| format!("not a valid STL file: {e}"))?;
     let vertices = stl

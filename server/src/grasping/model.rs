@@ -20,6 +20,8 @@ use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use thiserror::Error;
 
+use crate::geometry::{MAX_CONFIG_FILE_BYTES, describe_toml_error, read_regular_text};
+
 /// Number of flex values: the CyberGlove's 22 sensors, in the order of
 /// `vas_protocol::FLEX_JOINT_NAMES`.
 pub const FLEX_COUNT: usize = 22;
@@ -268,12 +270,12 @@ pub enum HandConfigError {
         source: std::io::Error,
     },
     /// The file is not valid TOML or does not have the expected keys and types.
-    #[error("{file}: {source}")]
+    #[error("{file}: {message}")]
     Syntax {
         /// The file.
         file: PathBuf,
-        /// The parser's message, with line and column.
-        source: Box<toml::de::Error>,
+        /// The line, the offending text and the reason.
+        message: String,
     },
     /// A value is present but not acceptable.
     #[error("{file}: {key}: {reason}")]
@@ -404,9 +406,9 @@ impl HandModel {
     /// Parses and validates a config given as text; `origin` names it in errors. A `mirror_of`
     /// key is refused here because there is no file to resolve it against.
     pub fn from_toml(origin: &Path, text: &str) -> Result<HandModel, HandConfigError> {
-        let file: HandFile = toml::from_str(text).map_err(|source| HandConfigError::Syntax {
+        let file: HandFile = toml::from_str(text).map_err(|error| HandConfigError::Syntax {
             file: origin.to_path_buf(),
-            source: Box::new(source),
+            message: describe_toml_error(text, &error),
         })?;
         if file.mirror_of.is_some() {
             return Err(Refuse(origin).at(
@@ -675,14 +677,14 @@ impl HandModel {
 }
 
 fn read_hand_file(path: &Path) -> Result<HandFile, HandConfigError> {
-    let text = crate::geometry::read_regular_text(path, crate::geometry::MAX_CONFIG_FILE_BYTES)
-        .map_err(|source| HandConfigError::Io {
+    let text =
+        read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| HandConfigError::Io {
             file: path.to_path_buf(),
             source,
         })?;
-    toml::from_str(&text).map_err(|source| HandConfigError::Syntax {
+    toml::from_str(&text).map_err(|error| HandConfigError::Syntax {
         file: path.to_path_buf(),
-        source: Box::new(source),
+        message: describe_toml_error(&text, &error),
     })
 }
 

@@ -76,6 +76,12 @@ pub enum RuntimeError {
         /// What iceoryx2 reported.
         reason: String,
     },
+    /// Another server already serves the prefix (each output service takes one publisher).
+    #[error(
+        "another vas server already serves this prefix: stop it, or start this one with another \
+         --prefix"
+    )]
+    PrefixInUse,
     /// An iceoryx2 operation failed.
     #[error("cannot {action}: {reason}")]
     Ipc {

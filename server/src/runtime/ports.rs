@@ -3,7 +3,7 @@
 
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
-use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::port::server::Server;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::port::update_connections::UpdateConnections;
@@ -110,11 +110,20 @@ impl Ports {
             control: listener(CONTROL)?,
             verified: listener(VERIFIED)?,
         };
+        // The parts service allows one publisher: the first to fail when another server serves
+        // this prefix, so its refusal says so in words.
         let parts = services::open_parts(node)?
             .publisher_builder()
             .initial_max_slice_len(part_count.max(output::INITIAL_MAX_PARTS))
             .allocation_strategy(AllocationStrategy::PowerOfTwo)
-            .create();
+            .create()
+            .map_err(|error| match error {
+                PublisherCreateError::ExceedsMaxSupportedPublishers => RuntimeError::PrefixInUse,
+                other => RuntimeError::Port {
+                    service: PARTS,
+                    reason: format!("{other:?}"),
+                },
+            })?;
         let ports = Self {
             tracker: port(
                 TRACKER,
@@ -124,7 +133,7 @@ impl Ports {
                 GLOVE,
                 services::open_glove(node)?.subscriber_builder().create(),
             )?,
-            parts: port(PARTS, parts)?,
+            parts,
             parts_notifier: notifier(PARTS)?,
             hand: port(
                 HAND,

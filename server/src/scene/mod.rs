@@ -52,7 +52,8 @@ use crate::collision::pipeline::ObjectId;
 use crate::collision::{DopTree, OrientationSet};
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{
-    GeometryError, MAX_CONFIG_FILE_BYTES, Point, TriMesh, load_mesh, read_regular_text,
+    GeometryError, MAX_CONFIG_FILE_BYTES, Point, TriMesh, describe_toml_error, load_mesh,
+    read_regular_text,
 };
 use crate::grasping::{HandModel, PartGeometry};
 use params::Problem;
@@ -440,21 +441,6 @@ impl Scene {
                 .map_or("none".to_owned(), |h| h.path.display().to_string())
         );
         s
-    }
-}
-
-/// Turns a TOML error into one line: where, the offending line's text, and the reason.
-fn describe_toml_error(text: &str, error: &toml::de::Error) -> String {
-    let reason = error.message().trim();
-    match error.span() {
-        Some(span) => {
-            let start = span.start.min(text.len());
-            let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
-            let line_number = text[..start].matches('\n').count() + 1;
-            let line = text[line_start..].lines().next().unwrap_or("").trim();
-            format!("line {line_number} (`{line}`): {reason}")
-        }
-        None => reason.to_owned(),
     }
 }
 

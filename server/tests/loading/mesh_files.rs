@@ -239,6 +239,15 @@ fn bad_files_are_refused_with_the_file_and_the_reason() {
     truncated.extend(5u32.to_le_bytes());
     truncated.extend([0u8; 70]);
     assert_refused("truncated.stl", &truncated, "not a valid STL file");
+    // A count smaller than the data: the reader stopped at the count and dropped the rest.
+    let mut undercounted = Vec::from([0u8; 80]);
+    undercounted.extend(1u32.to_le_bytes());
+    undercounted.extend([0u8; 100]);
+    assert_refused(
+        "undercounted.stl",
+        &undercounted,
+        "header counts 1 triangles, but it holds 184 bytes, room for 2 triangles",
+    );
 
     let missing = scratch("does_not_exist.obj");
     let error = load_mesh(&missing).unwrap_err();

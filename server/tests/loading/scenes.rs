@@ -668,3 +668,21 @@ fn scenes_whose_derived_values_would_overflow_are_refused() {
         }
     }
 }
+
+/// A config of one endless line is refused with a message of bounded length: the offending
+/// line is quoted cut short (a 50 MB line once came back whole in the error).
+#[test]
+fn errors_quote_a_huge_line_cut_short() {
+    let dir = scratch_dir("huge_line");
+    let line = format!("name = {}\n", "x".repeat(1_000_000));
+    let scene = write(&dir, "scene.toml", &line);
+    let hand = write(&dir, "hand.toml", &line);
+    let scene_error = Scene::load(&scene).expect_err("refused").to_string();
+    let hand_error = vas_server::grasping::HandModel::load(&hand)
+        .expect_err("refused")
+        .to_string();
+    for message in [scene_error, hand_error] {
+        assert!(message.contains("line 1"), "{message}");
+        assert!(message.len() < 1_000, "{} bytes", message.len());
+    }
+}

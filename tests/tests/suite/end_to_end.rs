@@ -264,8 +264,10 @@ fn a_second_server_on_the_same_prefix_is_refused() {
         .expect("the second server gives up");
     assert!(!status.success());
     assert!(
-        second.log().contains("vas/"),
-        "names the service: {}",
+        second
+            .log()
+            .contains("another vas server already serves this prefix"),
+        "says why in words: {}",
         second.log()
     );
     assert!(first.process.is_running());
