@@ -204,3 +204,36 @@ fn as_many_clients_as_the_services_take_connect_and_one_more_is_told_they_are_fu
     let client = Client::connect(Some(server.prefix())).expect("room again");
     client.flush_inputs(PATIENCE).expect("served");
 }
+
+/// The default scene serves within a gigabyte of address space: the interest matrix and the
+/// shared memory are sized to the scene (a hand group id near `u16::MAX` once made the matrix
+/// alone 4 GiB, and the server aborted under such a limit).
+#[test]
+fn the_default_scene_serves_within_a_gigabyte_of_address_space() {
+    let prefix = unique_prefix("ulimit");
+    let server = binary("vas-server");
+    let mut limited = Spawned::start(
+        std::path::Path::new("sh"),
+        &[
+            "-c",
+            "ulimit -v 1000000 && exec \"$0\" run --prefix \"$1\"",
+            server.to_str().expect("utf-8"),
+            prefix.as_str(),
+        ],
+        Stdio::null(),
+    );
+    let mut client = Client::connect(Some(&prefix)).expect("connect");
+    client
+        .scene_info(PATIENCE)
+        .unwrap_or_else(|error| panic!("no answer ({error}):\n{}", limited.log()));
+    let sample = tracker(1, [0.0, -0.2, 1.2]);
+    client.send_tracker(&sample).expect("send");
+    assert_eq!(answer(&mut client, &sample).tracker.seq, 1);
+    assert!(limited.is_running(), "{}", limited.log());
+    drop(client);
+    limited.signal(libc::SIGTERM);
+    let status = limited.wait_exit(PATIENCE).expect("the server stops");
+    assert!(status.success(), "{}", limited.log());
+    // SAFETY: the server has exited and this test's client is gone; no process uses the prefix.
+    unsafe { forget_prefix(&prefix) };
+}
