@@ -110,6 +110,16 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
                 ));
             }
             None => {
+                // A server that went away answers nothing more: say so instead of waiting out
+                // every remaining sample.
+                if client.scene_info(super::CONTROL_TIMEOUT).is_err() {
+                    anyhow::bail!(
+                        "no vas server answers on this prefix any more; stopped at sample {} \
+                         of {}",
+                        stamp.seq,
+                        recording.samples.len()
+                    );
+                }
                 tracing::warn!(seq = stamp.seq, "no answer within the timeout");
                 unanswered += 1;
             }

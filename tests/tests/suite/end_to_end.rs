@@ -175,6 +175,36 @@ fn long_recording(path: &std::path::Path, count: u64) {
 }
 
 #[test]
+fn a_lockstep_replay_whose_server_dies_stops_and_says_so() {
+    const SAMPLES: u64 = 20_000;
+    let mut server = Server::start_with("replaygone", &["--lockstep"]);
+    let mut observer = server.connect();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = dir.path().join("sweep.jsonl");
+    long_recording(&recording, SAMPLES);
+    let mut replay = server.client_tool(
+        &["replay", "--lockstep", recording.to_str().expect("utf-8")],
+        Stdio::null(),
+    );
+    wait_for(&mut observer, "the replay's frames", |frame| match frame {
+        Frame::Hand(hand) if hand.tracker.seq >= 20 => Some(()),
+        _ => None,
+    });
+    drop(observer);
+    server.process.signal(libc::SIGKILL);
+    // Without the check it waited out every remaining sample's timeout: hours.
+    let status = replay.wait_exit(PATIENCE).expect("the replay stops");
+    assert!(!status.success());
+    assert!(
+        replay
+            .log()
+            .contains("no vas server answers on this prefix any more"),
+        "{}",
+        replay.log()
+    );
+}
+
+#[test]
 fn a_killed_client_leaves_the_server_running_and_a_new_client_gets_the_latest_frame() {
     const SAMPLES: u64 = 20_000;
     let mut server = Server::start("sigkill");
