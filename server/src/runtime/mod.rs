@@ -114,6 +114,9 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     let config = config_with_prefix(options.prefix.as_deref())?;
     let name =
         NodeName::new("vas-server").map_err(|error| RuntimeError::ipc("name the node", error))?;
+    // Creating the node removes the resources of dead ones by itself; count them first, so that
+    // the log says what was cleaned.
+    let dead_nodes_found = dead_nodes(&config);
     let node = NodeBuilder::new()
         .name(&name)
         .config(&config)
@@ -125,11 +128,11 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     if termination_requested(&node) {
         return Ok(());
     }
-    let cleanup = node.try_cleanup_dead_nodes();
+    let dead_nodes_left = dead_nodes(&config);
     tracing::info!(
         prefix = options.prefix.as_deref().unwrap_or("(iceoryx2 default)"),
-        dead_nodes_cleaned = cleanup.cleanups,
-        dead_nodes_left = cleanup.failed_cleanups,
+        dead_nodes_cleaned = dead_nodes_found.saturating_sub(dead_nodes_left),
+        dead_nodes_left,
         "node created"
     );
 
@@ -174,6 +177,17 @@ fn publish_period(hz: f64) -> Result<Duration, RuntimeError> {
         .ok()
         .filter(|period| !period.is_zero())
         .ok_or(RuntimeError::PublishRate { hz })
+}
+
+/// How many nodes on this configuration's prefix belong to processes that died.
+fn dead_nodes(config: &iceoryx2::config::Config) -> usize {
+    let mut dead = 0;
+    // A listing that fails counts what it saw: the count only goes to the log.
+    let _ = Node::<ipc::Service>::list(config, |state| {
+        dead += usize::from(matches!(state, NodeState::Dead(_)));
+        CallbackProgression::Continue
+    });
+    dead
 }
 
 fn termination_requested(node: &Node<ipc::Service>) -> bool {

@@ -60,6 +60,14 @@ fn a_server_killed_mid_stream_is_replaced_by_one_on_the_same_prefix() {
         "the second server serves: {}",
         second.log()
     );
+    // The first server's two nodes: its own and the collision loop's waker.
+    assert!(
+        second
+            .log()
+            .contains("dead_nodes_cleaned=2 dead_nodes_left=0"),
+        "the log counts the dead nodes it cleaned: {}",
+        second.log()
+    );
     let mut client = Client::connect(Some(&prefix)).expect("connect again");
     client
         .scene_info(PATIENCE)
