@@ -245,3 +245,108 @@ fn the_default_scene_serves_within_a_gigabyte_of_address_space() {
     // SAFETY: the server has exited and this test's client is gone; no process uses the prefix.
     unsafe { forget_prefix(&prefix) };
 }
+
+/// Bad scenes sent over control while input streams at about 1 kHz and a renderer watches:
+/// each is refused with its reason, the server keeps answering and serving its scene, nothing
+/// non-finite is published, and every accepted sample is answered (the last one included) in
+/// order.
+#[test]
+fn bad_scenes_under_load_are_refused_and_the_stream_goes_on() {
+    const SAMPLES: u64 = 2_000;
+    let mut server = Server::start("underload");
+    let client = server.connect();
+    let scene = client.scene_info(PATIENCE).expect("scene info").name;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let write = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).expect("write");
+        path.to_str().expect("utf-8").to_owned()
+    };
+    std::fs::write(
+        dir.path().join("unit.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("empty_hand.toml"), "").unwrap();
+    let part = "[[parts]]\nname = \"p\"\nmovable = true\nmesh = \"unit.obj\"\n";
+    let bad = [
+        write("huge.toml", &format!("name = \"s\"\n{part}scale = 1e300\n")),
+        write(
+            "hand.toml",
+            &format!("name = \"s\"\nhand = \"empty_hand.toml\"\n{part}"),
+        ),
+        write(
+            "rate.toml",
+            &format!("name = \"s\"\n{part}[rates]\npublish_hz = 1e-300\n"),
+        ),
+        write("syntax.toml", "name = \n"),
+    ];
+
+    let prefix = server.prefix().to_owned();
+    let watcher = std::thread::spawn(move || {
+        let mut renderer = Client::connect(Some(&prefix)).expect("renderer connects");
+        let (mut last_seq, mut frames) = (0, 0u64);
+        while last_seq < SAMPLES {
+            assert_eq!(
+                renderer.wait(PATIENCE).expect("wait"),
+                vas_client::Wake::Ready,
+                "frames stopped at sample {last_seq}"
+            );
+            for frame in renderer.receive().expect("receive") {
+                match frame {
+                    Frame::Hand(hand) => {
+                        let root = hand.root.position.iter().chain(&hand.root.rotation);
+                        assert!(root.copied().all(f64::is_finite), "{hand:?}");
+                        assert!(hand.tracker.seq >= last_seq, "answers in order");
+                        last_seq = hand.tracker.seq;
+                        frames += 1;
+                    }
+                    Frame::Parts(parts) => assert!(parts.parts.iter().all(|part| {
+                        part.position
+                            .iter()
+                            .chain(&part.rotation)
+                            .all(|c| c.is_finite())
+                    })),
+                    Frame::Event(_) | Frame::Force(_) => {}
+                }
+            }
+        }
+        frames
+    });
+
+    let started = Instant::now();
+    for seq in 1..=SAMPLES {
+        let angle = seq as f64 * 0.003;
+        client
+            .send_tracker(&tracker(
+                seq,
+                [0.1 * angle.cos(), -0.3, 1.0 + 0.05 * angle.sin()],
+            ))
+            .expect("send");
+        if seq % 400 == 0 {
+            let path = &bad[(seq / 400 - 1) as usize % bad.len()];
+            match client.load_scene(path, PATIENCE) {
+                Err(ClientError::Refused {
+                    status, message, ..
+                }) => {
+                    assert_eq!(status, vas_protocol::ControlStatus::SceneLoadFailed);
+                    assert!(message.contains(path.as_str()), "{message}");
+                }
+                other => panic!("{path} must be refused, got {other:?}"),
+            }
+        }
+        // About 1 kHz: each sample waits for its slot.
+        let due = started + std::time::Duration::from_micros(1_000 * seq);
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+    }
+    let frames = watcher
+        .join()
+        .expect("the renderer saw every sample answered");
+    assert!(frames > 0);
+    let info = client
+        .scene_info(PATIENCE)
+        .expect("the server still answers");
+    assert_eq!(info.name, scene, "the scene served before is still served");
+    assert_eq!(info.stats.tracker_accepted, SAMPLES);
+    assert_eq!(info.stats.rejected(), 0);
+}
