@@ -57,13 +57,11 @@ pub const MAX_TIMEOUT_MS: u64 = 3_600_000;
 
 /// Connects with SIGINT and SIGTERM handled, so that long runs end cleanly.
 pub fn connect(prefix: Option<&str>) -> anyhow::Result<Client> {
-    let builder = Client::builder().handle_termination_signals(true);
-    match prefix {
-        Some(prefix) => builder.prefix(prefix),
-        None => builder,
-    }
-    .connect()
-    .context("cannot connect to the vas services")
+    Client::builder()
+        .handle_termination_signals(true)
+        .prefix(prefix)
+        .connect()
+        .context("cannot connect to the vas services")
 }
 
 /// Parses a number of a benchmark's command line that must be finite: a NaN or infinite

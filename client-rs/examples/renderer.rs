@@ -29,11 +29,10 @@ struct Args {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     // With the signals handled, Ctrl-C ends the loop below and the client leaves cleanly.
-    let builder = Client::builder().handle_termination_signals(true);
-    let mut client = match &args.prefix {
-        Some(prefix) => builder.prefix(prefix).connect()?,
-        None => builder.connect()?,
-    };
+    let mut client = Client::builder()
+        .handle_termination_signals(true)
+        .prefix(args.prefix.as_deref())
+        .connect()?;
 
     // Once per scene: what each part id is (a real renderer loads `mesh_source` here). The
     // answer also tells that the server is up (it may still be loading its scene).

@@ -32,10 +32,10 @@ pub struct ClientBuilder {
 }
 
 impl ClientBuilder {
-    /// Connect on this iceoryx2 prefix (the server's `--prefix`); without one, the prefix of the
-    /// iceoryx2 configuration is used.
-    pub fn prefix(mut self, prefix: impl Into<String>) -> Self {
-        self.prefix = Some(prefix.into());
+    /// Connect on this iceoryx2 prefix (the server's `--prefix`); with `None`, the prefix of
+    /// the iceoryx2 configuration is used.
+    pub fn prefix(mut self, prefix: Option<&str>) -> Self {
+        self.prefix = prefix.map(str::to_owned);
         self
     }
 
@@ -248,12 +248,7 @@ impl Client {
     /// Connects on `prefix` (the server's `--prefix`, or the configured default for `None`),
     /// leaving signal handling to the application.
     pub fn connect(prefix: Option<&str>) -> Result<Self, ClientError> {
-        let builder = ClientBuilder::default();
-        match prefix {
-            Some(prefix) => builder.prefix(prefix),
-            None => builder,
-        }
-        .connect()
+        ClientBuilder::default().prefix(prefix).connect()
     }
 
     /// Options for a connection.

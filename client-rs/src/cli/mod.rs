@@ -31,13 +31,11 @@ pub fn init_logging() {
 
 /// Connects with SIGINT and SIGTERM handled, so that long-running commands end cleanly.
 pub fn connect(prefix: Option<&str>) -> anyhow::Result<Client> {
-    let builder = Client::builder().handle_termination_signals(true);
-    match prefix {
-        Some(prefix) => builder.prefix(prefix),
-        None => builder,
-    }
-    .connect()
-    .context("cannot connect to the vas services")
+    Client::builder()
+        .handle_termination_signals(true)
+        .prefix(prefix)
+        .connect()
+        .context("cannot connect to the vas services")
 }
 
 /// `vas-client info`: the scene and the input counters as one JSON document.
