@@ -115,6 +115,8 @@ wire_code_enum! {
         SceneLoadFailed = 3,
         /// The server understands the request but cannot carry it out in this version.
         Unsupported = 4,
+        /// `LoadScene` while another scene is loading; ask again once that request is answered.
+        Busy = 5,
     }
 }
 

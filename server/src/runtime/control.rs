@@ -1,7 +1,7 @@
 //! Answers to `vas/control` requests: what they read and change of the served session, and the
 //! change they send down the loops.
 
-use std::path::Path;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use vas_protocol::{
@@ -48,34 +48,76 @@ impl Session {
     }
 }
 
-/// Carries out `request` and builds the answer, with the change for the loops, if any.
+/// What a control request needs: an answer now, or a scene loaded first.
+#[expect(
+    clippy::large_enum_variant,
+    reason = "one per request, copied straight into the response sample"
+)]
+pub enum Reply {
+    /// The answer, with the change for the loops, if any.
+    Now(ControlResponse, Option<Change>),
+    /// `LoadScene` of this file: load it apart and answer with [`loaded`].
+    Load(PathBuf),
+}
+
+/// Carries out `request` and builds the answer; `loading` says whether a scene load is already
+/// under way (a second one is refused).
 ///
 /// Every answer carries the scene summary and the input counters as they are after the request;
-/// a refused request changes nothing and explains itself in `message`. `LoadScene` reads the
-/// file, and a restart builds the hand, on the calling thread: the server answers nothing else
-/// meanwhile.
-pub fn answer(
-    session: &mut Session,
-    request: &ControlRequest,
-) -> (ControlResponse, Option<Change>) {
+/// a refused request changes nothing and explains itself in `message`.
+pub fn answer(session: &mut Session, request: &ControlRequest, loading: bool) -> Reply {
     let outcome = match ControlRequestKind::try_from(request.kind) {
         Err(unknown) => Err((ControlStatus::InvalidRequest, unknown.to_string())),
         Ok(ControlRequestKind::SceneInfo) => Ok((PartDescription::default(), None)),
         Ok(ControlRequestKind::PartInfo) => {
             describe_part(&session.scene, request.argument).map(|part| (part, None))
         }
-        Ok(ControlRequestKind::LoadScene) => load_scene(session, request),
+        Ok(ControlRequestKind::LoadScene) => match scene_path(request, loading) {
+            Ok(path) => return Reply::Load(path),
+            Err(refusal) => Err(refusal),
+        },
         Ok(ControlRequestKind::Reset) => session
             .restart(Arc::clone(&session.scene))
             .map(|change| (PartDescription::default(), Some(change))),
         Ok(ControlRequestKind::SetMetaphor) => set_metaphor(request.argument),
     };
+    let (response, change) = respond(session, request.kind, outcome);
+    Reply::Now(response, change)
+}
+
+/// The answer to a `LoadScene` request whose scene finished loading (or failed to): a loaded
+/// scene replaces the served one, a failure changes nothing and says why.
+pub fn loaded(
+    session: &mut Session,
+    outcome: Result<Scene, String>,
+) -> (ControlResponse, Option<Change>) {
+    let outcome = outcome
+        .map_err(|reason| (ControlStatus::SceneLoadFailed, reason))
+        .and_then(|scene| {
+            tracing::info!(
+                scene = scene.name,
+                parts = scene.parts.len(),
+                source = %scene.source.display(),
+                "scene loaded on request"
+            );
+            session.restart(Arc::new(scene))
+        })
+        .map(|change| (PartDescription::default(), Some(change)));
+    respond(session, ControlRequestKind::LoadScene as u32, outcome)
+}
+
+/// The response to a request of `kind` with `outcome`, summarising the session as it is now.
+fn respond(
+    session: &Session,
+    kind: u32,
+    outcome: Result<(PartDescription, Option<Change>), Refusal>,
+) -> (ControlResponse, Option<Change>) {
     let scene = &session.scene;
     let (scene_name, name_cut) = WireText::truncated(&scene.name);
     let (scene_source, source_cut) = WireText::truncated(&scene.source.display().to_string());
     let mut response = ControlResponse {
         status: ControlStatus::Ok as u32,
-        kind: request.kind,
+        kind,
         part_count: u32::try_from(scene.parts.len()).unwrap_or(u32::MAX),
         scene_truncated: u32::from(name_cut || source_cut),
         scene_name,
@@ -123,26 +165,20 @@ fn describe_part(scene: &Scene, id: u32) -> Result<PartDescription, Refusal> {
     })
 }
 
-fn load_scene(
-    session: &mut Session,
-    request: &ControlRequest,
-) -> Result<(PartDescription, Option<Change>), Refusal> {
+fn scene_path(request: &ControlRequest, loading: bool) -> Result<PathBuf, Refusal> {
+    if loading {
+        return Err((
+            ControlStatus::Busy,
+            "another scene is loading; ask again once that request is answered".to_owned(),
+        ));
+    }
     let path = request.path.as_str().map_err(|error| {
         (
             ControlStatus::InvalidRequest,
             format!("scene path: {error}"),
         )
     })?;
-    let scene = Scene::load(Path::new(path))
-        .map_err(|error| (ControlStatus::SceneLoadFailed, error.to_string()))?;
-    tracing::info!(
-        scene = scene.name,
-        parts = scene.parts.len(),
-        path,
-        "scene loaded on request"
-    );
-    let change = session.restart(Arc::new(scene))?;
-    Ok((PartDescription::default(), Some(change)))
+    Ok(PathBuf::from(path))
 }
 
 fn set_metaphor(code: u32) -> Result<(PartDescription, Option<Change>), Refusal> {
@@ -179,6 +215,27 @@ mod tests {
         ControlStatus::try_from(response.status).expect("known status")
     }
 
+    /// The answer to a request that needs no scene loaded.
+    fn now(session: &mut Session, request: &ControlRequest) -> (ControlResponse, Option<Change>) {
+        match answer(session, request, false) {
+            Reply::Now(response, change) => (response, change),
+            Reply::Load(path) => panic!("expected an answer, got a load of {path:?}"),
+        }
+    }
+
+    /// Asks to load `file` and answers as the I/O thread does once the loader finishes.
+    fn load(session: &mut Session, file: &Path) -> (ControlResponse, Option<Change>) {
+        let path = WireText::<MAX_PATH_BYTES>::new(&file.display().to_string()).expect("fits");
+        let Reply::Load(path) = answer(session, &ControlRequest::load_scene(path), false) else {
+            panic!("a load-scene request asks for a load");
+        };
+        assert_eq!(path, file);
+        loaded(
+            session,
+            Scene::load(&path).map_err(|error| error.to_string()),
+        )
+    }
+
     fn restart_epoch(change: Option<Change>) -> u64 {
         match change {
             Some(Change::Restart(restart)) => restart.epoch,
@@ -199,7 +256,7 @@ mod tests {
         nan.hand.position[0] = f64::NAN;
         assert!(session.inputs.apply_tracker(&nan).is_err());
 
-        let (response, change) = answer(&mut session, &ControlRequest::scene_info());
+        let (response, change) = now(&mut session, &ControlRequest::scene_info());
         assert!(change.is_none());
         let scene = &session.scene;
         assert_eq!(status(&response), ControlStatus::Ok);
@@ -219,7 +276,7 @@ mod tests {
         let mut session = session();
         let count = session.scene.parts.len();
         for id in 0..count {
-            let (response, _) = answer(&mut session, &ControlRequest::part_info(id as u32));
+            let (response, _) = now(&mut session, &ControlRequest::part_info(id as u32));
             let part = &session.scene.parts[id];
             assert_eq!(status(&response), ControlStatus::Ok);
             assert_eq!(response.part.id as usize, id);
@@ -235,7 +292,7 @@ mod tests {
                 WirePose::from_isometry(&part.pose)
             );
         }
-        let (response, change) = answer(&mut session, &ControlRequest::part_info(count as u32));
+        let (response, change) = now(&mut session, &ControlRequest::part_info(count as u32));
         assert!(change.is_none());
         assert_eq!(status(&response), ControlStatus::NoSuchPart);
         assert!(
@@ -252,12 +309,12 @@ mod tests {
         let mut session = session();
         let mut request = ControlRequest::scene_info();
         request.kind = 99;
-        let (response, change) = answer(&mut session, &request);
+        let (response, change) = now(&mut session, &request);
         assert_eq!(status(&response), ControlStatus::InvalidRequest);
         assert!(change.is_none());
         let mut request = ControlRequest::set_metaphor(SlidingMetaphor::RubberBand);
         request.argument = 0;
-        let (response, change) = answer(&mut session, &request);
+        let (response, change) = now(&mut session, &request);
         assert_eq!(status(&response), ControlStatus::InvalidRequest);
         assert!(change.is_none());
     }
@@ -266,9 +323,7 @@ mod tests {
     fn a_scene_that_fails_to_load_leaves_the_session_unchanged() {
         let mut session = session();
         let before = session.scene.name.clone();
-        let missing = config("no_such_scene.toml").display().to_string();
-        let path = WireText::<MAX_PATH_BYTES>::new(&missing).expect("fits");
-        let (response, change) = answer(&mut session, &ControlRequest::load_scene(path));
+        let (response, change) = load(&mut session, &config("no_such_scene.toml"));
         assert_eq!(status(&response), ControlStatus::SceneLoadFailed);
         assert!(change.is_none());
         assert!(
@@ -289,8 +344,7 @@ mod tests {
         let mut session = session();
         let file = config("peg_in_hole.toml");
         let expected = Scene::load(&file).expect("loads");
-        let path = WireText::<MAX_PATH_BYTES>::new(&file.display().to_string()).expect("fits");
-        let (response, change) = answer(&mut session, &ControlRequest::load_scene(path));
+        let (response, change) = load(&mut session, &file);
         assert_eq!(status(&response), ControlStatus::Ok);
         assert_eq!(response.scene_name.as_str(), Ok(expected.name.as_str()));
         assert_eq!(response.part_count as usize, expected.parts.len());
@@ -299,17 +353,31 @@ mod tests {
     }
 
     #[test]
+    fn a_second_load_while_one_is_under_way_is_refused_as_busy() {
+        let mut session = session();
+        let path = WireText::<MAX_PATH_BYTES>::new("peg_in_hole.toml").expect("fits");
+        let Reply::Now(response, change) =
+            answer(&mut session, &ControlRequest::load_scene(path), true)
+        else {
+            panic!("a load while loading is answered at once");
+        };
+        assert_eq!(status(&response), ControlStatus::Busy);
+        assert!(change.is_none());
+        assert_eq!(session.epoch, 1);
+    }
+
+    #[test]
     fn reset_restarts_the_same_scene_and_the_metaphor_is_passed_on() {
         let mut session = session();
         let request = ControlRequest::set_metaphor(SlidingMetaphor::IncrementalMotion);
-        let (response, change) = answer(&mut session, &request);
+        let (response, change) = now(&mut session, &request);
         assert_eq!(status(&response), ControlStatus::Ok);
         assert!(matches!(
             change,
             Some(Change::Metaphor(Metaphor::Incremental))
         ));
         let name = session.scene.name.clone();
-        let (response, change) = answer(&mut session, &ControlRequest::reset());
+        let (response, change) = now(&mut session, &ControlRequest::reset());
         assert_eq!(status(&response), ControlStatus::Ok);
         assert_eq!(restart_epoch(change), 2);
         assert_eq!(session.scene.name, name);

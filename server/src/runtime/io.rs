@@ -17,12 +17,13 @@ use crossbeam_channel::Receiver;
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use vas_protocol::{
-    ForceFrame, HandFrame, InputRejection, InputStats, PartState, PartsFrameHeader, SimEvent,
-    WirePose, wall_clock_ns,
+    ControlResponse, ControlStatus, ForceFrame, HandFrame, InputRejection, InputStats, PartState,
+    PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
 };
 
 use super::control::{self, Session};
 use super::frames::{Change, InputFrame, LoopWork, Stamps, VerifiedFrame};
+use super::loader::{Loaded, PendingRequest, SceneLoader};
 use super::loops::Loops;
 use super::ports::{Ports, Wakeups};
 use super::rendezvous::{ANNOUNCED_WAIT, AwakeWatch, Handoff, Work};
@@ -48,6 +49,8 @@ struct Io {
     watch: Arc<AwakeWatch>,
     answer: Answer,
     lockstep: Lockstep,
+    /// Loads requested scenes apart from this thread.
+    loader: SceneLoader,
     /// The latest published part states, for the periodic parts frames.
     parts: Vec<PartState>,
     hand_frames: u64,
@@ -100,6 +103,7 @@ impl InteractionManager {
         verified: Receiver<VerifiedFrame>,
         watch: Arc<AwakeWatch>,
         lockstep: bool,
+        config: iceoryx2::config::Config,
     ) -> Result<Self, RuntimeError> {
         let (ports, wakeups) = Ports::open(node, session.scene.parts.len())?;
         let mut io = Io {
@@ -110,6 +114,7 @@ impl InteractionManager {
             verified,
             watch,
             answer: Answer::default(),
+            loader: SceneLoader::new(config),
             lockstep: Lockstep {
                 enabled: lockstep,
                 in_flight: false,
@@ -300,27 +305,60 @@ impl Io {
             };
             self.process_tracker_samples();
             self.process_glove_samples();
-            let (response, change) = control::answer(&mut self.session, request.payload());
-            tracing::debug!(
-                kind = response.kind,
-                status = response.status,
-                "control request answered"
-            );
-            if let Some(change) = change {
-                let restarted = matches!(change, Change::Restart(_));
-                self.submit(Work::Control(change));
-                if restarted {
-                    self.reset_parts();
-                    self.publish_parts(None);
+            let loading = self.loader.is_loading();
+            match control::answer(&mut self.session, request.payload(), loading) {
+                control::Reply::Now(response, change) => {
+                    self.respond(request, response, change);
+                    answered = true;
+                }
+                control::Reply::Load(path) => {
+                    tracing::info!(path = %path.display(), "loading a scene on request");
+                    if let Some(failed) = self.loader.start(path, request) {
+                        answered |= self.finish_load(failed);
+                    }
                 }
             }
-            if let Err(error) = request.send_copy(response) {
-                self.log_failure(Err(RuntimeError::ipc("send a control response", error)));
-            }
-            answered = true;
+        }
+        if let Some(loaded) = self.loader.finished() {
+            answered |= self.finish_load(loaded);
         }
         if answered {
             self.log_failure(self.ports.notify_control_clients());
+        }
+    }
+
+    /// Answers a finished scene load: the loaded scene is swapped in here, between frames.
+    fn finish_load(&mut self, loaded: Loaded) -> bool {
+        let (response, change) = control::loaded(&mut self.session, loaded.outcome);
+        if response.status != ControlStatus::Ok as u32 {
+            tracing::warn!(message = ?response.message.as_str(), "scene load refused");
+        }
+        self.respond(loaded.request, response, change);
+        true
+    }
+
+    /// Sends `change` down the loops and `response` to the client.
+    fn respond(
+        &mut self,
+        request: PendingRequest,
+        response: ControlResponse,
+        change: Option<Change>,
+    ) {
+        tracing::debug!(
+            kind = response.kind,
+            status = response.status,
+            "control request answered"
+        );
+        if let Some(change) = change {
+            let restarted = matches!(change, Change::Restart(_));
+            self.submit(Work::Control(change));
+            if restarted {
+                self.reset_parts();
+                self.publish_parts(None);
+            }
+        }
+        if let Err(error) = request.send_copy(response) {
+            self.log_failure(Err(RuntimeError::ipc("send a control response", error)));
         }
     }
 

@@ -17,6 +17,7 @@ pub mod frames;
 mod inputs;
 pub mod interaction;
 mod io;
+mod loader;
 pub mod loops;
 mod ports;
 pub mod rendezvous;
@@ -157,6 +158,7 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         verified_out,
         std::sync::Arc::clone(&links.io_watch),
         options.lockstep,
+        config.clone(),
     )?;
     let waker_config = config.clone();
     let loops = Loops::spawn(
