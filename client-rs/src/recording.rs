@@ -166,6 +166,15 @@ impl Recording {
     /// Reads and checks a recording file: header format and version, one valid sample per
     /// line, times finite and non-decreasing. Blank lines are skipped.
     pub fn load(path: &Path) -> Result<Self, RecordingError> {
+        let file = File::open(path).map_err(|error| RecordingError::Io {
+            path: path.to_owned(),
+            error,
+        })?;
+        Self::from_reader(path, BufReader::new(file))
+    }
+
+    /// [`Recording::load`] on a recording read from `reader`; `path` names it in errors.
+    pub fn from_reader(path: &Path, reader: impl BufRead) -> Result<Self, RecordingError> {
         let io_error = |error| RecordingError::Io {
             path: path.to_owned(),
             error,
@@ -175,7 +184,6 @@ impl Recording {
             line,
             reason,
         };
-        let reader = BufReader::new(File::open(path).map_err(io_error)?);
         let mut header = None;
         let mut samples: Vec<RecordedSample> = Vec::new();
         for (index, text) in reader.lines().enumerate() {

@@ -367,7 +367,13 @@ impl HandModel {
     /// Reads and validates a hand config. A config with `mirror_of` is the mirror image of the
     /// named file (a path relative to this one), which must itself be a full description.
     pub fn load(path: &Path) -> Result<HandModel, HandConfigError> {
-        let file = read_hand_file(path)?;
+        HandModel::from_toml(path, &read_hand_text(path)?)
+    }
+
+    /// [`HandModel::load`] on a config's text already read from `path`: errors name `path`, and
+    /// a `mirror_of` file is read relative to its folder.
+    pub fn from_toml(path: &Path, text: &str) -> Result<HandModel, HandConfigError> {
+        let file = parse_hand_file(path, text)?;
         match &file.mirror_of {
             None => HandModel::from_file(path, file),
             Some(relative) => {
@@ -401,22 +407,6 @@ impl HandModel {
                 Ok(model)
             }
         }
-    }
-
-    /// Parses and validates a config given as text; `origin` names it in errors. A `mirror_of`
-    /// key is refused here because there is no file to resolve it against.
-    pub fn from_toml(origin: &Path, text: &str) -> Result<HandModel, HandConfigError> {
-        let file: HandFile = toml::from_str(text).map_err(|error| HandConfigError::Syntax {
-            file: origin.to_path_buf(),
-            message: describe_toml_error(text, &error),
-        })?;
-        if file.mirror_of.is_some() {
-            return Err(Refuse(origin).at(
-                "mirror_of",
-                "only a hand loaded from a file can mirror another",
-            ));
-        }
-        HandModel::from_file(origin, file)
     }
 
     fn from_file(path: &Path, file: HandFile) -> Result<HandModel, HandConfigError> {
@@ -677,14 +667,20 @@ impl HandModel {
 }
 
 fn read_hand_file(path: &Path) -> Result<HandFile, HandConfigError> {
-    let text =
-        read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| HandConfigError::Io {
-            file: path.to_path_buf(),
-            source,
-        })?;
-    toml::from_str(&text).map_err(|error| HandConfigError::Syntax {
+    parse_hand_file(path, &read_hand_text(path)?)
+}
+
+fn read_hand_text(path: &Path) -> Result<String, HandConfigError> {
+    read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| HandConfigError::Io {
         file: path.to_path_buf(),
-        message: describe_toml_error(&text, &error),
+        source,
+    })
+}
+
+fn parse_hand_file(path: &Path, text: &str) -> Result<HandFile, HandConfigError> {
+    toml::from_str(text).map_err(|error| HandConfigError::Syntax {
+        file: path.to_path_buf(),
+        message: describe_toml_error(text, &error),
     })
 }
 

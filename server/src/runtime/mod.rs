@@ -12,9 +12,9 @@
 //! `vas/output/force`. The input counters (rejected, clamped) are logged and returned in every
 //! `vas/control` response (`stats`).
 
-mod control;
+pub mod control;
 pub mod frames;
-mod inputs;
+pub mod inputs;
 pub mod interaction;
 mod io;
 pub mod loops;
