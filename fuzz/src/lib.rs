@@ -62,11 +62,16 @@ pub fn check_tree(mesh: &TriMesh) {
     assert!(tree.intersects(&tree, &Isometry3::identity(), &mut stats));
 }
 
-/// Panics unless `model`'s levers are finite and its segments' poses are finite at rest and at
-/// both ends of every joint's limits.
+/// Panics unless `model`'s levers are finite, its joint axes unit vectors, and its segments'
+/// poses finite with unit rotations at rest and at both ends of every joint's limits.
 pub fn check_hand(model: &HandModel) {
     for variable in 0..VARIABLE_COUNT {
         assert!(model.lever(variable).is_finite(), "lever of {variable}");
+    }
+    for segment in model.segments() {
+        for dof in &segment.dofs {
+            assert!((dof.axis.norm() - 1.0).abs() < 1e-9, "{}", segment.name);
+        }
     }
     let limits = model.limits();
     let low: [f64; FLEX_COUNT] = std::array::from_fn(|i| limits[i].min);
@@ -74,6 +79,11 @@ pub fn check_hand(model: &HandModel) {
     for flex in [[0.0; FLEX_COUNT], low, high] {
         for (segment, pose) in model.segment_poses(&flex).iter().enumerate() {
             assert!(is_finite(pose), "segment {segment} at {flex:?}: {pose}");
+            let norm = pose.rotation.norm();
+            assert!(
+                (norm - 1.0).abs() < 1e-9,
+                "segment {segment}: rotation of norm {norm}"
+            );
         }
     }
 }
