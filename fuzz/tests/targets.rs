@@ -34,6 +34,7 @@ fn mesh_file(name: &str, bytes: &[u8]) {
     }
 }
 
+/// The OBJ parser, seeded with the repository's meshes.
 #[test]
 fn obj_mesh() {
     bolero::check!().for_each(|bytes: &[u8]| mesh_file("fuzz.obj", bytes));
