@@ -163,9 +163,18 @@ pub struct Recording {
 }
 
 impl Recording {
-    /// Reads and checks a recording file: header format and version, one valid sample per
-    /// line, times finite and non-decreasing. Blank lines are skipped.
+    /// Reads and checks a recording file: header format and version, one valid sample (every
+    /// value finite) per line, times finite and non-decreasing. Blank lines are skipped.
     pub fn load(path: &Path) -> Result<Self, RecordingError> {
+        let file = File::open(path).map_err(|error| RecordingError::Io {
+            path: path.to_owned(),
+            error,
+        })?;
+        Self::from_reader(path, BufReader::new(file))
+    }
+
+    /// [`Recording::load`] on a recording read from `reader`; `path` names it in errors.
+    pub fn from_reader(path: &Path, reader: impl BufRead) -> Result<Self, RecordingError> {
         let io_error = |error| RecordingError::Io {
             path: path.to_owned(),
             error,
@@ -175,7 +184,6 @@ impl Recording {
             line,
             reason,
         };
-        let reader = BufReader::new(File::open(path).map_err(io_error)?);
         let mut header = None;
         let mut samples: Vec<RecordedSample> = Vec::new();
         for (index, text) in reader.lines().enumerate() {
@@ -201,6 +209,13 @@ impl Recording {
             }
             let sample: RecordedSample = serde_json::from_str(&text)
                 .map_err(|error| invalid(line, format!("not a recorded sample: {error}")))?;
+            // JSON has no infinity, but a number beyond `f32`'s range reads as one.
+            if !sample.input.is_finite() {
+                return Err(invalid(
+                    line,
+                    "a value is beyond the range of its type".to_owned(),
+                ));
+            }
             let previous = samples.last().map_or(0.0, |sample| sample.time);
             if !sample.time.is_finite() || sample.time < previous {
                 return Err(invalid(

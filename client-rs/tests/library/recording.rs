@@ -148,3 +148,17 @@ fn invalid_recordings_are_refused_naming_file_and_line() {
     let (_dir, path) = write_file(&[header, "", &glove_line("0.0")]);
     assert_eq!(Recording::load(&path).expect("valid").samples.len(), 1);
 }
+
+#[test]
+fn values_beyond_the_range_of_their_type_are_refused() {
+    // A glove value beyond f32's range was read as infinity, and the recording loaded.
+    let header = r#"{"format":"vas-recording","version":1,"scene":"s","description":""}"#;
+    let mut flex = ["0.0"; FLEX_COUNT];
+    flex[3] = "1e39";
+    let line = format!(
+        r#"{{"time":0.0,"glove":{{"seq":1,"timestamp_ns":0,"flex":[{}]}}}}"#,
+        flex.join(",")
+    );
+    let error = load_error(&[header, &line]);
+    assert!(error.contains(":2: a value is beyond the range"), "{error}");
+}

@@ -9,6 +9,7 @@
 //! Touching counts as intersecting (see [`triangle`]).
 
 pub mod broad_phase;
+pub mod brute_force;
 pub mod dop_tree;
 pub mod interest;
 pub mod orientation;
@@ -25,6 +26,7 @@ use nalgebra::Isometry3;
 
 use crate::geometry::TriMesh;
 
+pub use brute_force::brute_force_pairs;
 pub use dop_tree::DopTree;
 pub use orientation::OrientationSet;
 pub use parry_mesh::ParryMesh;

@@ -7,6 +7,7 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector4
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::brute_force::posed_triangles;
 use super::triangle::triangles_intersect;
 use super::tumble::tumble_pose;
 use super::*;
@@ -86,30 +87,9 @@ pub(crate) fn random_pose(rng: &mut ChaCha8Rng, reach: f64) -> Isometry3<f64> {
     Isometry3::from_parts(Translation3::from(t), q)
 }
 
-/// Every intersecting pair by testing all of them, sorted.
-pub(crate) fn brute_force_pairs(
-    a: &TriMesh,
-    b: &TriMesh,
-    b_to_a: &Isometry3<f64>,
-) -> Vec<[u32; 2]> {
-    let moved: Vec<_> = (0..b.triangles().len())
-        .map(|j| b.triangle(j).map(|p| b_to_a * p))
-        .collect();
-    let mut pairs = Vec::new();
-    for i in 0..a.triangles().len() {
-        let ta = a.triangle(i);
-        for (j, tb) in moved.iter().enumerate() {
-            if triangles_intersect(&ta, tb) {
-                pairs.push([i as u32, j as u32]);
-            }
-        }
-    }
-    pairs
-}
-
 /// Whether any triangle pair intersects, by testing every pair whose boxes overlap: exhaustive
-/// like [`brute_force_pairs`] and sharing nothing with the trees but the triangle test, fast
-/// enough for meshes of thousands of triangles (B's boxes are sorted along x, so each triangle
+/// like [`brute_force_pairs`] and sharing nothing with the trees but the triangle test and the
+/// placing of B ([`posed_triangles`]), fast enough for meshes of thousands of triangles (B's boxes are sorted along x, so each triangle
 /// of A meets only the boxes of its own x-range).
 pub(crate) fn brute_force_hit(a: &TriMesh, b: &TriMesh, b_to_a: &Isometry3<f64>) -> bool {
     let bounds = |t: &[Point3<f64>; 3]| {
@@ -117,11 +97,9 @@ pub(crate) fn brute_force_hit(a: &TriMesh, b: &TriMesh, b_to_a: &Isometry3<f64>)
         let hi = t[0].coords.sup(&t[1].coords).sup(&t[2].coords);
         (lo, hi)
     };
-    let mut moved: Vec<_> = (0..b.triangles().len())
-        .map(|j| {
-            let t = b.triangle(j).map(|p| b_to_a * p);
-            (bounds(&t), t)
-        })
+    let mut moved: Vec<_> = posed_triangles(b, b_to_a)
+        .into_iter()
+        .map(|t| (bounds(&t), t))
         .collect();
     moved.sort_unstable_by(|x, y| x.0.0.x.total_cmp(&y.0.0.x));
     (0..a.triangles().len()).any(|i| {

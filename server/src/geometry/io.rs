@@ -137,28 +137,24 @@ pub fn describe_toml_error(text: &str, error: &toml::de::Error) -> String {
 /// polygons are triangulated as fans. Normals, texture coordinates and materials are ignored.
 /// Degenerate triangles are removed with a warning naming the file and the count.
 pub fn load_mesh(path: &Path) -> Result<TriMesh, GeometryError> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let parse = match extension.as_deref() {
-        Some("obj") => parse_obj,
-        Some("stl") => parse_stl,
-        _ => {
-            return Err(GeometryError::UnsupportedFormat {
-                path: path.to_owned(),
-            });
-        }
-    };
+    // An unsupported name is refused before the file is read.
+    mesh_parser(path)?;
     let bytes =
         read_regular_file(path, MAX_MESH_FILE_BYTES).map_err(|source| GeometryError::Read {
             path: path.to_owned(),
             source,
         })?;
-    let (vertices, triangles) = parse(&bytes).map_err(|reason| GeometryError::Parse {
-        path: path.to_owned(),
-        reason,
-    })?;
+    mesh_from_bytes(path, &bytes)
+}
+
+/// [`load_mesh`] on a file's contents already read: `path` chooses the format by its extension
+/// and names the file in errors and warnings.
+pub fn mesh_from_bytes(path: &Path, bytes: &[u8]) -> Result<TriMesh, GeometryError> {
+    let (vertices, triangles) =
+        mesh_parser(path)?(bytes).map_err(|reason| GeometryError::Parse {
+            path: path.to_owned(),
+            reason,
+        })?;
     let (mesh, report) =
         TriMesh::new(vertices, triangles).map_err(|source| GeometryError::InvalidMesh {
             path: path.to_owned(),
@@ -172,6 +168,24 @@ pub fn load_mesh(path: &Path) -> Result<TriMesh, GeometryError> {
         );
     }
     Ok(mesh)
+}
+
+/// Parses a file's bytes into vertices and triangles as the file gives them.
+type Parser = fn(&[u8]) -> Result<RawMesh, String>;
+
+/// The parser of `path`'s format, by its extension.
+fn mesh_parser(path: &Path) -> Result<Parser, GeometryError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("obj") => Ok(parse_obj),
+        Some("stl") => Ok(parse_stl),
+        _ => Err(GeometryError::UnsupportedFormat {
+            path: path.to_owned(),
+        }),
+    }
 }
 
 /// A binary STL (one that does not begin as ASCII STL does) must hold exactly the triangles its

@@ -33,6 +33,18 @@ pub const ROOT_VARIABLE: usize = FLEX_COUNT;
 /// Number of variables the clasp interpolates: the 22 flex values and the hand root.
 pub const VARIABLE_COUNT: usize = FLEX_COUNT + 1;
 
+/// The largest length in a hand config (joint origins, pivots, sphere centres and radii), in
+/// metres: far beyond any hand, and small enough that every lever and pose derived from the model
+/// stays finite.
+pub const MAX_HAND_LENGTH_M: f64 = 10.0;
+
+/// The largest magnitude of a joint limit, in degrees.
+pub const MAX_FLEX_LIMIT_DEG: f64 = 360.0;
+
+/// The largest magnitude of a flex value's gain: with the limits, it keeps every joint angle (a
+/// sum of gains times flex values) finite.
+pub const MAX_FLEX_GAIN: f64 = 100.0;
+
 /// The 22 flex values (joint angles in radians), in CyberGlove order.
 pub type FlexVector = [f64; FLEX_COUNT];
 
@@ -367,7 +379,13 @@ impl HandModel {
     /// Reads and validates a hand config. A config with `mirror_of` is the mirror image of the
     /// named file (a path relative to this one), which must itself be a full description.
     pub fn load(path: &Path) -> Result<HandModel, HandConfigError> {
-        let file = read_hand_file(path)?;
+        HandModel::from_toml(path, &read_hand_text(path)?)
+    }
+
+    /// [`HandModel::load`] on a config's text already read from `path`: errors name `path`, and
+    /// a `mirror_of` file is read relative to its folder.
+    pub fn from_toml(path: &Path, text: &str) -> Result<HandModel, HandConfigError> {
+        let file = parse_hand_file(path, text)?;
         match &file.mirror_of {
             None => HandModel::from_file(path, file),
             Some(relative) => {
@@ -403,22 +421,6 @@ impl HandModel {
         }
     }
 
-    /// Parses and validates a config given as text; `origin` names it in errors. A `mirror_of`
-    /// key is refused here because there is no file to resolve it against.
-    pub fn from_toml(origin: &Path, text: &str) -> Result<HandModel, HandConfigError> {
-        let file: HandFile = toml::from_str(text).map_err(|error| HandConfigError::Syntax {
-            file: origin.to_path_buf(),
-            message: describe_toml_error(text, &error),
-        })?;
-        if file.mirror_of.is_some() {
-            return Err(Refuse(origin).at(
-                "mirror_of",
-                "only a hand loaded from a file can mirror another",
-            ));
-        }
-        HandModel::from_file(origin, file)
-    }
-
     fn from_file(path: &Path, file: HandFile) -> Result<HandModel, HandConfigError> {
         let refuse = Refuse(path);
         if file.flex.len() != FLEX_COUNT {
@@ -435,11 +437,13 @@ impl HandModel {
             .iter()
             .enumerate()
             .map(|(i, f)| {
-                if !(f.min_deg.is_finite() && f.max_deg.is_finite() && f.min_deg < f.max_deg) {
+                let within = |deg: f64| deg.abs() <= MAX_FLEX_LIMIT_DEG;
+                if !(within(f.min_deg) && within(f.max_deg) && f.min_deg < f.max_deg) {
                     return Err(refuse.at(
                         format!("flex[{i}] ({})", f.name),
                         format!(
-                            "need finite min_deg < max_deg, got {} and {}",
+                            "need finite min_deg < max_deg within ±{MAX_FLEX_LIMIT_DEG}, got {} \
+                             and {}",
                             f.min_deg, f.max_deg
                         ),
                     ));
@@ -469,8 +473,8 @@ impl HandModel {
                     )
                 })?)
             };
-            let origin = finite_vector(entry.origin)
-                .ok_or_else(|| refuse.at(key("origin"), "not finite"))?;
+            let origin =
+                length_vector(entry.origin).ok_or_else(|| refuse.at(key("origin"), too_long()))?;
             let mut base_rotation = UnitQuaternion::identity();
             for (j, r) in entry.base_rotations.iter().enumerate() {
                 let axis = unit_axis(r.axis).ok_or_else(|| {
@@ -510,33 +514,43 @@ impl HandModel {
                 }
                 let gains = match &d.gains {
                     None => vec![1.0; d.flex.len()],
-                    Some(g) if g.len() == d.flex.len() && g.iter().all(|x| x.is_finite()) => {
+                    Some(g)
+                        if g.len() == d.flex.len()
+                            && g.iter().all(|x| x.abs() <= MAX_FLEX_GAIN) =>
+                    {
                         g.clone()
                     }
                     Some(_) => {
                         return Err(refuse.at(
                             key(&format!("dofs[{j}].gains")),
-                            "needs one finite gain per flex index",
+                            format!(
+                                "needs one finite gain per flex index, each within \
+                                 ±{MAX_FLEX_GAIN}"
+                            ),
                         ));
                     }
                 };
                 for &f in &d.flex {
                     own = own.or(VariableSet::single(f));
                 }
-                let pivot = match d.pivot {
-                    None => Point3::origin(),
-                    Some(p) => Point3::from(finite_vector(p).ok_or_else(|| {
-                        refuse.at(key(&format!("dofs[{j}].pivot")), "not finite")
-                    })?),
-                };
+                let pivot =
+                    match d.pivot {
+                        None => Point3::origin(),
+                        Some(p) => Point3::from(length_vector(p).ok_or_else(|| {
+                            refuse.at(key(&format!("dofs[{j}].pivot")), too_long())
+                        })?),
+                    };
                 dofs.push(Dof {
                     axis,
                     pivot,
                     terms: d.flex.iter().copied().zip(gains).collect(),
                 });
             }
-            if !(entry.shape.radius.is_finite() && entry.shape.radius > 0.0) {
-                return Err(refuse.at(key("shape.radius"), "must be a positive number of metres"));
+            if !(entry.shape.radius > 0.0 && entry.shape.radius <= MAX_HAND_LENGTH_M) {
+                return Err(refuse.at(
+                    key("shape.radius"),
+                    format!("must be a positive number of metres, at most {MAX_HAND_LENGTH_M}"),
+                ));
             }
             if entry.shape.centres.is_empty() {
                 return Err(refuse.at(key("shape.centres"), "needs at least one sphere centre"));
@@ -545,9 +559,9 @@ impl HandModel {
                 .shape
                 .centres
                 .iter()
-                .map(|&c| finite_vector(c).map(Point3::from))
+                .map(|&c| length_vector(c).map(Point3::from))
                 .collect::<Option<Vec<_>>>()
-                .ok_or_else(|| refuse.at(key("shape.centres"), "not finite"))?;
+                .ok_or_else(|| refuse.at(key("shape.centres"), too_long()))?;
             let inherited = parent.map_or(VariableSet::EMPTY, |p| segments[p].variables);
             index_of.insert(entry.name.as_str(), segments.len());
             segments.push(Segment {
@@ -677,23 +691,41 @@ impl HandModel {
 }
 
 fn read_hand_file(path: &Path) -> Result<HandFile, HandConfigError> {
-    let text =
-        read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| HandConfigError::Io {
-            file: path.to_path_buf(),
-            source,
-        })?;
-    toml::from_str(&text).map_err(|error| HandConfigError::Syntax {
+    parse_hand_file(path, &read_hand_text(path)?)
+}
+
+fn read_hand_text(path: &Path) -> Result<String, HandConfigError> {
+    read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| HandConfigError::Io {
         file: path.to_path_buf(),
-        message: describe_toml_error(&text, &error),
+        source,
     })
 }
 
-fn finite_vector(v: [f64; 3]) -> Option<Vector3<f64>> {
-    v.iter().all(|c| c.is_finite()).then(|| Vector3::from(v))
+fn parse_hand_file(path: &Path, text: &str) -> Result<HandFile, HandConfigError> {
+    toml::from_str(text).map_err(|error| HandConfigError::Syntax {
+        file: path.to_path_buf(),
+        message: describe_toml_error(text, &error),
+    })
 }
 
+/// Why a position was refused.
+fn too_long() -> String {
+    format!("must be finite and within {MAX_HAND_LENGTH_M} m")
+}
+
+/// A position in a segment's frame: finite, every coordinate within [`MAX_HAND_LENGTH_M`].
+fn length_vector(v: [f64; 3]) -> Option<Vector3<f64>> {
+    v.iter()
+        .all(|c| c.abs() <= MAX_HAND_LENGTH_M)
+        .then(|| Vector3::from(v))
+}
+
+/// The direction of a finite, non-zero vector; scaled to a largest component of 1 first, so
+/// that the square of a long vector's length does not overflow.
 fn unit_axis(v: [f64; 3]) -> Option<Unit<Vector3<f64>>> {
-    finite_vector(v).and_then(|v| Unit::try_new(v, 1e-9))
+    let v = Vector3::from(v);
+    let largest = v.amax();
+    (v.iter().all(|c| c.is_finite()) && largest > 0.0).then(|| Unit::new_normalize(v / largest))
 }
 
 /// Checks the structure the grasp analysis relies on: the palm first and hanging from the root,
@@ -1027,7 +1059,7 @@ pub(crate) mod tests {
                     "origin = [0.0, 0.048, nan]",
                     1,
                 ),
-                "segment[2] (thumb middle).origin: not finite",
+                "segment[2] (thumb middle).origin: must be finite and within 10 m",
             ),
             (
                 text.replacen("side = \"right\"", "side = \"right\"\nhandedness = 1", 1),
@@ -1042,6 +1074,72 @@ pub(crate) mod tests {
             );
             assert!(message.starts_with("hand.toml"), "{message}");
         }
+    }
+
+    #[test]
+    fn values_that_would_make_poses_non_finite_are_refused() {
+        // Each was accepted, and gave infinite levers or NaN segment poses.
+        let text = right_text();
+        let cases = [
+            (
+                text.replacen(
+                    "origin = [0.0, 0.048, 0.0]",
+                    "origin = [0.0, 1e308, 0.0]",
+                    1,
+                ),
+                "segment[2] (thumb middle).origin: must be finite and within 10 m",
+            ),
+            (
+                text.replacen(
+                    "pivot = [-0.0095, 0.0, 0.0]",
+                    "pivot = [-1e300, 0.0, 0.0]",
+                    1,
+                ),
+                "segment[10] (ring inner).dofs[0].pivot: must be finite and within 10 m",
+            ),
+            (
+                text.replacen("[0.0, 0.026, 0.0]] }", "[0.0, 1e300, 0.0]] }", 1),
+                "segment[5] (index middle).shape.centres: must be finite and within 10 m",
+            ),
+            (
+                text.replacen("radius = 0.0088, centres", "radius = 1e300, centres", 1),
+                "segment[5] (index middle).shape.radius",
+            ),
+            (
+                text.replacen("gains = [0.5]", "gains = [1e300]", 1),
+                "segment[10] (ring inner).dofs[0].gains: needs one finite gain per flex index, \
+                 each within ±100",
+            ),
+            (
+                text.replacen(
+                    "name = \"palm arch\"\nmin_deg = -10\nmax_deg = 40",
+                    "name = \"palm arch\"\nmin_deg = -10\nmax_deg = 1e300",
+                    1,
+                ),
+                "flex[19] (palm arch): need finite min_deg < max_deg within ±360",
+            ),
+        ];
+        for (config, expected) in cases {
+            let message = refusal(&config);
+            assert!(
+                message.contains(expected),
+                "expected {expected:?} in {message:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_long_joint_axis_is_normalised_without_overflow() {
+        // The square of its length overflowed, and the axis became the zero vector.
+        let text = right_text().replacen(
+            "axis = [-1.0, 0.0, 0.0], flex = [5]",
+            "axis = [-1e308, -1e308, 0.0], flex = [5]",
+            1,
+        );
+        let model = HandModel::from_toml(Path::new("hand.toml"), &text).expect("loads");
+        let axis = model.segments()[segment(&model, "index middle")].dofs[0].axis;
+        let expected = Vector3::new(-1.0, -1.0, 0.0).normalize();
+        assert!((axis.into_inner() - expected).norm() < 1e-12, "{axis:?}");
     }
 
     #[test]

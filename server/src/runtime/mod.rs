@@ -12,10 +12,10 @@
 //! `vas/output/force`. The input counters (rejected, clamped) are logged and returned in every
 //! `vas/control` response (`stats`).
 
-mod control;
+pub mod control;
 pub mod frames;
 mod geometry;
-mod inputs;
+pub mod inputs;
 pub mod interaction;
 mod io;
 mod loader;

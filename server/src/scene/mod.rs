@@ -315,9 +315,15 @@ impl Scene {
                 file: path.to_owned(),
                 source,
             })?;
-        let file: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Syntax {
+        Scene::from_toml(path, &text)
+    }
+
+    /// [`Scene::load`] on a config's text already read from `path`: errors name `path`, and mesh
+    /// and hand paths are relative to its folder.
+    pub fn from_toml(path: &Path, text: &str) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Syntax {
             file: path.to_owned(),
-            message: describe_toml_error(&text, &e),
+            message: describe_toml_error(text, &e),
         })?;
         Loader {
             path,

@@ -1,0 +1,292 @@
+//! One fuzz target per input path of vas: each feeds what a file, a peer or a client could send
+//! into the entry the server (or the client library) uses, and checks that it is either refused
+//! with an error or accepted as a value that keeps the API's promises. A panic, a hang or a
+//! broken promise is a failure.
+//!
+//! Seeds live in `tests/__fuzz__/<target>/corpus/seed-*`. The hand-joints input has no wire type
+//! yet, so it has no target.
+
+use std::path::Path;
+use std::sync::{Arc, OnceLock};
+
+use vas_client::recording::Recording;
+use vas_fuzz::{
+    CollisionCase, check_hand, check_mesh, check_tree, configs_dir, is_finite, orientations,
+    values_from_bytes,
+};
+use vas_protocol::{
+    ControlRequest, ControlRequestKind, ControlStatus, FLEX_LIMITS_RAD, GloveSample,
+    PartDescription, TrackerSample,
+};
+use vas_server::collision::orientation::SUPPORTED_K;
+use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
+use vas_server::geometry::{TriMesh, load_mesh, mesh_from_bytes};
+use vas_server::grasping::HandModel;
+use vas_server::runtime::control::{Session, answer};
+use vas_server::runtime::inputs::Inputs;
+use vas_server::scene::Scene;
+
+/// A mesh file's bytes, as `load_mesh` has them once read; the extension picks the parser.
+fn mesh_file(name: &str, bytes: &[u8]) {
+    if let Ok(mesh) = mesh_from_bytes(&configs_dir().join(name), bytes) {
+        check_mesh(&mesh);
+        check_tree(&mesh);
+    }
+}
+
+/// The OBJ parser, seeded with the repository's meshes.
+#[test]
+fn obj_mesh() {
+    bolero::check!().for_each(|bytes: &[u8]| mesh_file("fuzz.obj", bytes));
+}
+
+/// The STL parser, seeded with ASCII files.
+#[test]
+fn stl_ascii_mesh() {
+    bolero::check!().for_each(|bytes: &[u8]| mesh_file("fuzz.stl", bytes));
+}
+
+/// The STL parser, seeded with binary files.
+#[test]
+fn stl_binary_mesh() {
+    bolero::check!().for_each(|bytes: &[u8]| mesh_file("fuzz.stl", bytes));
+}
+
+/// The most triangles the procedural shapes of one fuzzed scene may ask for. Up to
+/// `shapes::MAX_TRIANGLES` each is valid, but takes seconds and gigabytes to build: the fuzzer
+/// would spend its time there, or be stopped for it.
+const SCENE_TRIANGLE_BUDGET: i64 = 200_000;
+
+/// The sum of the `triangles` counts anywhere in `value`.
+fn triangles_asked(value: &toml::Value) -> i64 {
+    match value {
+        toml::Value::Table(table) => table
+            .iter()
+            .map(|(key, value)| match (key.as_str(), value) {
+                ("triangles", toml::Value::Integer(n)) => (*n).max(0),
+                _ => triangles_asked(value),
+            })
+            .fold(0, i64::saturating_add),
+        toml::Value::Array(values) => values
+            .iter()
+            .map(triangles_asked)
+            .fold(0, i64::saturating_add),
+        _ => 0,
+    }
+}
+
+/// A scene config's text, as `Scene::load` (check-scene, run, a load-scene request) has it once
+/// read; paths are relative to `configs/`, so that seeds load the repository's meshes and hands.
+#[test]
+fn scene_toml() {
+    let path = configs_dir().join("fuzz.toml");
+    bolero::check!().for_each(|bytes: &[u8]| {
+        let Ok(text) = std::str::from_utf8(bytes) else {
+            return;
+        };
+        if let Ok(table) = text.parse::<toml::Table>()
+            && triangles_asked(&toml::Value::Table(table)) > SCENE_TRIANGLE_BUDGET
+        {
+            return;
+        }
+        let Ok(scene) = Scene::from_toml(&path, text) else {
+            return;
+        };
+        assert!(!scene.name.trim().is_empty());
+        for part in &scene.parts {
+            check_mesh(&part.mesh);
+            assert!(is_finite(&part.pose), "{}: {}", part.name, part.pose);
+        }
+        for pair in &scene.groups.parts_not_of_interest {
+            assert!(pair[0] < pair[1] && pair[1] < scene.parts.len(), "{pair:?}");
+        }
+        if let Some(hand) = &scene.hand {
+            check_hand(&hand.model);
+        }
+        let _ = scene.summary();
+    });
+}
+
+/// A hand model config's text, as `HandModel::load` has it once read; `mirror_of` is relative
+/// to `configs/hands/`.
+#[test]
+fn hand_toml() {
+    let path = configs_dir().join("hands/fuzz.toml");
+    bolero::check!().for_each(|bytes: &[u8]| {
+        if let Ok(text) = std::str::from_utf8(bytes)
+            && let Ok(model) = HandModel::from_toml(&path, text)
+        {
+            check_hand(&model);
+        }
+    });
+}
+
+/// A recording (JSON Lines), as `Recording::load` reads it.
+#[test]
+fn recording_jsonl() {
+    let path = Path::new("fuzz.jsonl");
+    bolero::check!().for_each(|bytes: &[u8]| {
+        let Ok(recording) = Recording::from_reader(path, bytes) else {
+            return;
+        };
+        let mut previous = 0.0;
+        for sample in &recording.samples {
+            assert!(
+                sample.time.is_finite() && sample.time >= previous,
+                "{sample:?}"
+            );
+            assert!(sample.input.is_finite(), "{sample:?}");
+            previous = sample.time;
+        }
+    });
+}
+
+/// Tracker samples through the I/O thread's validation: an accepted one becomes a target with
+/// finite poses and unit rotations.
+#[test]
+fn tracker_samples() {
+    bolero::check!().for_each(|bytes: &[u8]| {
+        let mut inputs = Inputs::default();
+        for sample in values_from_bytes::<TrackerSample>(bytes) {
+            if inputs.apply_tracker(&sample).is_err() {
+                continue;
+            }
+            let input = inputs.frame().input;
+            for pose in [input.cart, input.tracker, input.cart * input.tracker] {
+                assert!(is_finite(&pose), "{sample:?} gave {pose}");
+                assert!((pose.rotation.norm() - 1.0).abs() < 1e-9, "{sample:?}");
+            }
+        }
+        let stats = inputs.stats();
+        assert_eq!(
+            stats.tracker_accepted + stats.rejected(),
+            bytes.len().div_ceil(size_of::<TrackerSample>()) as u64
+        );
+    });
+}
+
+/// Glove samples through the I/O thread's validation: an accepted one becomes finite flex
+/// values within the joint limits.
+#[test]
+fn glove_samples() {
+    bolero::check!().for_each(|bytes: &[u8]| {
+        let mut inputs = Inputs::default();
+        for sample in values_from_bytes::<GloveSample>(bytes) {
+            if inputs.apply_glove(&sample).is_err() {
+                continue;
+            }
+            let flex = inputs.frame().input.flex;
+            for (value, (low, high)) in flex.iter().zip(FLEX_LIMITS_RAD) {
+                assert!((low..=high).contains(value), "{sample:?} gave {flex:?}");
+            }
+        }
+    });
+}
+
+/// The demo scene, loaded once.
+fn demo_scene() -> &'static Arc<Scene> {
+    static SCENE: OnceLock<Arc<Scene>> = OnceLock::new();
+    SCENE.get_or_init(|| Arc::new(Scene::load(&configs_dir().join("default.toml")).expect("loads")))
+}
+
+/// Control requests answered in order on a fresh session of the demo scene.
+///
+/// Two kinds are skipped. `LoadScene` with a path that decodes would read whatever file the
+/// fuzzer names (anywhere on the machine, devices too), and what a scene file may hold is
+/// `scene_toml`'s to fuzz; one whose path does not decode is answered, as it never reaches the
+/// file system. `Reset` takes no argument and builds the hand anew (a fifth of a second), so its
+/// answer does not depend on the bytes, and the fuzzer would spend its time there.
+#[test]
+fn control_requests() {
+    bolero::check!().for_each(|bytes: &[u8]| {
+        let scene = demo_scene();
+        let mut session = Session {
+            scene: Arc::clone(scene),
+            inputs: Inputs::default(),
+            epoch: 1,
+        };
+        for request in values_from_bytes::<ControlRequest>(bytes) {
+            let kind = ControlRequestKind::try_from(request.kind);
+            let skipped = match kind {
+                Ok(ControlRequestKind::LoadScene) => request.path.as_str().is_ok(),
+                Ok(ControlRequestKind::Reset) => true,
+                _ => false,
+            };
+            if skipped {
+                continue;
+            }
+            let (response, change) = answer(&mut session, &request);
+            let status = ControlStatus::try_from(response.status).expect("a known status");
+            assert_eq!(response.kind, request.kind);
+            assert_eq!(response.part_count as usize, scene.parts.len());
+            assert_eq!(response.stats, session.inputs.stats());
+            assert!(response.scene_name.as_str().is_ok() && response.message.as_str().is_ok());
+            if status != ControlStatus::Ok {
+                assert!(change.is_none() && response.part == PartDescription::default());
+            } else if kind == Ok(ControlRequestKind::PartInfo) {
+                assert_eq!(response.part.id, request.argument);
+                assert!(response.part.initial_pose.is_finite());
+                assert!(response.part.name.as_str().is_ok());
+            }
+        }
+    });
+}
+
+/// The fixed mesh of the collision target: the low-poly bunny in [-1, 1]^3.
+fn bunny() -> &'static TriMesh {
+    static BUNNY: OnceLock<TriMesh> = OnceLock::new();
+    BUNNY.get_or_init(|| {
+        load_mesh(&configs_dir().join("meshes/low_poly_bunny.obj"))
+            .expect("loads")
+            .normalized_to_unit_box()
+    })
+}
+
+/// The bunny's tree for each orientation set, built once.
+fn bunny_tree(k: usize) -> &'static DopTree {
+    static TREES: OnceLock<Vec<DopTree>> = OnceLock::new();
+    let trees = TREES.get_or_init(|| {
+        SUPPORTED_K
+            .iter()
+            .map(|&k| DopTree::with_orientations(bunny(), orientations(k)))
+            .collect()
+    });
+    &trees[SUPPORTED_K
+        .iter()
+        .position(|&s| s == k)
+        .expect("a supported k")]
+}
+
+/// A small fuzzed mesh, validated and built into a DOP-tree, against the bunny at fuzzed poses:
+/// the first-hit answer and the intersecting triangle pairs equal brute force over all pairs
+/// with the same exact triangle test, in both roles (the bunny as A, then as B).
+#[test]
+fn dop_tree_against_brute_force() {
+    bolero::check!()
+        .with_type::<CollisionCase>()
+        .for_each(|case: &CollisionCase| {
+            let Ok(mesh) = case.mesh.validate() else {
+                return;
+            };
+            check_mesh(&mesh);
+            let k = SUPPORTED_K[usize::from(case.orientations) % SUPPORTED_K.len()];
+            let leaf_size = 1 + usize::from(case.leaf_size % 4);
+            let tree = DopTree::with_options(&mesh, orientations(k), leaf_size);
+            let (bunny, bunny_tree) = (bunny(), bunny_tree(k));
+            let mut stats = Default::default();
+            for pose in case.poses.iter().filter_map(|p| p.isometry()) {
+                for (a, tree_a, b, tree_b, b_to_a) in [
+                    (bunny, bunny_tree, &mesh, &tree, pose),
+                    (&mesh, &tree, bunny, bunny_tree, pose.inverse()),
+                ] {
+                    let expected = brute_force_pairs(a, b, &b_to_a);
+                    let hit = tree_a.intersects(tree_b, &b_to_a, &mut stats);
+                    assert_eq!(hit, !expected.is_empty(), "first hit at {b_to_a}");
+                    let mut pairs = Vec::new();
+                    tree_a.intersecting_pairs(tree_b, &b_to_a, &mut pairs, &mut stats);
+                    pairs.sort_unstable();
+                    assert_eq!(pairs, expected, "pairs at {b_to_a}");
+                }
+            }
+        });
+}
