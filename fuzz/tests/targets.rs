@@ -22,7 +22,7 @@ use vas_server::collision::orientation::SUPPORTED_K;
 use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
 use vas_server::geometry::{TriMesh, load_mesh, mesh_from_bytes};
 use vas_server::grasping::HandModel;
-use vas_server::runtime::control::{Session, answer};
+use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
 use vas_server::runtime::inputs::Inputs;
 use vas_server::scene::Scene;
 
@@ -189,13 +189,14 @@ fn demo_scene() -> &'static Arc<Scene> {
     SCENE.get_or_init(|| Arc::new(Scene::load(&configs_dir().join("default.toml")).expect("loads")))
 }
 
-/// Control requests answered in order on a fresh session of the demo scene.
+/// Control requests answered in order on a fresh session of the demo scene, offering the scenes
+/// of `configs/`.
 ///
-/// Two kinds are skipped. `LoadScene` with a path that decodes would read whatever file the
-/// fuzzer names (anywhere on the machine, devices too), and what a scene file may hold is
-/// `scene_toml`'s to fuzz; one whose path does not decode is answered, as it never reaches the
-/// file system. `Reset` takes no argument and builds the hand anew (a fifth of a second), so its
-/// answer does not depend on the bytes, and the fuzzer would spend its time there.
+/// A load is only asked for here, never carried out (the server's loader thread reads the file,
+/// and what a scene file may hold is `scene_toml`'s to fuzz): a named load must resolve inside
+/// the offered folder. `Reset` is skipped: it takes no argument and builds the hand anew (a
+/// fifth of a second), so its answer does not depend on the bytes, and the fuzzer would spend
+/// its time there.
 #[test]
 fn control_requests() {
     bolero::check!().for_each(|bytes: &[u8]| {
@@ -204,18 +205,24 @@ fn control_requests() {
             scene: Arc::clone(scene),
             inputs: Inputs::default(),
             epoch: 1,
+            catalogue: SceneCatalogue::of(configs_dir()),
         };
         for request in values_from_bytes::<ControlRequest>(bytes) {
             let kind = ControlRequestKind::try_from(request.kind);
-            let skipped = match kind {
-                Ok(ControlRequestKind::LoadScene) => request.path.as_str().is_ok(),
-                Ok(ControlRequestKind::Reset) => true,
-                _ => false,
-            };
-            if skipped {
+            if kind == Ok(ControlRequestKind::Reset) {
                 continue;
             }
-            let (response, change) = answer(&mut session, &request);
+            let (response, change) = match answer(&mut session, &request, false) {
+                Reply::Now(response, change) => (response, change),
+                Reply::Load(path) => {
+                    if kind == Ok(ControlRequestKind::LoadNamedScene) {
+                        assert_eq!(path.parent(), Some(configs_dir().as_path()), "{path:?}");
+                    } else {
+                        assert_eq!(kind, Ok(ControlRequestKind::LoadScene));
+                    }
+                    continue;
+                }
+            };
             let status = ControlStatus::try_from(response.status).expect("a known status");
             assert_eq!(response.kind, request.kind);
             assert_eq!(response.part_count as usize, scene.parts.len());

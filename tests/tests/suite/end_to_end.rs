@@ -549,3 +549,80 @@ fn a_lockstep_replay_answers_every_sample_the_same_way_twice() {
         .expect("a number");
     assert!(flex > 0.5, "{flex}");
 }
+
+/// Receives frames until a geometry frame of a generation after `after` arrives.
+fn next_geometry(client: &mut Client, after: u64) -> std::sync::Arc<vas_protocol::SceneGeometry> {
+    let deadline = Instant::now() + PATIENCE;
+    loop {
+        assert!(
+            Instant::now() < deadline,
+            "no geometry after generation {after}"
+        );
+        client.wait(PATIENCE).expect("wait");
+        for frame in client.receive().expect("receive") {
+            if let Frame::Geometry(geometry) = frame
+                && geometry.generation > after
+            {
+                return geometry;
+            }
+        }
+    }
+}
+
+/// The geometry on the wire is the scene's: a mesh per part with the server's own vertices
+/// (scale applied) and triangles, the hand's segments; a reset sends it again under a new
+/// generation, and a scene loaded by name sends its own.
+#[test]
+fn the_geometry_follows_every_reset_and_load() {
+    let mut server = Server::start("geometry");
+    let mut client = server.connect();
+    let own = Scene::load(&configs_dir().join("default.toml")).expect("loads");
+    let first = next_geometry(&mut client, 0);
+    assert_eq!(first.parts.len(), own.parts.len());
+    for (mesh, part) in first.parts.iter().zip(&own.parts) {
+        assert_eq!(mesh.name, part.name);
+        assert_eq!(mesh.triangles, part.mesh.triangles());
+        let vertices = part.mesh.vertices();
+        assert_eq!(mesh.positions.len(), vertices.len());
+        for (wire, own) in mesh.positions.iter().zip(vertices) {
+            assert!(
+                (0..3).all(|i| (f64::from(wire[i]) - own[i]).abs() < 1e-6),
+                "{}",
+                part.name
+            );
+        }
+    }
+    let model = &own.hand.as_ref().expect("the demo has a hand").model;
+    assert_eq!(first.hands.len(), 1);
+    assert_eq!(first.hands[0].model, model.name());
+    assert_eq!(first.hands[0].segments.len(), model.segments().len());
+    assert!(
+        first.hands[0]
+            .segments
+            .iter()
+            .all(|s| !s.triangles.is_empty())
+    );
+
+    client.reset(PATIENCE).expect("reset");
+    let reset = next_geometry(&mut client, first.generation);
+    assert_eq!((&reset.parts, &reset.hands), (&first.parts, &first.hands));
+
+    let names = client.scene_names(PATIENCE).expect("the scenes offered");
+    assert!(names.iter().any(|name| name == "peg_insert"), "{names:?}");
+    for outside in ["../configs/peg_insert", "/etc/passwd", "peg_insert.toml"] {
+        match client.load_named_scene(outside, PATIENCE) {
+            Err(ClientError::Refused { status, .. }) => {
+                assert_eq!(status, ControlStatus::SceneLoadFailed, "{outside}")
+            }
+            other => panic!("{outside} is no offered name, got {other:?}"),
+        }
+    }
+    client
+        .load_named_scene("peg_insert", PATIENCE)
+        .expect("loads");
+    let loaded = next_geometry(&mut client, reset.generation);
+    let peg = Scene::load(&configs_dir().join("peg_insert.toml")).expect("loads");
+    let names: Vec<&str> = loaded.parts.iter().map(|mesh| mesh.name.as_str()).collect();
+    let expected: Vec<&str> = peg.parts.iter().map(|part| part.name.as_str()).collect();
+    assert_eq!(names, expected);
+}
