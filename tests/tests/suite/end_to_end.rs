@@ -338,7 +338,7 @@ fn control_requests_load_scenes_reset_and_set_the_metaphor() {
 fn watch_prints_frames_as_json_lines() {
     let mut server = Server::start("watch");
     server.connect();
-    let mut watch = server.client_tool(&["watch", "--count", "5"], Stdio::piped());
+    let mut watch = server.client_tool(&["watch", "--count", "8"], Stdio::piped());
     let stdout = watch.take_stdout().expect("piped");
     let lines: Vec<String> = BufReader::new(stdout)
         .lines()
@@ -346,9 +346,9 @@ fn watch_prints_frames_as_json_lines() {
         .collect();
     let status = watch
         .wait_exit(PATIENCE)
-        .expect("watch ends after 5 frames");
+        .expect("watch ends after 8 frames");
     assert!(status.success(), "{}", watch.log());
-    assert_eq!(lines.len(), 5);
+    assert_eq!(lines.len(), 8);
     let scene = Scene::load(&configs_dir().join("default.toml")).expect("loads");
     let json =
         |line: &String| -> serde_json::Value { serde_json::from_str(line).expect("a JSON line") };
