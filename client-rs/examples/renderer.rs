@@ -1,9 +1,9 @@
 //! How a renderer connects: the loop of a renderer that draws nothing.
 //!
-//! The scene's geometry arrives first (each part's mesh with its scale applied, each hand
-//! segment's mesh), and again after every load or reset. Then each wake-up "draws" the newest
-//! state, as a renderer does (frames that arrived meanwhile are skipped): a line per part of a
-//! new parts frame, and a line per hand segment of a new hand frame.
+//! The scene's geometry (each part's mesh with its scale applied, each hand segment's mesh)
+//! arrives on connecting and after every load or reset. Each wake-up "draws" the newest state,
+//! as a renderer does (frames that arrived meanwhile are skipped): a line per part of a new
+//! parts frame, and a line per hand segment of a new hand frame.
 //!
 //! ```text
 //! cargo run --release -p vas-server -- run --prefix demo
@@ -34,18 +34,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .handle_termination_signals(true)
         .prefix(args.prefix.as_deref())
         .connect()?;
-    let mut drawn = 0;
+    // What was drawn last: a renderer redraws when the newest state differs, whichever poll
+    // brought it (the meshes may come after the first frames, or before).
+    let (mut drawn, mut generation, mut parts_frame, mut hand_frame) = (0, None, None, None);
     while args.frames.is_none_or(|limit| drawn < limit) {
         match client.wait(Duration::from_secs(1))? {
-            Wake::Ready => {}
+            Wake::Ready => client.poll()?,
             Wake::Timeout => continue,
             Wake::Terminated => break,
-        }
-        let received = client.poll()?;
+        };
         let Some(geometry) = client.geometry() else {
             continue; // Nothing to draw before the meshes.
         };
-        if received.geometry > 0 {
+        if generation.replace(geometry.generation) != Some(geometry.generation) {
             // Once per scene: a real renderer uploads the meshes here.
             for (id, mesh) in geometry.parts.iter().enumerate() {
                 let (min, max) = mesh.bounds().unwrap_or_default();
@@ -56,7 +57,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
-        if let Some(frame) = client.latest_parts().filter(|_| received.parts > 0) {
+        let parts = (client.latest_parts()).filter(|f| parts_frame != Some(f.header.frame));
+        let hand = (client.latest_hand()).filter(|hand| hand_frame != Some(hand.frame));
+        if parts.is_none() && hand.is_none() {
+            continue; // Events or force frames alone draw nothing.
+        }
+        drawn += 1;
+        if let Some(frame) = parts {
+            parts_frame = Some(frame.header.frame);
             for part in &frame.parts {
                 let name = geometry
                     .parts
@@ -70,7 +78,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
-        if let Some(hand) = client.latest_hand().filter(|_| received.hand > 0) {
+        if let Some(hand) = hand {
+            hand_frame = Some(hand.frame);
             let (frame, side, grasp) = (
                 hand.frame,
                 hand_name(hand.hand),
@@ -89,8 +98,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
-        // A wake-up for events or force frames alone draws nothing.
-        drawn += u64::from(received.parts > 0 || received.hand > 0);
     }
     Ok(())
 }

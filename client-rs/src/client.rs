@@ -245,6 +245,9 @@ pub struct SceneInfo {
     pub hands: Vec<HandInfo>,
     /// How many scenes the server may load by name ([`Client::scene_names`]).
     pub scenes_offered: u32,
+    /// The scene's generation: one more after every load or reset, the same number as its
+    /// geometry's ([`SceneGeometry::generation`]).
+    pub generation: u64,
 }
 
 /// A hand of the scene.
@@ -517,45 +520,45 @@ impl Client {
     }
 
     /// Asks for the scene: its summary, then every part; `timeout` bounds the whole exchange.
+    /// The answers describe one scene generation: when a load or reset comes between them, the
+    /// questions are asked again.
     pub fn scene_info(&self, timeout: Duration) -> Result<SceneInfo, ClientError> {
         let deadline = deadline_after(timeout);
-        let summary = self.request(ControlRequest::scene_info(), deadline, timeout)?;
-        let parts = (0..summary.part_count)
-            .map(|id| {
-                let part = self
-                    .request(ControlRequest::part_info(id), deadline, timeout)?
-                    .part;
-                Ok(PartInfo {
-                    id: part.id,
-                    name: part.name.as_str()?.to_owned(),
-                    group: part.group.as_str()?.to_owned(),
-                    mesh_source: part.mesh_source.as_str()?.to_owned(),
-                    movable: part.flags & PART_MOVABLE != 0,
-                    initial_pose: part.initial_pose,
-                    scale: part.scale,
-                    truncated: part.truncated != 0,
-                })
-            })
-            .collect::<Result<Vec<_>, ClientError>>()?;
-        let hands = (summary.hands.iter())
-            .take(summary.hand_count as usize)
-            .map(|hand| {
-                Ok(HandInfo {
-                    side: HandSide::try_from(hand.side)?,
-                    model: hand.model.as_str()?.to_owned(),
-                })
-            })
-            .collect::<Result<_, ClientError>>()?;
-        Ok(SceneInfo {
-            name: summary.scene_name.as_str()?.to_owned(),
-            source: summary.scene_source.as_str()?.to_owned(),
-            parts,
-            stats: summary.stats,
-            up: summary.up,
-            metres_per_unit: summary.metres_per_unit,
-            hands,
-            scenes_offered: summary.listed_count,
-        })
+        loop {
+            let summary = self.request(ControlRequest::scene_info(), deadline, timeout)?;
+            if let Some(parts) = self.parts_of(&summary, deadline, timeout)? {
+                return scene_info_of(&summary, parts);
+            }
+        }
+    }
+
+    /// Every part of the scene `summary` describes, or `None` if another generation of the
+    /// scene answered meanwhile.
+    fn parts_of(
+        &self,
+        summary: &ControlResponse,
+        deadline: Instant,
+        timeout: Duration,
+    ) -> Result<Option<Vec<PartInfo>>, ClientError> {
+        let mut parts = Vec::with_capacity(summary.part_count as usize);
+        for id in 0..summary.part_count {
+            let answer = self.exchange(ControlRequest::part_info(id), deadline, timeout)?;
+            if answer.generation != summary.generation {
+                return Ok(None);
+            }
+            let part = check_status(ControlRequestKind::PartInfo, answer)?.part;
+            parts.push(PartInfo {
+                id: part.id,
+                name: part.name.as_str()?.to_owned(),
+                group: part.group.as_str()?.to_owned(),
+                mesh_source: part.mesh_source.as_str()?.to_owned(),
+                movable: part.flags & PART_MOVABLE != 0,
+                initial_pose: part.initial_pose,
+                scale: part.scale,
+                truncated: part.truncated != 0,
+            });
+        }
+        Ok(Some(parts))
     }
 
     /// The server's input counters (rejected, clamped and accepted samples).
@@ -626,7 +629,19 @@ impl Client {
         self.request(request, deadline_after(timeout), timeout)
     }
 
+    /// Sends `request` and waits for its answer, refusing any status but [`ControlStatus::Ok`].
     fn request(
+        &self,
+        request: ControlRequest,
+        deadline: Instant,
+        timeout: Duration,
+    ) -> Result<ControlResponse, ClientError> {
+        let kind = ControlRequestKind::try_from(request.kind)?;
+        check_status(kind, self.exchange(request, deadline, timeout)?)
+    }
+
+    /// Sends `request` and waits for its answer, whatever its status.
+    fn exchange(
         &self,
         request: ControlRequest,
         deadline: Instant,
@@ -650,7 +665,7 @@ impl Client {
                     .receive()
                     .map_err(|error| ClientError::ipc("receive a control response", error))?
                 {
-                    return check_status(kind, *response.payload());
+                    return Ok(*response.payload());
                 }
                 let remaining = deadline.saturating_duration_since(Instant::now());
                 if remaining.is_zero() {
@@ -673,6 +688,33 @@ impl Client {
             }
         }
     }
+}
+
+/// The scene `summary` describes, with its `parts`.
+fn scene_info_of(
+    summary: &ControlResponse,
+    parts: Vec<PartInfo>,
+) -> Result<SceneInfo, ClientError> {
+    let hands = (summary.hands.iter())
+        .take(summary.hand_count as usize)
+        .map(|hand| {
+            Ok(HandInfo {
+                side: HandSide::try_from(hand.side)?,
+                model: hand.model.as_str()?.to_owned(),
+            })
+        })
+        .collect::<Result<_, ClientError>>()?;
+    Ok(SceneInfo {
+        name: summary.scene_name.as_str()?.to_owned(),
+        source: summary.scene_source.as_str()?.to_owned(),
+        parts,
+        stats: summary.stats,
+        up: summary.up,
+        metres_per_unit: summary.metres_per_unit,
+        hands,
+        scenes_offered: summary.listed_count,
+        generation: summary.generation,
+    })
 }
 
 fn check_status(

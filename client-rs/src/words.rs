@@ -95,6 +95,7 @@ mod tests {
             metres_per_unit: 1.0,
             hands: Vec::new(),
             scenes_offered: 0,
+            generation: 1,
         })
     }
 

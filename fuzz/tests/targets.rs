@@ -20,7 +20,7 @@ use vas_protocol::{
 };
 use vas_server::collision::orientation::SUPPORTED_K;
 use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
-use vas_server::geometry::{TriMesh, load_mesh, mesh_from_bytes};
+use vas_server::geometry::{FileLimits, TriMesh, load_mesh, mesh_from_bytes};
 use vas_server::grasping::HandModel;
 use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
 use vas_server::runtime::inputs::Inputs;
@@ -89,7 +89,7 @@ fn scene_toml() {
         {
             return;
         }
-        let Ok(scene) = Scene::from_toml(&path, text) else {
+        let Ok(scene) = Scene::from_toml(&path, text, &FileLimits::default()) else {
             return;
         };
         assert!(!scene.name.trim().is_empty());
@@ -114,7 +114,7 @@ fn hand_toml() {
     let path = configs_dir().join("hands/fuzz.toml");
     bolero::check!().for_each(|bytes: &[u8]| {
         if let Ok(text) = std::str::from_utf8(bytes)
-            && let Ok(model) = HandModel::from_toml(&path, text)
+            && let Ok(model) = HandModel::from_toml(&path, text, &FileLimits::default())
         {
             check_hand(&model);
         }

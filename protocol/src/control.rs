@@ -221,7 +221,7 @@ pub const MAX_HANDS: usize = 2;
 /// One flat type for every request kind: the fields a kind does not use are zero. Every response
 /// carries the scene summary and the input counters, so any request doubles as a status query.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("vas::control::ControlResponse::v3")]
+#[type_name("vas::control::ControlResponse::v4")]
 #[repr(C)]
 pub struct ControlResponse {
     /// A [`ControlStatus`] code.
@@ -254,4 +254,9 @@ pub struct ControlResponse {
     pub hands: [HandDescription; MAX_HANDS],
     /// `ListScene`: the name asked for; empty otherwise.
     pub listed: WireText<MAX_NAME_BYTES>,
+    /// The served scene's generation, as the answer leaves: 1 for the scene the server started
+    /// with, one more after each load or reset; the same number as
+    /// [`GeometryHeader::generation`](crate::GeometryHeader::generation). Answers of different
+    /// generations describe different scenes.
+    pub generation: u64,
 }

@@ -50,10 +50,11 @@ fn control_types_keep_their_layout() {
     assert_layout::<InputStats>(64, 8);
     assert_layout::<PartDescription>(728, 8);
     assert_layout::<HandDescription>(72, 4);
-    assert_layout::<ControlResponse>(1912, 8);
+    assert_layout::<ControlResponse>(1920, 8);
     assert_eq!(offset_of!(ControlResponse, part), 600);
     assert_eq!(offset_of!(ControlResponse, stats), 1328);
     assert_eq!(offset_of!(ControlResponse, hands), 1696);
+    assert_eq!(offset_of!(ControlResponse, generation), 1912);
 }
 
 #[test]
@@ -95,7 +96,7 @@ fn payload_type_names_are_versioned() {
             "vas::output::ForceFrame::v1",
             "vas::scene::GeometryHeader::v1",
             "vas::control::ControlRequest::v1",
-            "vas::control::ControlResponse::v3",
+            "vas::control::ControlResponse::v4",
         ]
     );
 }

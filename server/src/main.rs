@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
 use vas_server::geometry::shapes::{self, ShapeKind};
-use vas_server::geometry::write_obj;
+use vas_server::geometry::{FileLimits, write_obj};
 use vas_server::runtime;
 use vas_server::scene::{Scene, default_scene_path};
 
@@ -39,6 +39,8 @@ enum Command {
         /// stepping on its own: replays give the same output every time.
         #[arg(long)]
         lockstep: bool,
+        #[command(flatten)]
+        limits: LimitArgs,
     },
     /// Write a procedural test object (unit size, centred at the origin) as an OBJ file.
     Shape {
@@ -56,7 +58,29 @@ enum Command {
     CheckScene {
         /// The scene file.
         file: PathBuf,
+        #[command(flatten)]
+        limits: LimitArgs,
     },
+}
+
+/// The largest files a scene load reads; larger ones are refused with their size.
+#[derive(Debug, Args)]
+struct LimitArgs {
+    /// The largest mesh file, in bytes or with a unit (KiB, MiB, GiB).
+    #[arg(long, value_name = "SIZE", default_value = "4GiB", value_parser = parse_size)]
+    max_mesh_file: u64,
+    /// The largest scene or hand config file, in bytes or with a unit (KiB, MiB, GiB).
+    #[arg(long, value_name = "SIZE", default_value = "16MiB", value_parser = parse_size)]
+    max_config_file: u64,
+}
+
+impl LimitArgs {
+    fn limits(&self) -> FileLimits {
+        FileLimits {
+            mesh_bytes: self.max_mesh_file,
+            config_bytes: self.max_config_file,
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -65,35 +89,36 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .with_ansi(std::io::stderr().is_terminal())
         .init();
-    let result =
-        match Cli::parse().command {
-            Command::Run {
-                scene,
-                scenes,
-                prefix,
-                lockstep,
-            } => runtime::run(&runtime::RunOptions {
-                scene: scene.unwrap_or_else(default_scene_path),
-                scenes,
-                prefix,
-                lockstep,
-            })
-            .map_err(Into::into),
-            Command::Shape {
-                kind,
-                triangles,
-                out,
-            } => write_shape(kind, triangles, &out),
-            Command::CheckScene { file } => Scene::load(&file)
-                .map_err(anyhow::Error::from)
-                .and_then(|scene| {
-                    match writeln!(std::io::stdout().lock(), "{}", scene.summary()) {
-                        // The reader went away (`check-scene ... | head`): nothing is wrong.
-                        Err(error) if error.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-                        written => written.map_err(Into::into),
-                    }
-                }),
-        };
+    let result = match Cli::parse().command {
+        Command::Run {
+            scene,
+            scenes,
+            prefix,
+            lockstep,
+            limits,
+        } => runtime::run(&runtime::RunOptions {
+            scene: scene.unwrap_or_else(default_scene_path),
+            scenes,
+            prefix,
+            lockstep,
+            limits: limits.limits(),
+        })
+        .map_err(Into::into),
+        Command::Shape {
+            kind,
+            triangles,
+            out,
+        } => write_shape(kind, triangles, &out),
+        Command::CheckScene { file, limits } => Scene::load_within(&file, &limits.limits())
+            .map_err(anyhow::Error::from)
+            .and_then(|scene| {
+                match writeln!(std::io::stdout().lock(), "{}", scene.summary()) {
+                    // The reader went away (`check-scene ... | head`): nothing is wrong.
+                    Err(error) if error.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+                    written => written.map_err(Into::into),
+                }
+            }),
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
@@ -123,6 +148,29 @@ fn shape_kind() -> impl TypedValueParser<Value = ShapeKind> {
         name.parse()
             .expect("the possible values are the kinds' own names")
     })
+}
+
+/// clap's parser of a file size: a whole number of bytes, or of KiB, MiB or GiB (`512MiB`).
+fn parse_size(text: &str) -> Result<u64, String> {
+    let text = text.trim();
+    let split = text
+        .find(|c: char| !c.is_ascii_digit())
+        .unwrap_or(text.len());
+    let (number, unit) = text.split_at(split);
+    let shift = match unit.trim() {
+        "" | "B" => 0,
+        "KiB" => 10,
+        "MiB" => 20,
+        "GiB" => 30,
+        other => return Err(format!("unknown unit {other:?}; use B, KiB, MiB or GiB")),
+    };
+    let number: u64 = number
+        .parse()
+        .map_err(|_| format!("{text:?} is not a size such as 4096 or 64MiB"))?;
+    number
+        .checked_mul(1 << shift)
+        .filter(|&bytes| bytes > 0)
+        .ok_or_else(|| format!("{text:?} must be at least 1 byte and at most 2^64 - 1 bytes"))
 }
 
 /// clap's parser of a procedural shape's triangle count: from 1 to

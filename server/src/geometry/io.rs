@@ -70,11 +70,29 @@ pub enum GeometryError {
     },
 }
 
-/// The largest mesh file read: 4 GiB, more than a 20-million-triangle binary STL.
-pub const MAX_MESH_FILE_BYTES: u64 = 4 << 30;
+/// The largest files the loaders read, by kind: a setting of the deployment (`vas-server
+/// --max-mesh-file`, `--max-config-file`), so that a file that is larger than any the site
+/// uses is refused before it fills the memory.
+///
+/// Passed down to every read rather than kept in a global, so that each load (and each test)
+/// says which limits it reads under.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FileLimits {
+    /// The largest mesh file, in bytes.
+    pub mesh_bytes: u64,
+    /// The largest config file (scene, hand model), in bytes.
+    pub config_bytes: u64,
+}
 
-/// The largest config file (scene, hand model) read: 16 MiB.
-pub const MAX_CONFIG_FILE_BYTES: u64 = 16 << 20;
+impl Default for FileLimits {
+    /// 4 GiB for a mesh (more than a 20-million-triangle binary STL) and 16 MiB for a config.
+    fn default() -> Self {
+        Self {
+            mesh_bytes: 4 << 30,
+            config_bytes: 16 << 20,
+        }
+    }
+}
 
 /// Reads a whole file of at most `limit` bytes, refusing anything but a regular file: a FIFO
 /// would block the reader until a writer comes (forever, for a server's I/O thread), and a
@@ -135,12 +153,18 @@ pub fn describe_toml_error(text: &str, error: &toml::de::Error) -> String {
 ///
 /// All objects and groups of an OBJ file become one mesh that keeps the file's vertex sharing;
 /// polygons are triangulated as fans. Normals, texture coordinates and materials are ignored.
-/// Degenerate triangles are removed with a warning naming the file and the count.
+/// Degenerate triangles are removed with a warning naming the file and the count. The file may
+/// have the [default](FileLimits::default) size at most.
 pub fn load_mesh(path: &Path) -> Result<TriMesh, GeometryError> {
+    load_mesh_within(path, &FileLimits::default())
+}
+
+/// [`load_mesh`] of a file of at most `limits.mesh_bytes`.
+pub fn load_mesh_within(path: &Path, limits: &FileLimits) -> Result<TriMesh, GeometryError> {
     // An unsupported name is refused before the file is read.
     mesh_parser(path)?;
     let bytes =
-        read_regular_file(path, MAX_MESH_FILE_BYTES).map_err(|source| GeometryError::Read {
+        read_regular_file(path, limits.mesh_bytes).map_err(|source| GeometryError::Read {
             path: path.to_owned(),
             source,
         })?;

@@ -10,7 +10,7 @@ pub mod weld;
 pub use adjacency::EdgeAdjacency;
 pub use hull::{ConvexHull, HullSource};
 pub use io::{
-    GeometryError, MAX_CONFIG_FILE_BYTES, describe_toml_error, load_mesh, mesh_from_bytes,
+    FileLimits, GeometryError, describe_toml_error, load_mesh, load_mesh_within, mesh_from_bytes,
     parse_mesh_spec, read_regular_text, write_obj,
 };
 pub use mesh::{CleanupReport, MeshError, Point, TriMesh, bounding_box_of, bounding_sphere_of};

@@ -20,7 +20,7 @@ use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::geometry::{MAX_CONFIG_FILE_BYTES, describe_toml_error, read_regular_text};
+use crate::geometry::{FileLimits, describe_toml_error, read_regular_text};
 
 /// Number of flex values: the CyberGlove's 22 sensors, in the order of
 /// `vas_protocol::FLEX_JOINT_NAMES`.
@@ -377,14 +377,24 @@ impl Refuse<'_> {
 
 impl HandModel {
     /// Reads and validates a hand config. A config with `mirror_of` is the mirror image of the
-    /// named file (a path relative to this one), which must itself be a full description.
+    /// named file (a path relative to this one), which must itself be a full description. Each
+    /// file may have the [default](FileLimits::default) size at most.
     pub fn load(path: &Path) -> Result<HandModel, HandConfigError> {
-        HandModel::from_toml(path, &read_hand_text(path)?)
+        HandModel::load_within(path, &FileLimits::default())
     }
 
-    /// [`HandModel::load`] on a config's text already read from `path`: errors name `path`, and
-    /// a `mirror_of` file is read relative to its folder.
-    pub fn from_toml(path: &Path, text: &str) -> Result<HandModel, HandConfigError> {
+    /// [`HandModel::load`] of files of at most `limits.config_bytes`.
+    pub fn load_within(path: &Path, limits: &FileLimits) -> Result<HandModel, HandConfigError> {
+        HandModel::from_toml(path, &read_hand_text(path, limits)?, limits)
+    }
+
+    /// [`HandModel::load_within`] on a config's text already read from `path`: errors name
+    /// `path`, and a `mirror_of` file is read relative to its folder.
+    pub fn from_toml(
+        path: &Path,
+        text: &str,
+        limits: &FileLimits,
+    ) -> Result<HandModel, HandConfigError> {
         let file = parse_hand_file(path, text)?;
         match &file.mirror_of {
             None => HandModel::from_file(path, file),
@@ -397,7 +407,7 @@ impl HandModel {
                     ));
                 }
                 let original_path = path.parent().unwrap_or(Path::new("")).join(relative);
-                let original = read_hand_file(&original_path)?;
+                let original = read_hand_file(&original_path, limits)?;
                 if original.mirror_of.is_some() {
                     return Err(refuse.at(
                         "mirror_of",
@@ -690,12 +700,12 @@ impl HandModel {
     }
 }
 
-fn read_hand_file(path: &Path) -> Result<HandFile, HandConfigError> {
-    parse_hand_file(path, &read_hand_text(path)?)
+fn read_hand_file(path: &Path, limits: &FileLimits) -> Result<HandFile, HandConfigError> {
+    parse_hand_file(path, &read_hand_text(path, limits)?)
 }
 
-fn read_hand_text(path: &Path) -> Result<String, HandConfigError> {
-    read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| HandConfigError::Io {
+fn read_hand_text(path: &Path, limits: &FileLimits) -> Result<String, HandConfigError> {
+    read_regular_text(path, limits.config_bytes).map_err(|source| HandConfigError::Io {
         file: path.to_path_buf(),
         source,
     })
@@ -988,7 +998,7 @@ pub(crate) mod tests {
     }
 
     fn refusal(text: &str) -> String {
-        HandModel::from_toml(Path::new("hand.toml"), text)
+        HandModel::from_toml(Path::new("hand.toml"), text, &FileLimits::default())
             .unwrap_err()
             .to_string()
     }
@@ -1136,7 +1146,8 @@ pub(crate) mod tests {
             "axis = [-1e308, -1e308, 0.0], flex = [5]",
             1,
         );
-        let model = HandModel::from_toml(Path::new("hand.toml"), &text).expect("loads");
+        let model = HandModel::from_toml(Path::new("hand.toml"), &text, &FileLimits::default())
+            .expect("loads");
         let axis = model.segments()[segment(&model, "index middle")].dofs[0].axis;
         let expected = Vector3::new(-1.0, -1.0, 0.0).normalize();
         assert!((axis.into_inner() - expected).norm() < 1e-12, "{axis:?}");

@@ -213,6 +213,7 @@ fn respond(
         listed_count: u32::try_from(session.catalogue.names().len()).unwrap_or(u32::MAX),
         hands,
         listed: WireText::EMPTY,
+        generation: session.epoch,
     };
     match outcome {
         Ok((part, change)) => {

@@ -28,7 +28,7 @@ use super::loader::{Loaded, PendingRequest, SceneLoader};
 use super::loops::{Links, Loops};
 use super::ports::{Ports, Wakeups};
 use super::rendezvous::{ANNOUNCED_WAIT, AwakeWatch, Handoff, Work};
-use super::{RuntimeError, publish_period};
+use super::{RunOptions, RuntimeError, publish_period};
 
 /// How often the input counters are logged, when they changed.
 const STATS_LOG_PERIOD: Duration = Duration::from_secs(5);
@@ -108,7 +108,7 @@ impl InteractionManager {
         start: &Restart,
         links: &Links,
         verified: Receiver<VerifiedFrame>,
-        lockstep: bool,
+        options: &RunOptions,
         config: iceoryx2::config::Config,
     ) -> Result<Self, RuntimeError> {
         let geometry = ServedGeometry::of(start);
@@ -123,11 +123,11 @@ impl InteractionManager {
             verified,
             watch: Arc::clone(&links.io_watch),
             answer: Answer::default(),
-            loader: SceneLoader::new(config),
+            loader: SceneLoader::new(config, options.limits),
             geometry,
             hand_side,
             lockstep: Lockstep {
-                enabled: lockstep,
+                enabled: options.lockstep,
                 in_flight: false,
                 waiting: VecDeque::new(),
             },

@@ -11,6 +11,7 @@ use iceoryx2::prelude::*;
 use vas_protocol::{ControlRequest, ControlResponse};
 
 use super::ports;
+use crate::geometry::FileLimits;
 use crate::scene::Scene;
 
 /// A control request being answered, held until its answer is ready.
@@ -21,6 +22,8 @@ pub(super) type PendingRequest =
 pub(super) struct SceneLoader {
     /// For the loader thread's waker of the I/O thread.
     config: iceoryx2::config::Config,
+    /// The largest files a load reads.
+    limits: FileLimits,
     loading: Option<Loading>,
 }
 
@@ -37,10 +40,12 @@ pub(super) struct Loaded {
 }
 
 impl SceneLoader {
-    /// A loader whose threads wake the I/O thread on `config`'s prefix when they finish.
-    pub(super) fn new(config: iceoryx2::config::Config) -> Self {
+    /// A loader whose threads read files within `limits` and wake the I/O thread on `config`'s
+    /// prefix when they finish.
+    pub(super) fn new(config: iceoryx2::config::Config, limits: FileLimits) -> Self {
         Self {
             config,
+            limits,
             loading: None,
         }
     }
@@ -55,10 +60,14 @@ impl SceneLoader {
     pub(super) fn start(&mut self, path: PathBuf, request: PendingRequest) -> Option<Loaded> {
         let (sender, outcome) = crossbeam_channel::bounded(1);
         let config = self.config.clone();
+        let limits = self.limits;
         let spawned = std::thread::Builder::new()
             .name("scene-loader".into())
             .spawn(move || {
-                let loaded = Scene::load(&path).map_err(|error| error.to_string());
+                let loaded = Scene::load_within(&path, &limits).map_err(|error| error.to_string());
+                if let Ok(scene) = &loaded {
+                    scene.build_trees();
+                }
                 // The receiver is gone only when the server is shutting down.
                 let _ = sender.send(loaded);
                 ports::verified_waker(&config)();

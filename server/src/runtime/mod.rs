@@ -30,6 +30,7 @@ use std::time::Duration;
 use iceoryx2::prelude::*;
 use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
 
+use crate::geometry::FileLimits;
 use crate::scene::{Scene, SceneError};
 use control::Session;
 use frames::HandSetupError;
@@ -49,6 +50,8 @@ pub struct RunOptions {
     /// One frame per input sample, each handed over when the previous one was verified, and no
     /// loop steps on its own: a replay gives the same output every time.
     pub lockstep: bool,
+    /// The largest files read, at start-up and for a load-scene request alike.
+    pub limits: FileLimits,
 }
 
 /// Why the server could not start or had to stop.
@@ -141,7 +144,7 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         "node created"
     );
 
-    let scene = Scene::load(&options.scene)?;
+    let scene = Scene::load_within(&options.scene, &options.limits)?;
     tracing::info!(
         scene = scene.name,
         source = %scene.source.display(),
@@ -166,7 +169,7 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         &start,
         &links,
         verified_out,
-        options.lockstep,
+        options,
         config.clone(),
     )?;
     let waker_config = config.clone();

@@ -52,7 +52,7 @@ use crate::collision::pipeline::ObjectId;
 use crate::collision::{DopTree, OrientationSet};
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{
-    GeometryError, MAX_CONFIG_FILE_BYTES, Point, TriMesh, describe_toml_error, load_mesh,
+    FileLimits, GeometryError, Point, TriMesh, describe_toml_error, load_mesh_within,
     read_regular_text,
 };
 use crate::grasping::{HandModel, PartGeometry};
@@ -308,19 +308,25 @@ fn default_group() -> String {
 
 impl Scene {
     /// Loads and validates the scene config at `path`. Mesh paths (and the hand model) are
-    /// relative to the config's folder.
+    /// relative to the config's folder. Each file may have the [default](FileLimits::default)
+    /// size at most.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        Scene::load_within(path, &FileLimits::default())
+    }
+
+    /// [`Scene::load`] of files (config, meshes, hand model) of at most `limits`.
+    pub fn load_within(path: &Path, limits: &FileLimits) -> Result<Scene, SceneError> {
         let text =
-            read_regular_text(path, MAX_CONFIG_FILE_BYTES).map_err(|source| SceneError::Read {
+            read_regular_text(path, limits.config_bytes).map_err(|source| SceneError::Read {
                 file: path.to_owned(),
                 source,
             })?;
-        Scene::from_toml(path, &text)
+        Scene::from_toml(path, &text, limits)
     }
 
-    /// [`Scene::load`] on a config's text already read from `path`: errors name `path`, and mesh
-    /// and hand paths are relative to its folder.
-    pub fn from_toml(path: &Path, text: &str) -> Result<Scene, SceneError> {
+    /// [`Scene::load_within`] on a config's text already read from `path`: errors name `path`,
+    /// and mesh and hand paths are relative to its folder.
+    pub fn from_toml(path: &Path, text: &str, limits: &FileLimits) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Syntax {
             file: path.to_owned(),
             message: describe_toml_error(text, &e),
@@ -328,6 +334,7 @@ impl Scene {
         Loader {
             path,
             folder: path.parent().unwrap_or(Path::new("")),
+            limits,
             meshes: HashMap::new(),
             orientations: file.params.dop_orientations,
         }
@@ -365,6 +372,15 @@ impl Scene {
             }
         }
         matrix
+    }
+
+    /// Builds every part's DOP-tree now, in parallel, rather than on the loops' first use: a
+    /// scene loaded while another is served is made ready before it replaces it.
+    pub fn build_trees(&self) {
+        use rayon::prelude::*;
+        self.parts.par_iter().for_each(|part| {
+            part.tree();
+        });
     }
 
     /// A human-readable summary: parts, triangles, groups, parameters and rates.
@@ -457,6 +473,8 @@ impl Scene {
 struct Loader<'a> {
     path: &'a Path,
     folder: &'a Path,
+    /// The largest files read.
+    limits: &'a FileLimits,
     /// Meshes already loaded or built, with their trees, by source, so that parts sharing one
     /// are loaded once and share its tree.
     meshes: HashMap<String, (Arc<TriMesh>, PartTree)>,
@@ -546,7 +564,7 @@ impl Loader<'_> {
         let hand = match file.hand {
             Some(hand) => {
                 let path = self.folder.join(&hand);
-                let model = HandModel::load(&path)
+                let model = HandModel::load_within(&path, self.limits)
                     .map_err(|error| self.invalid("hand", error.to_string()))?;
                 Some(SceneHand {
                     path,
@@ -675,7 +693,7 @@ impl Loader<'_> {
             key: format!("parts[{index}].mesh"),
             source,
         };
-        let mut mesh = load_mesh(&path).map_err(mesh_error)?;
+        let mut mesh = load_mesh_within(&path, self.limits).map_err(mesh_error)?;
         if scale != 1.0 {
             // Uniform scaling keeps the triangles' shapes; only extreme scales can make some
             // degenerate, and a mesh with none left is refused.

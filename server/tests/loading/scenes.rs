@@ -686,3 +686,62 @@ fn errors_quote_a_huge_line_cut_short() {
         assert!(message.len() < 1_000, "{} bytes", message.len());
     }
 }
+
+/// Files larger than the configured limits are refused with the file and the limit, whichever
+/// the file is (scene, mesh, hand model), and `check-scene` takes the limits as flags.
+#[test]
+fn files_beyond_the_configured_limits_are_refused() {
+    use vas_server::geometry::FileLimits;
+    let scene = configs().join("default.toml");
+    let loose = FileLimits::default();
+    Scene::load_within(&scene, &loose).expect("the default limits take the demo scene");
+
+    let refusal = |limits: FileLimits| {
+        Scene::load_within(&scene, &limits)
+            .expect_err("a limit below the file's size refuses it")
+            .to_string()
+    };
+    let config = refusal(FileLimits {
+        config_bytes: 64,
+        ..loose
+    });
+    assert!(
+        config.contains("default.toml") && config.contains("64 bytes"),
+        "{config}"
+    );
+    let mesh = refusal(FileLimits {
+        mesh_bytes: 1024,
+        ..loose
+    });
+    assert!(
+        mesh.contains("bunny") && mesh.contains("1024 bytes"),
+        "{mesh}"
+    );
+    // The scene file itself fits in 4 KiB, the hand model it names does not.
+    let hand = refusal(FileLimits {
+        config_bytes: 4096,
+        ..loose
+    });
+    assert!(
+        hand.contains("right.toml") && hand.contains("4096 bytes"),
+        "{hand}"
+    );
+
+    let binary = env!("CARGO_BIN_EXE_vas-server");
+    let check = |size: &str| {
+        Command::new(binary)
+            .args(["check-scene", "--max-mesh-file", size])
+            .arg(&scene)
+            .output()
+            .unwrap()
+    };
+    let refused = check("1KiB");
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("1024 bytes"), "{stderr}");
+    assert!(check("64MiB").status.success());
+    let nonsense = check("lots");
+    assert!(!nonsense.status.success());
+    let stderr = String::from_utf8_lossy(&nonsense.stderr);
+    assert!(stderr.contains("--max-mesh-file"), "{stderr}");
+}

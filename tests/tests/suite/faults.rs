@@ -355,3 +355,81 @@ fn bad_scenes_under_load_are_refused_and_the_stream_goes_on() {
     assert_eq!(info.stats.tracker_accepted, SAMPLES);
     assert_eq!(info.stats.rejected(), 0);
 }
+
+/// A scene requested over control loads apart from the I/O thread: while it loads, the server
+/// answers input and control on the scene it served, refuses a second load as busy, and swaps
+/// the new scene in once it is ready.
+#[test]
+fn the_old_scene_is_served_while_a_requested_one_loads() {
+    let mut server = Server::start("bgload");
+    let mut client = server.connect();
+    let served = client.scene_info(PATIENCE).expect("scene info").name;
+    let large = vas_tests::configs_dir().join("peg_insert_50k.toml");
+    let large = large.to_str().expect("utf-8").to_owned();
+    let prefix = server.prefix().to_owned();
+    let loading = std::thread::spawn(move || {
+        let loader = Client::connect(Some(&prefix)).expect("connect");
+        // The probe below asks for loads too, and each occupies the loader for a moment: the
+        // large load is asked for again until it, not a probe, is the one under way.
+        loop {
+            match loader.load_scene(&large, PATIENCE) {
+                Err(ClientError::Refused {
+                    status: ControlStatus::Busy,
+                    ..
+                }) => continue,
+                answer => {
+                    let response = answer.expect("the scene loads");
+                    return response.scene_name.as_str().expect("utf-8").to_owned();
+                }
+            }
+        }
+    });
+
+    // A load of a missing file fails quickly, or is refused as busy while the large load is
+    // under way: the first busy answer shows the server answering during the load.
+    let missing = vas_tests::configs_dir().join("no_such_scene.toml");
+    let missing = missing.to_str().expect("utf-8");
+    loop {
+        assert!(
+            !loading.is_finished(),
+            "the load ended before it was seen under way"
+        );
+        match client.load_scene(missing, PATIENCE) {
+            Err(ClientError::Refused {
+                status: ControlStatus::Busy,
+                ..
+            }) => break,
+            Err(ClientError::Refused { status, .. }) => {
+                assert_eq!(status, ControlStatus::SceneLoadFailed)
+            }
+            other => panic!("a missing scene cannot load: {other:?}"),
+        }
+    }
+    let during = client
+        .scene_info(PATIENCE)
+        .expect("answered during the load");
+    let sample = tracker(1, [0.0, -0.2, 1.2]);
+    client.send_tracker(&sample).expect("send");
+    assert_eq!(answer(&mut client, &sample).tracker.seq, 1);
+    // Busy again: the load was under way all along (it loads and builds the 50k-triangle peg's
+    // tree, far longer than these few exchanges).
+    assert!(
+        matches!(
+            client.load_scene(missing, PATIENCE),
+            Err(ClientError::Refused {
+                status: ControlStatus::Busy,
+                ..
+            })
+        ),
+        "the load finished before the checks during it"
+    );
+    let loaded = loading.join().expect("the load is answered");
+    let after = client.scene_info(PATIENCE).expect("scene info");
+    assert_eq!(
+        during.name, served,
+        "the old scene is served during the load"
+    );
+    assert_eq!(loaded, "peg insert 50k");
+    assert_eq!(after.name, loaded, "the loaded scene is served once ready");
+    assert!(after.generation > during.generation);
+}

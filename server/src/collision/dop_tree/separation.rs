@@ -28,6 +28,11 @@ pub(super) const BOX_TEST_MAX_TRIANGLES: usize = 64;
 /// on the way down overlap; small boxes still pay on the worst queries (see BENCHMARKS.md, B2).
 pub(super) const PLAIN_BOX_TEST_MAX_TRIANGLES: usize = 8;
 
+/// Relative rounding guard of [`TreePair::face_separation`]'s gaps, of the coordinates' scale:
+/// covers the `f64` rounding of a projection and of posing a corner in the other frame, each a
+/// few ulps.
+const FACE_ROUNDING: f64 = 64.0 * f64::EPSILON;
+
 /// How [`TreePair::face_separation`] measures the extent of an inner node along a leaf's face
 /// normal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -198,6 +203,13 @@ impl<R> TreePair<'_, R> {
                 (centre - radius, centre + radius)
             }
         };
+        // Both sides are projected here in each tree's own frame, while the triangle test poses
+        // B's corners in A's frame (R q + t): the two round differently, so a gap within that
+        // rounding proves nothing (a corner 4e-16 inside a face was once cleared by it).
+        let rounding = FACE_ROUNDING
+            * (f64::from(self.a.max_abs_offset())
+                + f64::from(self.b.max_abs_offset())
+                + self.translation.abs().sum());
         let mut best = Ending::Retest;
         let mut widest = 0.0;
         // A's normals in A's frame, B's in B's own; each rounded to f32 (as stored) before the
@@ -222,10 +234,11 @@ impl<R> TreePair<'_, R> {
             let (low_b, high_b) = range(node_b, triangles_b, &in_b, in_a.dot(&self.translation));
             // In A's frame the other tree is B (beyond along +normal when B is above); in B's
             // frame it is A.
-            let (gap, sign) = if low_b - high_a > widest {
-                (low_b - high_a, if along_b { -1.0 } else { 1.0 })
-            } else if low_a - high_b > widest {
-                (low_a - high_b, if along_b { 1.0 } else { -1.0 })
+            let (above, below) = (low_b - high_a - rounding, low_a - high_b - rounding);
+            let (gap, sign) = if above > widest {
+                (above, if along_b { -1.0 } else { 1.0 })
+            } else if below > widest {
+                (below, if along_b { 1.0 } else { -1.0 })
             } else {
                 continue;
             };
