@@ -14,8 +14,9 @@ pub const MAX_COMMAND_BYTES: usize = 4096;
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Command {
-    /// Put the scene back to its initial state.
-    Reset,
+    /// Put the scene back to its initial state. (A struct variant: serde lets a unit variant
+    /// of a tagged enum through with any other fields.)
+    Reset {},
     /// Load one of the scenes the server offers, by name (never a path).
     LoadScene {
         /// The scene's name, as the server lists it.
@@ -32,7 +33,7 @@ impl Command {
     /// The command's `type`, for replies and logs.
     pub fn name(&self) -> &'static str {
         match self {
-            Self::Reset => "reset",
+            Self::Reset {} => "reset",
             Self::LoadScene { .. } => "load_scene",
             Self::SetMetaphor { .. } => "set_metaphor",
         }
@@ -116,7 +117,7 @@ mod tests {
 
     #[test]
     fn the_three_commands_parse() {
-        assert_eq!(parse(r#"{"type":"reset"}"#), Ok(Command::Reset));
+        assert_eq!(parse(r#"{"type":"reset"}"#), Ok(Command::Reset {}));
         assert_eq!(
             parse(r#"{"type":"load_scene","name":"peg insert"}"#),
             Ok(Command::LoadScene {

@@ -180,7 +180,7 @@ struct Latest {
 /// Carries out a page's command on the server; the answer in words either way.
 fn carry_out(client: &Client, command: &Command) -> Result<String, String> {
     let done = match command {
-        Command::Reset => client.reset(CONTROL_TIMEOUT).map(|_| "scene reset".to_owned()),
+        Command::Reset {} => client.reset(CONTROL_TIMEOUT).map(|_| "scene reset".to_owned()),
         Command::SetMetaphor { metaphor } => client
             .set_metaphor((*metaphor).into(), CONTROL_TIMEOUT)
             .map(|_| format!("grasp metaphor: {}", metaphor.words())),
