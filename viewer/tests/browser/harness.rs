@@ -85,36 +85,70 @@ impl Viewer {
     }
 }
 
-/// A `GET path` sent as written (no client normalises it), over one HTTP/1.1 connection:
-/// the status and the body.
+/// A `GET path` sent as written (no client normalises it): the status and the body.
 pub async fn http_get(address: SocketAddr, path: &str) -> (u16, Vec<u8>) {
+    http_request(address, "GET", path, None).await
+}
+
+/// One HTTP/1.1 request with an optional JSON body, on its own connection: the status and the
+/// body of the answer.
+async fn http_request(
+    address: SocketAddr,
+    method: &str,
+    path: &str,
+    json_body: Option<&str>,
+) -> (u16, Vec<u8>) {
     let mut stream = TcpStream::connect(address).await.expect("connect");
-    let request =
-        format!("GET {path} HTTP/1.1\r\nHost: {address}\r\nConnection: close\r\n\r\n").into_bytes();
-    stream.write_all(&request).await.expect("send the request");
-    let mut response = Vec::new();
+    let mut request = format!("{method} {path} HTTP/1.1\r\nHost: {address}\r\n");
+    if let Some(body) = json_body {
+        request += &format!(
+            "Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+            body.len()
+        );
+    } else {
+        request += "\r\n";
+    }
     stream
-        .read_to_end(&mut response)
+        .write_all(request.as_bytes())
         .await
-        .expect("read the response");
-    let split = response
-        .windows(4)
-        .position(|window| window == b"\r\n\r\n")
-        .expect("a complete response head");
-    let head = String::from_utf8_lossy(&response[..split]).into_owned();
+        .expect("send the request");
+    let mut response = Vec::new();
+    let head_end = loop {
+        if let Some(end) = response.windows(4).position(|window| window == b"\r\n\r\n") {
+            break end + 4;
+        }
+        read_more(&mut stream, &mut response).await;
+    };
+    let head = String::from_utf8_lossy(&response[..head_end]).to_ascii_lowercase();
     let status = head
         .split(' ')
         .nth(1)
         .and_then(|code| code.parse().ok())
         .unwrap_or_else(|| panic!("no status in {head:?}"));
-    let mut body = response[split + 4..].to_vec();
-    if head
-        .to_ascii_lowercase()
-        .contains("transfer-encoding: chunked")
-    {
-        body = dechunk(&body);
+    let mut body = response.split_off(head_end);
+    if head.contains("transfer-encoding: chunked") {
+        while !body.ends_with(b"0\r\n\r\n") {
+            read_more(&mut stream, &mut body).await;
+        }
+        return (status, dechunk(&body));
+    }
+    let length = head
+        .lines()
+        .find_map(|line| line.strip_prefix("content-length:"))
+        .and_then(|length| length.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no length in {head:?}"));
+    while body.len() < length {
+        read_more(&mut stream, &mut body).await;
     }
     (status, body)
+}
+
+/// Appends what `stream` has next to `buffer`; panics at its end.
+async fn read_more(stream: &mut TcpStream, buffer: &mut Vec<u8>) {
+    let mut chunk = [0; 16 * 1024];
+    let read = stream.read(&mut chunk).await.expect("read the response");
+    assert!(read > 0, "the response ended early");
+    buffer.extend_from_slice(&chunk[..read]);
 }
 
 /// The body of a chunked transfer.
@@ -252,27 +286,15 @@ impl Browser {
             .expect("session id")
             .expect("a session");
         let body = json!({ "cmd": command, "params": params }).to_string();
-        let address: SocketAddr = self
-            .driver_address()
-            .parse()
-            .expect("the driver's address");
-        let mut stream = TcpStream::connect(address).await.expect("connect");
-        let request = format!(
-            "POST /session/{session}/goog/cdp/execute HTTP/1.1\r\nHost: {address}\r\n\
-             Content-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
-            body.len()
+        let address = SocketAddr::from(([127, 0, 0, 1], self.driver_port));
+        let path = format!("/session/{session}/goog/cdp/execute");
+        let (status, answer) = http_request(address, "POST", &path, Some(&body)).await;
+        assert_eq!(
+            status,
+            200,
+            "CDP {command} failed: {}",
+            String::from_utf8_lossy(&answer)
         );
-        stream.write_all(request.as_bytes()).await.expect("send");
-        let mut response = String::new();
-        stream.read_to_string(&mut response).await.expect("read");
-        assert!(
-            response.starts_with("HTTP/1.1 200"),
-            "CDP {command} failed: {response}"
-        );
-    }
-
-    fn driver_address(&self) -> String {
-        format!("127.0.0.1:{}", self.driver_port)
     }
 
     /// A screenshot of the window, decoded: (width, height, RGBA rows).

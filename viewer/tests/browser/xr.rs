@@ -9,8 +9,10 @@ use crate::harness::{Browser, Viewer};
 /// iwer's build, which defines `window.IWER` (see `vendor/README.md`).
 const IWER: &str = include_str!("vendor/iwer/iwer.min.js");
 
-/// Installs an emulated Meta Quest 3 as the page's `navigator.xr`.
-const INSTALL: &str = "new IWER.XRDevice(IWER.metaQuest3).installRuntime();";
+/// Installs an emulated Meta Quest 3 as the page's `navigator.xr`, over Chromium's own (which
+/// has no headset to offer).
+const INSTALL: &str =
+    "new IWER.XRDevice(IWER.metaQuest3).installRuntime({ forceInstall: true });";
 
 #[tokio::test]
 async fn entering_vr_draws_the_scene_in_an_xr_session() {
