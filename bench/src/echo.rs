@@ -13,7 +13,7 @@ use anyhow::{Context, anyhow};
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use vas_protocol::services::{self, GLOVE, HAND, TRACKER, config_with_prefix};
-use vas_protocol::{FLEX_COUNT, HandFrame, InputStamp, WirePose, wall_clock_ns};
+use vas_protocol::{HandFrame, wall_clock_ns};
 
 /// The line the echo prints on stdout once its ports exist, so that a parent knows samples
 /// sent from then on are answered.
@@ -83,16 +83,7 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
         .context("announcing readiness")?;
     drop(out);
 
-    let mut frame = HandFrame {
-        frame: 0,
-        tracker: InputStamp::default(),
-        glove: InputStamp::default(),
-        timestamp_ns: 0,
-        root: WirePose::IDENTITY,
-        flex: [0.0; FLEX_COUNT],
-        touching: 0,
-        grasp_type: 0,
-    };
+    let mut frame = HandFrame::default();
     let answer = |frame: &mut HandFrame| -> anyhow::Result<()> {
         frame.frame += 1;
         frame.timestamp_ns = wall_clock_ns();

@@ -573,11 +573,7 @@ mod tests {
             frame: 1,
             tracker: stamp(1, 1_000),
             glove: stamp(1, 1_500),
-            timestamp_ns: 0,
-            root: vas_protocol::WirePose::IDENTITY,
-            flex: [0.0; vas_protocol::FLEX_COUNT],
-            touching: 0,
-            grasp_type: 0,
+            ..HandFrame::default()
         };
         answers.mark(&frame, &sent, 3_000);
         let later = HandFrame { frame: 4, ..frame };

@@ -1,9 +1,9 @@
 //! How a renderer connects: the loop of a renderer that draws nothing.
 //!
-//! It connects to a vas server, asks for the scene (part names and geometry), then waits for
-//! frames. Each time it wakes it "draws" the newest state, as a renderer does (frames that
-//! arrived meanwhile are skipped): one line per part of the newest parts frame, and one line for
-//! a new hand frame.
+//! The scene's geometry arrives first (each part's mesh with its scale applied, each hand
+//! segment's mesh), and again after every load or reset. Then each wake-up "draws" the newest
+//! state, as a renderer does (frames that arrived meanwhile are skipped): a line per part of a
+//! new parts frame, and a line per hand segment of a new hand frame.
 //!
 //! ```text
 //! cargo run --release -p vas-server -- run --prefix demo
@@ -13,9 +13,10 @@
 use std::time::Duration;
 
 use clap::Parser;
-use vas_client::{Client, GraspType, HandSegment, Wake};
+use vas_client::words::{grasp_name, hand_name};
+use vas_client::{Client, HandSegment, Wake};
 
-/// Prints the scene's parts and hand as the server moves them.
+/// Prints the scene's meshes, then its parts and hand as the server moves them.
 #[derive(Parser)]
 struct Args {
     /// The server's iceoryx2 prefix (its `--prefix`).
@@ -33,12 +34,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .handle_termination_signals(true)
         .prefix(args.prefix.as_deref())
         .connect()?;
-
-    // Once per scene: what each part id is (a real renderer loads `mesh_source` here). The
-    // answer also tells that the server is up (it may still be loading its scene).
-    let scene = client.scene_info(Duration::from_secs(30))?;
-    println!("scene {:?} parts={}", scene.name, scene.parts.len());
-
     let mut drawn = 0;
     while args.frames.is_none_or(|limit| drawn < limit) {
         match client.wait(Duration::from_secs(1))? {
@@ -47,35 +42,52 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Wake::Terminated => break,
         }
         let received = client.poll()?;
-        if let Some(frame) = client.latest_parts().filter(|_| received.parts > 0) {
-            println!("parts frame={}", frame.header.frame);
-            for part in &frame.parts {
-                let name = scene.parts.get(part.id as usize).map_or("?", |p| &p.name);
-                let (position, rotation) = (part.position, part.rotation);
+        let Some(geometry) = client.geometry() else {
+            continue; // Nothing to draw before the meshes.
+        };
+        if received.geometry > 0 {
+            // Once per scene: a real renderer uploads the meshes here.
+            for (id, mesh) in geometry.parts.iter().enumerate() {
+                let (min, max) = mesh.bounds().unwrap_or_default();
+                let triangles = mesh.triangles.len();
                 println!(
-                    "part id={} name={name:?} position={position:?} rotation={rotation:?}",
+                    "mesh part={id} name={:?} triangles={triangles} min={min:?} max={max:?}",
+                    mesh.name
+                );
+            }
+        }
+        if let Some(frame) = client.latest_parts().filter(|_| received.parts > 0) {
+            for part in &frame.parts {
+                let name = geometry
+                    .parts
+                    .get(part.id as usize)
+                    .map_or("?", |m| &m.name);
+                let (frame, position, rotation) =
+                    (frame.header.frame, part.position, part.rotation);
+                println!(
+                    "part frame={frame} id={} name={name:?} position={position:?} rotation={rotation:?}",
                     part.id
                 );
             }
         }
         if let Some(hand) = client.latest_hand().filter(|_| received.hand > 0) {
-            let grasp =
-                GraspType::try_from(hand.grasp_type).map_or("?".into(), |g| format!("{g:?}"));
-            let touching: Vec<String> = HandSegment::ALL
-                .iter()
-                .filter(|segment| hand.touching & segment.bit() != 0)
-                .map(|segment| format!("{segment:?}"))
-                .collect();
-            let (position, rotation) = (hand.root.position, hand.root.rotation);
-            println!(
-                "hand frame={} position={position:?} rotation={rotation:?} grasp={grasp} touching={}",
+            let (frame, side, grasp) = (
                 hand.frame,
-                if touching.is_empty() {
-                    "none".to_owned()
-                } else {
-                    touching.join(",")
-                }
+                hand_name(hand.hand),
+                grasp_name(hand.grasp_type),
             );
+            println!(
+                "hand frame={frame} side={side} grasp={grasp} position={:?}",
+                hand.root.position
+            );
+            // Each segment's mesh goes where the server verified the segment: no kinematics here.
+            for (segment, pose) in HandSegment::ALL.iter().zip(hand.segment_poses()) {
+                let (position, rotation) = (pose.position, pose.rotation);
+                println!(
+                    "segment frame={frame} name={} position={position:?} rotation={rotation:?}",
+                    segment.name()
+                );
+            }
         }
         // A wake-up for events or force frames alone draws nothing.
         drawn += u64::from(received.parts > 0 || received.hand > 0);

@@ -1,5 +1,6 @@
 //! The [`Client`]: the renderer's connection to a vas server.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use iceoryx2::port::client::Client as ControlPort;
@@ -11,9 +12,10 @@ use iceoryx2::prelude::*;
 use serde::Serialize;
 use vas_protocol::services::{self, config_with_prefix};
 use vas_protocol::{
-    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, ForceFrame, GloveSample,
-    HandFrame, InputStats, MAX_PATH_BYTES, PART_MOVABLE, PartState, PartsFrameHeader, SimEvent,
-    SlidingMetaphor, TrackerSample, WirePose, WireText,
+    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, ForceFrame, GeometryHeader,
+    GloveSample, HandFrame, HandSide, InputStats, MAX_PATH_BYTES, MeshData, PART_MOVABLE,
+    PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor, TrackerSample, WirePose,
+    WireText,
 };
 
 use crate::ClientError;
@@ -63,6 +65,7 @@ impl ClientBuilder {
         let hand_wakeup = services::open_wakeup(&node, services::HAND)?;
         let events_wakeup = services::open_wakeup(&node, services::EVENTS)?;
         let force_wakeup = services::open_wakeup(&node, services::FORCE)?;
+        let geometry_wakeup = services::open_wakeup(&node, services::GEOMETRY)?;
         let control_wakeup = services::open_wakeup(&node, services::CONTROL)?;
         Ok(Client {
             tracker: tracker
@@ -113,6 +116,14 @@ impl ClientBuilder {
                 .listener_builder()
                 .create()
                 .map_err(ClientError::port)?,
+            geometry: services::open_geometry(&node)?
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            geometry_listener: geometry_wakeup
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)?,
             control: control
                 .client_builder()
                 .create()
@@ -128,6 +139,7 @@ impl ClientBuilder {
             waitset: new_waitset(self.handle_termination_signals)?,
             latest_parts: None,
             latest_hand: None,
+            latest_geometry: None,
             node,
         })
     }
@@ -162,6 +174,10 @@ pub struct PartsFrame {
 /// One received output frame.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "a hand frame is the common case; boxing it would allocate per frame"
+)]
 pub enum Frame {
     /// A parts frame.
     Parts(PartsFrame),
@@ -171,6 +187,28 @@ pub enum Frame {
     Event(SimEvent),
     /// The force and torque for a force-feedback device.
     Force(ForceFrame),
+    /// The render meshes of a new scene generation (after a start, load or reset); in JSON, a
+    /// summary.
+    Geometry(#[serde(serialize_with = "geometry_summary")] Arc<SceneGeometry>),
+}
+
+/// A geometry frame in JSON: its generation and what it holds, not every vertex.
+fn geometry_summary<S: serde::Serializer>(
+    geometry: &Arc<SceneGeometry>,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeStruct;
+    let triangles = |mesh: &MeshData| mesh.triangles.len();
+    let mut summary = serializer.serialize_struct("Geometry", 4)?;
+    summary.serialize_field("generation", &geometry.generation)?;
+    summary.serialize_field("parts", &geometry.parts.len())?;
+    summary.serialize_field("hands", &geometry.hands.len())?;
+    let total: usize = (geometry.parts.iter())
+        .chain(geometry.hands.iter().flat_map(|hand| &hand.segments))
+        .map(triangles)
+        .sum();
+    summary.serialize_field("triangles", &total)?;
+    summary.end()
 }
 
 /// How many frames a [`Client::poll`] received.
@@ -184,6 +222,8 @@ pub struct Received {
     pub events: usize,
     /// Force frames received.
     pub force: usize,
+    /// Geometry generations received.
+    pub geometry: usize,
 }
 
 /// The server's scene, as the control service describes it.
@@ -197,6 +237,23 @@ pub struct SceneInfo {
     pub parts: Vec<PartInfo>,
     /// The server's input counters at the time of the answer.
     pub stats: InputStats,
+    /// The world's up direction (z up).
+    pub up: [f64; 3],
+    /// Metres per unit of every length (1: metres).
+    pub metres_per_unit: f64,
+    /// The scene's hands: side and model name.
+    pub hands: Vec<HandInfo>,
+    /// How many scenes the server may load by name ([`Client::scene_names`]).
+    pub scenes_offered: u32,
+}
+
+/// A hand of the scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HandInfo {
+    /// Which hand.
+    pub side: HandSide,
+    /// The hand model's name.
+    pub model: String,
 }
 
 /// One part of the scene.
@@ -214,6 +271,8 @@ pub struct PartInfo {
     pub movable: bool,
     /// Its pose when the scene was loaded.
     pub initial_pose: WirePose,
+    /// The scale the scene applies to its mesh (already applied to the mesh on the wire).
+    pub scale: f64,
     /// Whether a name or path was cut to fit the wire.
     pub truncated: bool,
 }
@@ -236,12 +295,15 @@ pub struct Client {
     events_listener: Listener<ipc::Service>,
     force: Subscriber<ipc::Service, ForceFrame, ()>,
     force_listener: Listener<ipc::Service>,
+    geometry: Subscriber<ipc::Service, [u8], GeometryHeader>,
+    geometry_listener: Listener<ipc::Service>,
     control: ControlPort<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     control_notifier: Notifier<ipc::Service>,
     control_listener: Listener<ipc::Service>,
     waitset: WaitSet<ipc::Service>,
     latest_parts: Option<PartsFrame>,
     latest_hand: Option<HandFrame>,
+    latest_geometry: Option<Arc<SceneGeometry>>,
 }
 
 impl Client {
@@ -297,14 +359,16 @@ impl Client {
         }
     }
 
-    /// Blocks until an output frame (parts, hand, event or force) is ready to be received, the
+    /// Blocks until an output frame (geometry, parts, hand, event or force) is ready to be received, the
     /// timeout passes, or (with signal handling on) a termination signal arrives. Frames stay
     /// queued for [`Client::poll`] or [`Client::receive`].
     pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
         let (parts, hand, events, force) = (&self.parts, &self.hand, &self.events, &self.force);
+        let geometry = &self.geometry;
         wait_until_ready(
             &self.waitset,
             &[
+                &self.geometry_listener,
                 &self.parts_listener,
                 &self.hand_listener,
                 &self.events_listener,
@@ -315,7 +379,8 @@ impl Client {
                 let has = |result: Result<bool, _>| {
                     result.map_err(|error| ClientError::ipc("check a subscriber", error))
                 };
-                Ok(has(parts.has_samples())?
+                Ok(has(geometry.has_samples())?
+                    || has(parts.has_samples())?
                     || has(hand.has_samples())?
                     || has(events.has_samples())?
                     || has(force.has_samples())?)
@@ -323,12 +388,21 @@ impl Client {
         )
     }
 
-    /// Receives every queued frame, keeps the newest of each kind for [`Client::latest_parts`]
-    /// and [`Client::latest_hand`], and returns them all in arrival order per kind: parts
-    /// frames, events, force frames, then hand frames (the server publishes a frame's hand
-    /// last, so the parts and events of a hand frame's own frame come with it or before it).
+    /// Receives every queued frame, keeps the newest of each kind for [`Client::geometry`],
+    /// [`Client::latest_parts`] and [`Client::latest_hand`], and returns them all in arrival
+    /// order per kind: geometry, parts frames, events, force frames, then hand frames (the
+    /// server publishes a frame's hand last, so the parts and events of a hand frame's own frame
+    /// come with it or before it, and a new scene's geometry before its frames).
     pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
         let mut frames = Vec::new();
+        while let Some(sample) = self
+            .geometry
+            .receive()
+            .map_err(|error| ClientError::ipc("receive the geometry", error))?
+        {
+            let geometry = SceneGeometry::decode(sample.user_header(), sample.payload())?;
+            frames.push(Frame::Geometry(Arc::new(geometry)));
+        }
         while let Some(sample) = self
             .parts
             .receive()
@@ -362,6 +436,7 @@ impl Client {
         }
         for frame in &frames {
             match frame {
+                Frame::Geometry(geometry) => self.latest_geometry = Some(Arc::clone(geometry)),
                 Frame::Parts(parts) => self.latest_parts = Some(parts.clone()),
                 Frame::Hand(hand) => self.latest_hand = Some(*hand),
                 Frame::Event(_) | Frame::Force(_) => {}
@@ -409,6 +484,7 @@ impl Client {
                 Frame::Hand(_) => received.hand += 1,
                 Frame::Event(_) => received.events += 1,
                 Frame::Force(_) => received.force += 1,
+                Frame::Geometry(_) => received.geometry += 1,
             }
         }
         Ok(received)
@@ -422,6 +498,14 @@ impl Client {
     /// The newest hand frame received so far (by [`Client::poll`] or [`Client::receive`]).
     pub fn latest_hand(&self) -> Option<&HandFrame> {
         self.latest_hand.as_ref()
+    }
+
+    /// The render meshes of the newest scene generation received so far (by [`Client::poll`]
+    /// or [`Client::receive`]): every part's mesh in its own frame with its scale applied, and
+    /// every hand segment's mesh in the segment's frame. A client that connects gets the
+    /// current generation at once.
+    pub fn geometry(&self) -> Option<&Arc<SceneGeometry>> {
+        self.latest_geometry.as_ref()
     }
 
     /// Sleeps for `duration`; [`Wake::Terminated`] if a handled termination signal arrived.
@@ -448,15 +532,29 @@ impl Client {
                     mesh_source: part.mesh_source.as_str()?.to_owned(),
                     movable: part.flags & PART_MOVABLE != 0,
                     initial_pose: part.initial_pose,
+                    scale: part.scale,
                     truncated: part.truncated != 0,
                 })
             })
             .collect::<Result<Vec<_>, ClientError>>()?;
+        let hands = (summary.hands.iter())
+            .take(summary.hand_count as usize)
+            .map(|hand| {
+                Ok(HandInfo {
+                    side: HandSide::try_from(hand.side)?,
+                    model: hand.model.as_str()?.to_owned(),
+                })
+            })
+            .collect::<Result<_, ClientError>>()?;
         Ok(SceneInfo {
             name: summary.scene_name.as_str()?.to_owned(),
             source: summary.scene_source.as_str()?.to_owned(),
             parts,
             stats: summary.stats,
+            up: summary.up,
+            metres_per_unit: summary.metres_per_unit,
+            hands,
+            scenes_offered: summary.listed_count,
         })
     }
 
@@ -473,6 +571,35 @@ impl Client {
     ) -> Result<ControlResponse, ClientError> {
         let path = WireText::<MAX_PATH_BYTES>::new(path)?;
         self.control(ControlRequest::load_scene(path), timeout)
+    }
+
+    /// The names of the scenes the server may load by name ([`Client::load_named_scene`]);
+    /// `timeout` bounds the whole exchange.
+    pub fn scene_names(&self, timeout: Duration) -> Result<Vec<String>, ClientError> {
+        let deadline = deadline_after(timeout);
+        let first = self.request(ControlRequest::list_scene(0), deadline, timeout);
+        let count = match &first {
+            Ok(response) => response.listed_count,
+            // An empty list refuses index 0.
+            Err(ClientError::Refused { .. }) => return Ok(Vec::new()),
+            Err(_) => return first.map(|_| Vec::new()),
+        };
+        let mut names = vec![first?.listed.as_str()?.to_owned()];
+        for index in 1..count {
+            let response = self.request(ControlRequest::list_scene(index), deadline, timeout)?;
+            names.push(response.listed.as_str()?.to_owned());
+        }
+        Ok(names)
+    }
+
+    /// Asks the server to load the scene it offers as `name` (one of [`Client::scene_names`]).
+    pub fn load_named_scene(
+        &self,
+        name: &str,
+        timeout: Duration,
+    ) -> Result<ControlResponse, ClientError> {
+        let name = WireText::<MAX_PATH_BYTES>::new(name)?;
+        self.control(ControlRequest::load_named_scene(name), timeout)
     }
 
     /// Asks the server to put the scene back to its initial state.

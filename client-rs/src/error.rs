@@ -8,7 +8,9 @@ use iceoryx2::port::publisher::PublisherCreateError;
 use iceoryx2::port::subscriber::SubscriberCreateError;
 use iceoryx2::service::port_factory::client::ClientCreateError;
 use vas_protocol::services::{PrefixError, ServiceOpenError};
-use vas_protocol::{ControlRequestKind, ControlStatus, UnknownCode, WireTextError};
+use vas_protocol::{
+    ControlRequestKind, ControlStatus, GeometryDecodeError, UnknownCode, WireTextError,
+};
 
 /// What went wrong talking to a vas server.
 #[derive(Debug, thiserror::Error)]
@@ -62,6 +64,9 @@ pub enum ClientError {
     /// The server answered with a malformed string.
     #[error(transparent)]
     WireText(#[from] WireTextError),
+    /// A geometry sample could not be read (a corrupt or mismatched peer).
+    #[error(transparent)]
+    Geometry(#[from] GeometryDecodeError),
 }
 
 impl ClientError {

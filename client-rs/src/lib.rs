@@ -32,18 +32,23 @@ pub mod latency;
 pub mod recording;
 mod tap;
 mod wait;
+pub mod words;
 
-pub use client::{Client, ClientBuilder, Frame, PartInfo, PartsFrame, Received, SceneInfo};
+pub use client::{
+    Client, ClientBuilder, Frame, HandInfo, PartInfo, PartsFrame, Received, SceneInfo,
+};
 pub use error::ClientError;
 pub use tap::InputTap;
 pub use wait::Wake;
+pub use words::SceneWords;
 
 /// The wire types, so that a renderer or input sender needs this crate only; the ones such a
 /// program names most are re-exported below as well.
 pub use vas_protocol as protocol;
 pub use vas_protocol::{
     ControlStatus, EventKind, FLEX_COUNT, FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, ForceFrame,
-    GloveSample, GraspType, HAND_PART_ID, HandFrame, HandSegment, InputStamp, InputStats,
-    PART_GRASPED, PART_SLIDING, PART_TOUCHING, PartState, PartsFrameHeader, SimEvent,
-    SlidingMetaphor, TrackerSample, WirePose, wall_clock_ns,
+    GloveSample, GraspType, HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame, HandGeometry, HandSegment,
+    HandSide, InputStamp, InputStats, MeshData, PART_GRASPED, PART_SLIDING, PART_TOUCHING,
+    PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor, TrackerSample, WirePose,
+    wall_clock_ns,
 };

@@ -1,5 +1,5 @@
 //! The `vas-client` tool: watch a server's frames, record and replay input, send samples from
-//! scripts, print the scene. (The latency benchmark and the soak are `vas-bench e2e` and `soak`.)
+//! scripts, print the scene, and reset, load scenes or set the sliding metaphor. (The latency benchmark and the soak are `vas-bench e2e` and `soak`.)
 
 mod cli;
 
@@ -20,7 +20,7 @@ struct Args {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Print parts and hand frames as JSON lines on stdout.
+    /// Print every frame as a JSON line on stdout, codes also in words.
     Watch {
         /// Stop after this many frames.
         #[arg(long)]
@@ -36,6 +36,18 @@ enum Command {
     SendTracker(cli::send::TrackerArgs),
     /// Send one glove sample.
     SendGlove(cli::send::GloveArgs),
+    /// Put the scene back to its initial state.
+    Reset,
+    /// Replace the served scene by a scene file, or by a scene the server offers by name.
+    LoadScene(cli::control::LoadSceneArgs),
+    /// List the scenes the server offers by name.
+    Scenes,
+    /// Choose how grasped parts follow the hand.
+    SetMetaphor {
+        /// The sliding metaphor.
+        #[arg(value_enum)]
+        metaphor: cli::control::Metaphor,
+    },
 }
 
 fn main() -> ExitCode {
@@ -49,6 +61,10 @@ fn main() -> ExitCode {
         Command::Replay(replay) => cli::replay::run(prefix, &replay),
         Command::SendTracker(tracker) => cli::send::tracker(prefix, &tracker),
         Command::SendGlove(glove) => cli::send::glove(prefix, &glove),
+        Command::Reset => cli::control::reset(prefix),
+        Command::LoadScene(load) => cli::control::load_scene(prefix, &load),
+        Command::Scenes => cli::control::scenes(prefix),
+        Command::SetMetaphor { metaphor } => cli::control::set_metaphor(prefix, metaphor),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

@@ -28,12 +28,21 @@ wire_code_enum! {
         SceneInfo = 1,
         /// One part's description; [`ControlRequest::argument`] is the part id.
         PartInfo = 2,
-        /// Replace the scene by the file in [`ControlRequest::path`].
+        /// Replace the scene by the file in [`ControlRequest::path`], as the server's file system
+        /// sees it (for local tools; a page of the viewer uses [`Self::LoadNamedScene`]).
         LoadScene = 3,
         /// Put every part back to its initial pose and forget the hand state.
         Reset = 4,
         /// Select the sliding metaphor; [`ControlRequest::argument`] is a [`SlidingMetaphor`] code.
         SetMetaphor = 5,
+        /// The name of the scene number [`ControlRequest::argument`] among those the server may
+        /// load by name ([`ControlResponse::listed`]), and how many there are
+        /// ([`ControlResponse::listed_count`]).
+        ListScene = 6,
+        /// Replace the scene by the one the server lists under the name in
+        /// [`ControlRequest::path`]: a name, never a path, so that a remote page can only choose
+        /// among the scenes the server offers.
+        LoadNamedScene = 7,
     }
 }
 
@@ -59,7 +68,8 @@ pub struct ControlRequest {
     pub kind: u32,
     /// Part id for `PartInfo`, metaphor code for `SetMetaphor`, 0 otherwise.
     pub argument: u32,
-    /// Scene file for `LoadScene`, as the server sees the file system; empty otherwise.
+    /// Scene file for `LoadScene`, as the server sees the file system; scene name for
+    /// `LoadNamedScene`; empty otherwise.
     pub path: WireText<MAX_PATH_BYTES>,
 }
 
@@ -79,6 +89,19 @@ impl ControlRequest {
         Self {
             path,
             ..Self::with_argument(ControlRequestKind::LoadScene, 0)
+        }
+    }
+
+    /// Ask for the name of the `index`th scene the server may load by name.
+    pub fn list_scene(index: u32) -> Self {
+        Self::with_argument(ControlRequestKind::ListScene, index)
+    }
+
+    /// Ask the server to replace its scene by the one it lists as `name`.
+    pub fn load_named_scene(name: WireText<MAX_PATH_BYTES>) -> Self {
+        Self {
+            path: name,
+            ..Self::with_argument(ControlRequestKind::LoadNamedScene, 0)
         }
     }
 
@@ -111,7 +134,8 @@ wire_code_enum! {
         InvalidRequest = 1,
         /// `PartInfo` named a part id the scene does not have.
         NoSuchPart = 2,
-        /// `LoadScene` failed; the scene is unchanged and the message says why.
+        /// `LoadScene` or `LoadNamedScene` failed (or `ListScene` asked past the list); the scene
+        /// is unchanged and the message says why.
         SceneLoadFailed = 3,
         /// The server understands the request but cannot carry it out in this version.
         Unsupported = 4,
@@ -174,14 +198,30 @@ pub struct PartDescription {
     pub mesh_source: WireText<MAX_PATH_BYTES>,
     /// Non-zero when a string above was cut to fit its capacity.
     pub truncated: u32,
+    /// The scale the scene applies to the part's mesh (already applied to the mesh on
+    /// `vas/scene/geometry`).
+    pub scale: f64,
 }
+
+/// A hand of the scene, as every [`ControlResponse`] describes it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[repr(C)]
+pub struct HandDescription {
+    /// A [`crate::HandSide`] code.
+    pub side: u32,
+    /// The hand model's name.
+    pub model: WireText<MAX_NAME_BYTES>,
+}
+
+/// Most hands a scene has: a left and a right one.
+pub const MAX_HANDS: usize = 2;
 
 /// The answer to a [`ControlRequest`].
 ///
 /// One flat type for every request kind: the fields a kind does not use are zero. Every response
 /// carries the scene summary and the input counters, so any request doubles as a status query.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("vas::control::ControlResponse::v2")]
+#[type_name("vas::control::ControlResponse::v3")]
 #[repr(C)]
 pub struct ControlResponse {
     /// A [`ControlStatus`] code.
@@ -202,4 +242,16 @@ pub struct ControlResponse {
     pub stats: InputStats,
     /// Human-readable detail, mainly for errors.
     pub message: WireText<MAX_STATUS_MESSAGE_BYTES>,
+    /// The world's up direction: `[0, 0, 1]` (z up).
+    pub up: [f64; 3],
+    /// Metres per unit of every length on the wire: 1 (lengths are in metres).
+    pub metres_per_unit: f64,
+    /// Hands the scene has (`hands[..hand_count]`).
+    pub hand_count: u32,
+    /// How many scenes the server may load by name.
+    pub listed_count: u32,
+    /// The scene's hands.
+    pub hands: [HandDescription; MAX_HANDS],
+    /// `ListScene`: the name asked for; empty otherwise.
+    pub listed: WireText<MAX_NAME_BYTES>,
 }

@@ -47,6 +47,7 @@ macro_rules! wire_code_enum {
 
 mod clock;
 mod control;
+mod geometry;
 mod input;
 mod output;
 mod pose;
@@ -55,16 +56,21 @@ mod text;
 
 pub use clock::wall_clock_ns;
 pub use control::{
-    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, InputStats, MAX_NAME_BYTES,
-    MAX_PATH_BYTES, MAX_STATUS_MESSAGE_BYTES, PART_MOVABLE, PartDescription, SlidingMetaphor,
+    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, HandDescription,
+    InputStats, MAX_HANDS, MAX_NAME_BYTES, MAX_PATH_BYTES, MAX_STATUS_MESSAGE_BYTES, PART_MOVABLE,
+    PartDescription, SlidingMetaphor,
+};
+pub use geometry::{
+    GeometryDecodeError, GeometryHeader, HandGeometry, MAX_MESH_NAME_BYTES, MeshData, SceneGeometry,
 };
 pub use input::{
     FLEX_COUNT, FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, GloveSample, GloveTarget, InputRejection,
     MAX_POSITION_M, TrackerSample, TrackerTarget, UNIT_QUATERNION_TOLERANCE,
 };
 pub use output::{
-    EventKind, ForceFrame, GraspType, HAND_PART_ID, HandFrame, HandSegment, InputStamp,
-    PART_GRASPED, PART_SLIDING, PART_TOUCHING, PartState, PartsFrameHeader, SimEvent,
+    EventKind, ForceFrame, GraspType, HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame, HandSegment,
+    HandSide, InputStamp, PART_GRASPED, PART_SLIDING, PART_TOUCHING, PartState, PartsFrameHeader,
+    SimEvent,
 };
 pub use pose::WirePose;
 pub use text::{WireText, WireTextError};

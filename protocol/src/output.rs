@@ -69,9 +69,35 @@ impl PartState {
     }
 }
 
-/// The valid hand: root pose, flex vector, touching segments and grasp type.
+wire_code_enum! {
+    /// Which hand a hand frame, event or hand geometry is about.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    #[serde(rename_all = "snake_case")]
+    pub enum HandSide {
+        /// The right hand.
+        Right = 0,
+        /// The left hand.
+        Left = 1,
+    }
+}
+
+impl HandSide {
+    /// The side in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Right => "right",
+            Self::Left => "left",
+        }
+    }
+}
+
+/// Segments of a hand frame: [`HandSegment::ALL`].
+pub const HAND_SEGMENT_COUNT: usize = 16;
+
+/// One hand as the collision loop verified it: root pose, flex vector, each segment's pose,
+/// touching segments and grasp type.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::HandFrame::v1")]
+#[type_name("vas::output::HandFrame::v2")]
 #[repr(C)]
 pub struct HandFrame {
     /// Frame number of the hand stream, from 1.
@@ -90,6 +116,46 @@ pub struct HandFrame {
     pub touching: u32,
     /// The recognised grasp, a [`GraspType`] code.
     pub grasp_type: u32,
+    /// The hand, a [`HandSide`] code.
+    pub hand: u32,
+    /// 1 when the hand follows its input; 0 when its tracking is lost (it stays where it was).
+    pub tracked: u32,
+    /// Segments with a pose in [`HandFrame::segments`]: [`HAND_SEGMENT_COUNT`] with a hand
+    /// model, 0 in a scene without one.
+    pub segment_count: u32,
+    /// Padding, 0.
+    pub reserved: u32,
+    /// Each segment's verified pose in the world, in [`HandSegment`] order: where a renderer
+    /// places the segment's mesh from `vas/scene/geometry`.
+    pub segments: [WirePose; HAND_SEGMENT_COUNT],
+}
+
+impl Default for HandFrame {
+    /// A frame of nothing: frame 0, no input, the identity root and segments, a right hand.
+    fn default() -> Self {
+        Self {
+            frame: 0,
+            tracker: InputStamp::default(),
+            glove: InputStamp::default(),
+            timestamp_ns: 0,
+            root: WirePose::IDENTITY,
+            flex: [0.0; FLEX_COUNT],
+            touching: 0,
+            grasp_type: GraspType::None as u32,
+            hand: HandSide::Right as u32,
+            tracked: 0,
+            segment_count: 0,
+            reserved: 0,
+            segments: [WirePose::IDENTITY; HAND_SEGMENT_COUNT],
+        }
+    }
+}
+
+impl HandFrame {
+    /// The segments that have a pose.
+    pub fn segment_poses(&self) -> &[WirePose] {
+        &self.segments[..(self.segment_count as usize).min(HAND_SEGMENT_COUNT)]
+    }
 }
 
 /// The segments of the hand, as numbered in [`HandFrame::touching`].
@@ -132,7 +198,7 @@ pub enum HandSegment {
 
 impl HandSegment {
     /// Every segment, in bit order.
-    pub const ALL: [Self; 16] = [
+    pub const ALL: [Self; HAND_SEGMENT_COUNT] = [
         Self::Palm,
         Self::ThumbProximal,
         Self::ThumbMiddle,
@@ -154,6 +220,29 @@ impl HandSegment {
     /// The segment's bit in [`HandFrame::touching`].
     pub fn bit(self) -> u32 {
         1 << self as u32
+    }
+
+    /// The segment in words, e.g. `index_distal`.
+    pub fn name(self) -> &'static str {
+        const NAMES: [&str; HAND_SEGMENT_COUNT] = [
+            "palm",
+            "thumb_proximal",
+            "thumb_middle",
+            "thumb_distal",
+            "index_proximal",
+            "index_middle",
+            "index_distal",
+            "middle_proximal",
+            "middle_middle",
+            "middle_distal",
+            "ring_proximal",
+            "ring_middle",
+            "ring_distal",
+            "pinky_proximal",
+            "pinky_middle",
+            "pinky_distal",
+        ];
+        NAMES[self as usize]
     }
 }
 
@@ -204,9 +293,39 @@ wire_code_enum! {
     }
 }
 
+impl GraspType {
+    /// The grasp in words, e.g. `three_jaw_chuck`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Push => "push",
+            Self::Precision => "precision",
+            Self::TipPinch => "tip_pinch",
+            Self::ThreeJawChuck => "three_jaw_chuck",
+            Self::Key => "key",
+            Self::Cigarette => "cigarette",
+            Self::ThreePointPinch => "three_point_pinch",
+            Self::Power => "power",
+            Self::Gravity => "gravity",
+        }
+    }
+}
+
+impl EventKind {
+    /// The event in words, e.g. `contact_begin`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Grasp => "grasp",
+            Self::Release => "release",
+            Self::ContactBegin => "contact_begin",
+            Self::ContactEnd => "contact_end",
+        }
+    }
+}
+
 /// A discrete simulation event on `vas/output/events`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::SimEvent::v1")]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::output::SimEvent::v2")]
 #[repr(C)]
 pub struct SimEvent {
     /// Number of the hand frame during which the event happened.
@@ -225,6 +344,16 @@ pub struct SimEvent {
     pub part: u32,
     /// The other part of a contact, or [`HAND_PART_ID`].
     pub other: u32,
+    /// The hand the event is about (grasp, release, a contact with the hand) or whose held part
+    /// touched, a [`HandSide`] code.
+    pub hand: u32,
+    /// The hand segment of a contact with the hand, a [`HandSegment`] code; 0 otherwise.
+    pub segment: u32,
+    /// Contacts: where the two touch, in the world (metres); zero for other events.
+    pub point: [f64; 3],
+    /// Contacts: the unit normal at `point`, pointing from `other` towards `part`; zero for other
+    /// events.
+    pub normal: [f64; 3],
 }
 
 /// Force and torque a force-feedback device should render, on `vas/output/force`.

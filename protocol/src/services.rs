@@ -16,7 +16,7 @@ use iceoryx2::service::Service;
 use iceoryx2::service::port_factory::{event, publish_subscribe, request_response};
 
 use crate::{
-    ControlRequest, ControlResponse, ForceFrame, GloveSample, HandFrame, PartState,
+    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame, PartState,
     PartsFrameHeader, SimEvent, TrackerSample,
 };
 
@@ -32,6 +32,9 @@ pub const HAND: &str = "vas/output/hand";
 pub const EVENTS: &str = "vas/output/events";
 /// Force feedback ([`crate::ForceFrame`]).
 pub const FORCE: &str = "vas/output/force";
+/// Render geometry of the scene: a [`crate::GeometryHeader`] user header over the bytes of a
+/// [`crate::SceneGeometry`], one sample per scene generation.
+pub const GEOMETRY: &str = "vas/scene/geometry";
 /// Control requests and responses ([`crate::ControlRequest`], [`crate::ControlResponse`]).
 pub const CONTROL: &str = "vas/control";
 
@@ -69,6 +72,14 @@ pub mod output {
     pub const MAX_NODES: usize = 24;
     /// Initial capacity of a parts frame, in parts; the publisher grows it for larger scenes.
     pub const INITIAL_MAX_PARTS: usize = 64;
+}
+
+/// Settings of the geometry service.
+pub mod geometry {
+    /// A reader that (re)connects gets the current generation's geometry at once.
+    pub const HISTORY: usize = 1;
+    /// Geometry samples buffered per reader: the current one and the next.
+    pub const SUBSCRIBER_BUFFER: usize = 2;
 }
 
 /// Settings of the control service.
@@ -160,6 +171,8 @@ pub type HandService<S> = publish_subscribe::PortFactory<S, HandFrame, ()>;
 pub type EventsService<S> = publish_subscribe::PortFactory<S, SimEvent, ()>;
 /// The force output service.
 pub type ForceService<S> = publish_subscribe::PortFactory<S, ForceFrame, ()>;
+/// The geometry service: a generation header over the encoded meshes.
+pub type GeometryService<S> = publish_subscribe::PortFactory<S, [u8], GeometryHeader>;
 /// The control service.
 pub type ControlService<S> =
     request_response::PortFactory<S, ControlRequest, (), ControlResponse, ()>;
@@ -240,6 +253,21 @@ pub fn open_parts<S: Service>(node: &Node<S>) -> Result<PartsService<S>, Service
         .enable_safe_overflow(true)
         .open_or_create()
         .map_err(|error| open_failed(PARTS, error))
+}
+
+/// Opens (or creates) the geometry service.
+pub fn open_geometry<S: Service>(node: &Node<S>) -> Result<GeometryService<S>, ServiceOpenError> {
+    node.service_builder(&service_name(GEOMETRY)?)
+        .publish_subscribe::<[u8]>()
+        .user_header::<GeometryHeader>()
+        .max_publishers(output::MAX_PUBLISHERS)
+        .max_subscribers(output::MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(geometry::SUBSCRIBER_BUFFER)
+        .history_size(geometry::HISTORY)
+        .max_nodes(output::MAX_NODES)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|error| open_failed(GEOMETRY, error))
 }
 
 /// Opens (or creates) the hand output service.

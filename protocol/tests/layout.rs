@@ -27,14 +27,17 @@ fn output_types_keep_their_layout() {
     assert_layout::<InputStamp>(16, 8);
     assert_layout::<PartsFrameHeader>(56, 8);
     assert_layout::<PartState>(64, 8);
-    assert_layout::<HandFrame>(200, 8);
-    assert_layout::<SimEvent>(64, 8);
+    assert_layout::<HandFrame>(1112, 8);
+    assert_layout::<SimEvent>(120, 8);
+    assert_layout::<GeometryHeader>(24, 8);
     assert_layout::<ForceFrame>(96, 8);
     assert_eq!(offset_of!(PartsFrameHeader, part_count), 48);
     assert_eq!(offset_of!(PartState, position), 8);
     assert_eq!(offset_of!(HandFrame, root), 48);
     assert_eq!(offset_of!(HandFrame, flex), 104);
     assert_eq!(offset_of!(HandFrame, grasp_type), 196);
+    assert_eq!(offset_of!(HandFrame, segments), 216);
+    assert_eq!(offset_of!(SimEvent, point), 72);
     assert_eq!(offset_of!(ForceFrame, torque), 72);
 }
 
@@ -45,10 +48,12 @@ fn control_types_keep_their_layout() {
     assert_layout::<WireText<MAX_STATUS_MESSAGE_BYTES>>(260, 4);
     assert_layout::<ControlRequest>(524, 4);
     assert_layout::<InputStats>(64, 8);
-    assert_layout::<PartDescription>(720, 8);
-    assert_layout::<ControlResponse>(1648, 8);
+    assert_layout::<PartDescription>(728, 8);
+    assert_layout::<HandDescription>(72, 4);
+    assert_layout::<ControlResponse>(1912, 8);
     assert_eq!(offset_of!(ControlResponse, part), 600);
-    assert_eq!(offset_of!(ControlResponse, stats), 1320);
+    assert_eq!(offset_of!(ControlResponse, stats), 1328);
+    assert_eq!(offset_of!(ControlResponse, hands), 1696);
 }
 
 #[test]
@@ -73,6 +78,7 @@ fn payload_type_names_are_versioned() {
             <HandFrame as ZeroCopySend>::type_name(),
             <SimEvent as ZeroCopySend>::type_name(),
             <ForceFrame as ZeroCopySend>::type_name(),
+            <GeometryHeader as ZeroCopySend>::type_name(),
             <ControlRequest as ZeroCopySend>::type_name(),
             <ControlResponse as ZeroCopySend>::type_name(),
         ]
@@ -84,11 +90,12 @@ fn payload_type_names_are_versioned() {
             "vas::input::GloveSample::v1",
             "vas::output::PartsFrameHeader::v1",
             "vas::output::PartState::v1",
-            "vas::output::HandFrame::v1",
-            "vas::output::SimEvent::v1",
+            "vas::output::HandFrame::v2",
+            "vas::output::SimEvent::v2",
             "vas::output::ForceFrame::v1",
+            "vas::scene::GeometryHeader::v1",
             "vas::control::ControlRequest::v1",
-            "vas::control::ControlResponse::v2",
+            "vas::control::ControlResponse::v3",
         ]
     );
 }

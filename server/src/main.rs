@@ -28,6 +28,10 @@ enum Command {
         /// The scene config (default: configs/default.toml).
         #[arg(long)]
         scene: Option<PathBuf>,
+        /// The folder of the scenes clients may load by name, as a viewer's page offers them
+        /// (default: the scene file's folder).
+        #[arg(long)]
+        scenes: Option<PathBuf>,
         /// iceoryx2 prefix of every resource, so that servers on different prefixes never meet.
         #[arg(long)]
         prefix: Option<String>,
@@ -65,10 +69,12 @@ fn main() -> ExitCode {
         match Cli::parse().command {
             Command::Run {
                 scene,
+                scenes,
                 prefix,
                 lockstep,
             } => runtime::run(&runtime::RunOptions {
                 scene: scene.unwrap_or_else(default_scene_path),
+                scenes,
                 prefix,
                 lockstep,
             })

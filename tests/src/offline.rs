@@ -286,7 +286,7 @@ fn replay_inputs(
             .touching
             .iter()
             .flatten()
-            .map(|&p| p as usize)
+            .map(|contact| contact.part as usize)
             .collect();
         touched.sort_unstable();
         touched.dedup();

@@ -1,5 +1,7 @@
 //! The subcommands of the `vas-client` tool.
 
+pub mod control;
+pub mod named;
 pub mod record;
 pub mod replay;
 pub mod send;

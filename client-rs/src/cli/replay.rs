@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use vas_client::recording::Recording;
-use vas_client::{Client, Frame, Wake};
+use vas_client::{Client, Frame, SceneWords, Wake};
 use vas_protocol::wall_clock_ns;
 
 use vas_client::latency::LatencySummary;
@@ -49,6 +49,7 @@ pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
         lockstep(
             &mut client,
             &recording,
+            &SceneWords::new(&scene),
             Duration::from_millis(args.answer_timeout_ms),
         )?;
     } else {
@@ -76,7 +77,12 @@ fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> anyhow::Result<()> {
+fn lockstep(
+    client: &mut Client,
+    recording: &Recording,
+    words: &SceneWords,
+    timeout: Duration,
+) -> anyhow::Result<()> {
     let mut round_trips = Vec::with_capacity(recording.samples.len());
     let mut server_latencies = Vec::with_capacity(recording.samples.len());
     let mut unanswered = 0usize;
@@ -97,12 +103,12 @@ fn lockstep(client: &mut Client, recording: &Recording, timeout: Duration) -> an
             },
         )?;
         for event in &events {
-            serde_json::to_writer(&mut out, event)?;
+            serde_json::to_writer(&mut out, &super::named::named(event, words)?)?;
             writeln!(out)?;
         }
         match answer {
             Some(frame) => {
-                serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
+                serde_json::to_writer(&mut out, &super::named::named(&Frame::Hand(frame), words)?)?;
                 writeln!(out)?;
                 round_trips.push(sent_at.elapsed());
                 server_latencies.push(Duration::from_nanos(

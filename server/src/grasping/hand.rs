@@ -17,7 +17,7 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Point3, Unit, Vector3};
 use serde::Serialize;
 
 use super::analysis::{AnalysisParams, Contact, GraspType, Touch, classify};
@@ -130,6 +130,18 @@ pub struct ClaspRun {
     pub time: Duration,
 }
 
+/// A part a segment touches, and where.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentContact {
+    /// The part touched.
+    pub part: PartId,
+    /// The centre of the contact region, in the world.
+    pub point: Point3<f64>,
+    /// The segment's outward normal over the contact, in the world (from the hand into the
+    /// part).
+    pub normal: Unit<Vector3<f64>>,
+}
+
 /// The outcome of one input sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HandFrame {
@@ -138,7 +150,7 @@ pub struct HandFrame {
     /// What the hand is doing.
     pub mode: HandMode,
     /// Per segment, the parts it touches (confirmed by a contact); empty unless clasping.
-    pub touching: [Vec<PartId>; SEGMENT_COUNT],
+    pub touching: [Vec<SegmentContact>; SEGMENT_COUNT],
     /// The grasp on the held part, or else the firmest grasp found on a touched part.
     pub grasp: Option<GraspType>,
     /// The held part and its pose in the world.
@@ -457,10 +469,10 @@ fn analyse(
     flagged: &[ObjectSet; SEGMENT_COUNT],
     held: Option<PartId>,
     cache: &mut [Vec<CachedContact>; SEGMENT_COUNT],
-) -> ([Vec<PartId>; SEGMENT_COUNT], Vec<Analysed>) {
+) -> ([Vec<SegmentContact>; SEGMENT_COUNT], Vec<Analysed>) {
     let poses = model.segment_poses(&visible.flex);
     let mut per_object: Vec<Vec<Touch>> = vec![Vec::new(); collider.obstacles().len()];
-    let mut touched: [Vec<PartId>; SEGMENT_COUNT] = Default::default();
+    let mut touched: [Vec<SegmentContact>; SEGMENT_COUNT] = Default::default();
     for (s, flagged) in flagged.iter().enumerate() {
         let segment = &model.segments()[s];
         let still = collider
@@ -493,12 +505,17 @@ fn analyse(
                 None => collider.contact(s, segment.level, k, &to_object),
             };
             if let Some(contact) = &contact {
-                touched[s].push(part);
+                let contact = contact.transformed(&collider.object_pose(k, &visible.root));
+                touched[s].push(SegmentContact {
+                    part,
+                    point: contact.centre(),
+                    normal: contact.normal,
+                });
                 per_object[k].push(Touch {
                     segment: s,
                     finger: segment.finger,
                     level: segment.level,
-                    contact: contact.transformed(&collider.object_pose(k, &visible.root)),
+                    contact,
                 });
             }
             kept.push(CachedContact {

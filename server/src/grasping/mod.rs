@@ -29,7 +29,9 @@ pub(crate) mod testing;
 pub use analysis::{GraspType, PrecisionKind};
 pub use clasp::{ClaspParamError, ClaspParams, HandPose};
 pub use collider::{Obstacle, PartGeometry, PartId};
-pub use hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandInput, HandMode};
+pub use hand::{
+    GraspEvent, GraspParams, GraspingHand, HandFrame, HandInput, HandMode, SegmentContact,
+};
 pub use model::{
     FLEX_COUNT, Finger, FlexVector, HandConfigError, HandModel, JointLevel, ROOT_VARIABLE,
     SegmentId, Side, VARIABLE_COUNT, VariableSet,

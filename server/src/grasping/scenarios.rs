@@ -198,7 +198,7 @@ impl Run {
             .touching
             .iter()
             .enumerate()
-            .filter(|(_, parts)| !parts.is_empty())
+            .filter(|(_, contacts)| !contacts.is_empty())
             .map(|(s, _)| self.model.segments()[s].name.as_str())
             .collect()
     }

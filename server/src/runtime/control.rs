@@ -1,15 +1,16 @@
 //! Answers to `vas/control` requests: what they read and change of the served session, and the
 //! change they send down the loops.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use vas_protocol::{
-    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, PART_MOVABLE,
-    PartDescription, SlidingMetaphor, WirePose, WireText,
+    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, HandDescription, MAX_HANDS,
+    MAX_NAME_BYTES, PART_MOVABLE, PartDescription, SlidingMetaphor, WirePose, WireText,
 };
 
 use super::frames::{Change, Restart};
+use super::geometry::wire_side;
 use super::inputs::Inputs;
 use crate::scene::{Part, Scene};
 use crate::sliding::Metaphor;
@@ -22,19 +23,76 @@ pub struct Session {
     pub inputs: Inputs,
     /// Restarts so far (the first load is 1).
     pub epoch: u64,
+    /// The scenes that may be loaded by name.
+    pub catalogue: SceneCatalogue,
+}
+
+/// The scenes the server may load by name: the `*.toml` files of one folder, named by their
+/// file stem. A name is looked up in this list, never joined to a path, so a request cannot
+/// reach a file outside the folder.
+#[derive(Debug, Clone)]
+pub struct SceneCatalogue {
+    folder: PathBuf,
+    names: Vec<String>,
+}
+
+impl SceneCatalogue {
+    /// The scenes of `folder`, as it is now.
+    pub fn of(folder: PathBuf) -> Self {
+        let mut catalogue = Self {
+            folder,
+            names: Vec::new(),
+        };
+        catalogue.refresh();
+        catalogue
+    }
+
+    /// Reads the folder again (a listing that fails leaves the list empty, and says why in the
+    /// log).
+    fn refresh(&mut self) {
+        let entries = match std::fs::read_dir(&self.folder) {
+            Ok(entries) => entries,
+            Err(error) => {
+                tracing::warn!(folder = %self.folder.display(), %error, "cannot list the scenes");
+                self.names.clear();
+                return;
+            }
+        };
+        self.names = entries
+            .filter_map(|entry| entry.ok()?.path().to_str().map(PathBuf::from))
+            .filter(|path| path.extension().is_some_and(|e| e == "toml") && path.is_file())
+            .filter_map(|path| Some(path.file_stem()?.to_str()?.to_owned()))
+            .collect();
+        self.names.sort();
+    }
+
+    /// The scene names, sorted.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    fn path_of(&self, name: &str) -> Option<PathBuf> {
+        (self.names.iter().any(|listed| listed == name))
+            .then(|| self.folder.join(format!("{name}.toml")))
+    }
 }
 
 impl Session {
-    /// A session on `scene` and what starts the loops on it.
-    pub fn start(scene: Scene) -> Result<(Session, Change), super::frames::HandSetupError> {
+    /// A session on `scene`, offering the scenes of `catalogue`, and what starts the loops on
+    /// it.
+    pub fn start(
+        scene: Scene,
+        catalogue: SceneCatalogue,
+    ) -> Result<(Session, Restart), super::frames::HandSetupError> {
         let scene = Arc::new(scene);
         let restart = Restart::new(Arc::clone(&scene), 1)?;
         let session = Session {
             scene,
             inputs: Inputs::default(),
             epoch: 1,
+            catalogue,
         };
-        Ok((session, restart.into_change()))
+        Ok((session, restart))
     }
 
     /// Starts over on `scene`: the targets are forgotten, the counters go on.
@@ -66,6 +124,7 @@ pub enum Reply {
 /// Every answer carries the scene summary and the input counters as they are after the request;
 /// a refused request changes nothing and explains itself in `message`.
 pub fn answer(session: &mut Session, request: &ControlRequest, loading: bool) -> Reply {
+    let mut listed = WireText::EMPTY;
     let outcome = match ControlRequestKind::try_from(request.kind) {
         Err(unknown) => Err((ControlStatus::InvalidRequest, unknown.to_string())),
         Ok(ControlRequestKind::SceneInfo) => Ok((PartDescription::default(), None)),
@@ -76,12 +135,28 @@ pub fn answer(session: &mut Session, request: &ControlRequest, loading: bool) ->
             Ok(path) => return Reply::Load(path),
             Err(refusal) => Err(refusal),
         },
+        Ok(ControlRequestKind::LoadNamedScene) => {
+            match scene_path(request, loading).and_then(|name| named(&session.catalogue, &name)) {
+                Ok(path) => return Reply::Load(path),
+                Err(refusal) => Err(refusal),
+            }
+        }
+        Ok(ControlRequestKind::ListScene) => {
+            if request.argument == 0 {
+                session.catalogue.refresh();
+            }
+            list_scene(&session.catalogue, request.argument).map(|name| {
+                listed = name;
+                (PartDescription::default(), None)
+            })
+        }
         Ok(ControlRequestKind::Reset) => session
             .restart(Arc::clone(&session.scene))
             .map(|change| (PartDescription::default(), Some(change))),
         Ok(ControlRequestKind::SetMetaphor) => set_metaphor(request.argument),
     };
-    let (response, change) = respond(session, request.kind, outcome);
+    let (mut response, change) = respond(session, request.kind, outcome);
+    response.listed = listed;
     Reply::Now(response, change)
 }
 
@@ -115,6 +190,13 @@ fn respond(
     let scene = &session.scene;
     let (scene_name, name_cut) = WireText::truncated(&scene.name);
     let (scene_source, source_cut) = WireText::truncated(&scene.source.display().to_string());
+    let mut hands = [HandDescription::default(); MAX_HANDS];
+    if let Some(hand) = &scene.hand {
+        hands[0] = HandDescription {
+            side: wire_side(hand.model.side()) as u32,
+            model: WireText::truncated(hand.model.name()).0,
+        };
+    }
     let mut response = ControlResponse {
         status: ControlStatus::Ok as u32,
         kind,
@@ -125,6 +207,12 @@ fn respond(
         part: PartDescription::default(),
         stats: session.inputs.stats(),
         message: WireText::EMPTY,
+        up: [0.0, 0.0, 1.0],
+        metres_per_unit: 1.0,
+        hand_count: u32::from(scene.hand.is_some()),
+        listed_count: u32::try_from(session.catalogue.names().len()).unwrap_or(u32::MAX),
+        hands,
+        listed: WireText::EMPTY,
     };
     match outcome {
         Ok((part, change)) => {
@@ -162,6 +250,38 @@ fn describe_part(scene: &Scene, id: u32) -> Result<PartDescription, Refusal> {
         group,
         mesh_source,
         truncated: u32::from(name_cut || group_cut || source_cut),
+        scale: part.scale,
+    })
+}
+
+fn named(catalogue: &SceneCatalogue, name: &Path) -> Result<PathBuf, Refusal> {
+    let name = name.to_string_lossy();
+    catalogue.path_of(&name).ok_or_else(|| {
+        (
+            ControlStatus::SceneLoadFailed,
+            format!(
+                "no scene is named {name:?}; the server offers {}",
+                catalogue.names().join(", ")
+            ),
+        )
+    })
+}
+
+fn list_scene(catalogue: &SceneCatalogue, index: u32) -> Result<WireText<MAX_NAME_BYTES>, Refusal> {
+    let name = catalogue.names().get(index as usize).ok_or_else(|| {
+        (
+            ControlStatus::SceneLoadFailed,
+            format!(
+                "the server offers {} scenes, there is no scene {index}",
+                catalogue.names().len()
+            ),
+        )
+    })?;
+    WireText::new(name).map_err(|error| {
+        (
+            ControlStatus::SceneLoadFailed,
+            format!("scene {index}'s name: {error}"),
+        )
     })
 }
 
@@ -208,7 +328,8 @@ mod tests {
 
     fn session() -> Session {
         let scene = Scene::load(&config("default.toml")).expect("the demo scene loads");
-        Session::start(scene).expect("its hand builds").0
+        let catalogue = SceneCatalogue::of(config(""));
+        Session::start(scene, catalogue).expect("its hand builds").0
     }
 
     fn status(response: &ControlResponse) -> ControlStatus {

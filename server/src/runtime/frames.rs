@@ -3,14 +3,14 @@
 
 use std::sync::Arc;
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Point3, Vector3};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGraspType, InputStamp};
 
 use super::interaction::HeldPart;
 use super::rendezvous::{Coalesce, Work};
 use super::verify::HandBodies;
 use crate::grasping::{
-    GraspEvent, GraspType, GraspingHand, HandFrame, HandInput, HandPose, PartId,
+    GraspEvent, GraspType, GraspingHand, HandFrame, HandInput, HandPose, PartId, SegmentContact,
 };
 use crate::scene::Scene;
 use crate::sliding::{Metaphor, Wrench};
@@ -68,7 +68,7 @@ pub struct ProposedHand {
     /// Joint angles, radians.
     pub flex: [f32; FLEX_COUNT],
     /// Per hand segment (in [`vas_protocol::HandSegment`] order), the parts it touches.
-    pub touching: Vec<Vec<PartId>>,
+    pub touching: Vec<Vec<SegmentContact>>,
     /// The grasp the hand has or would have.
     pub grasp: WireGraspType,
 }
@@ -98,8 +98,19 @@ impl Coalesce for CandidateFrame {
     }
 }
 
+/// Where two things touch, in the world.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactAt {
+    /// The hand segment, for a contact with the hand; 0 otherwise.
+    pub segment: u32,
+    /// A point of the contact.
+    pub point: Point3<f64>,
+    /// The unit normal there, from the other towards the part.
+    pub normal: Vector3<f64>,
+}
+
 /// A discrete event of a verified frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Event {
     /// What happened.
     pub kind: EventKind,
@@ -109,6 +120,8 @@ pub struct Event {
     pub part: PartId,
     /// The other part of a contact, or [`vas_protocol::HAND_PART_ID`].
     pub other: u32,
+    /// Where, for contact events.
+    pub at: Option<ContactAt>,
 }
 
 /// One part in a verified frame.
@@ -131,6 +144,8 @@ pub struct VerifiedFrame {
     pub hand_root: Isometry3<f64>,
     /// Joint angles, radians.
     pub flex: [f32; FLEX_COUNT],
+    /// Each hand segment's pose in the world, as verified; empty without a hand model.
+    pub segments: Vec<Isometry3<f64>>,
     /// Bits of the segments touching a part.
     pub touching: u32,
     /// The grasp.

@@ -24,6 +24,7 @@ use std::sync::Arc;
 
 use nalgebra::Isometry3;
 
+use super::frames::ContactAt;
 use crate::collision::DopTree;
 use crate::grasping::{
     GraspEvent, GraspingHand, HandFrame, HandInput, Obstacle as HandObstacle, PartGeometry, PartId,
@@ -116,8 +117,8 @@ pub struct HeldPart {
     pub hand_root: Isometry3<f64>,
     /// The force and torque pulling the hand towards the visible part.
     pub wrench: Wrench,
-    /// The obstacles the part touches, by part id, sorted.
-    pub touching: Vec<PartId>,
+    /// The obstacles the part touches, by part id, sorted, each with one of its contacts.
+    pub touching: Vec<(PartId, ContactAt)>,
 }
 
 impl HeldPart {
@@ -246,13 +247,20 @@ impl SlideStage {
             slide.machine.ghost_pivot_pose(),
             self.period,
         );
-        let mut touching: Vec<PartId> = slide
+        let mut touching: Vec<(PartId, ContactAt)> = slide
             .machine
             .contacts()
-            .map(|contact| obstacle_part(slide.part, contact.obstacle))
+            .map(|contact| {
+                let at = ContactAt {
+                    segment: 0,
+                    point: contact.point,
+                    normal: contact.normal.into_inner(),
+                };
+                (obstacle_part(slide.part, contact.obstacle), at)
+            })
             .collect();
-        touching.sort_unstable();
-        touching.dedup();
+        touching.sort_by_key(|&(part, _)| part);
+        touching.dedup_by_key(|&mut (part, _)| part);
         Some(HeldPart {
             part: slide.part,
             ghost: slide.ghost,
@@ -407,6 +415,7 @@ mod tests {
             name: name.into(),
             mesh: Arc::new(mesh),
             mesh_source: format!("shape:{name}"),
+            scale: 1.0,
             pose,
             movable,
             group: "default".into(),

@@ -17,14 +17,15 @@ use crossbeam_channel::Receiver;
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use vas_protocol::{
-    ControlResponse, ControlStatus, ForceFrame, HandFrame, InputRejection, InputStats, PartState,
-    PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
+    ControlResponse, ControlStatus, ForceFrame, HAND_SEGMENT_COUNT, HandFrame, HandSide,
+    InputRejection, InputStats, PartState, PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
 };
 
 use super::control::{self, Session};
-use super::frames::{Change, InputFrame, LoopWork, Stamps, VerifiedFrame};
+use super::frames::{Change, InputFrame, LoopWork, Restart, Stamps, VerifiedFrame};
+use super::geometry::{ServedGeometry, wire_side};
 use super::loader::{Loaded, PendingRequest, SceneLoader};
-use super::loops::Loops;
+use super::loops::{Links, Loops};
 use super::ports::{Ports, Wakeups};
 use super::rendezvous::{ANNOUNCED_WAIT, AwakeWatch, Handoff, Work};
 use super::{RuntimeError, publish_period};
@@ -51,6 +52,10 @@ struct Io {
     lockstep: Lockstep,
     /// Loads requested scenes apart from this thread.
     loader: SceneLoader,
+    /// The served scene's render meshes.
+    geometry: ServedGeometry,
+    /// The side of the served scene's hand.
+    hand_side: HandSide,
     /// The latest published part states, for the periodic parts frames.
     parts: Vec<PartState>,
     hand_frames: u64,
@@ -95,26 +100,32 @@ struct Lockstep {
 }
 
 impl InteractionManager {
-    /// Opens the ports for the session's scene; `change` starts the loops on it.
+    /// Opens the ports for the session's scene, which `start` starts the loops on; hands work to
+    /// the loops through `links` and takes their frames from `verified`.
     pub(super) fn new(
         node: &Node<ipc::Service>,
         session: Session,
-        inputs: Arc<Handoff<InputFrame, Change>>,
+        start: &Restart,
+        links: &Links,
         verified: Receiver<VerifiedFrame>,
-        watch: Arc<AwakeWatch>,
         lockstep: bool,
         config: iceoryx2::config::Config,
     ) -> Result<Self, RuntimeError> {
-        let (ports, wakeups) = Ports::open(node, session.scene.parts.len())?;
+        let geometry = ServedGeometry::of(start);
+        let hand_side = hand_side(&session.scene);
+        let (ports, wakeups) =
+            Ports::open(node, session.scene.parts.len(), geometry.sample().1.len())?;
         let mut io = Io {
             ports,
             parts: Vec::new(),
             session,
-            inputs,
+            inputs: Arc::clone(&links.inputs),
             verified,
-            watch,
+            watch: Arc::clone(&links.io_watch),
             answer: Answer::default(),
             loader: SceneLoader::new(config),
+            geometry,
+            hand_side,
             lockstep: Lockstep {
                 enabled: lockstep,
                 in_flight: false,
@@ -152,6 +163,7 @@ impl InteractionManager {
             .map_err(attach)?;
 
         io.submit(Work::Control(start));
+        io.publish_geometry();
         io.publish_parts(None);
         tracing::info!(lockstep = io.lockstep.enabled, "serving");
         loop {
@@ -350,16 +362,27 @@ impl Io {
             "control request answered"
         );
         if let Some(change) = change {
+            if let Change::Restart(restart) = &change {
+                self.geometry.restart(restart);
+                self.hand_side = hand_side(&restart.scene);
+            }
             let restarted = matches!(change, Change::Restart(_));
             self.submit(Work::Control(change));
             if restarted {
                 self.reset_parts();
+                self.publish_geometry();
                 self.publish_parts(None);
             }
         }
         if let Err(error) = request.send_copy(response) {
             self.log_failure(Err(RuntimeError::ipc("send a control response", error)));
         }
+    }
+
+    /// Publishes the served scene's geometry (once per generation).
+    fn publish_geometry(&mut self) {
+        let (header, bytes) = self.geometry.sample();
+        self.log_failure(self.ports.publish_geometry(header, bytes));
     }
 
     /// The session's scene's parts at their configured poses, as published until the loops
@@ -414,6 +437,10 @@ impl Io {
                 grasp_type: event.grasp as u32,
                 part: event.part,
                 other: event.other,
+                hand: self.hand_side as u32,
+                segment: event.at.map_or(0, |at| at.segment),
+                point: event.at.map_or([0.0; 3], |at| at.point.into()),
+                normal: event.at.map_or([0.0; 3], |at| at.normal.into()),
             })
             .collect();
         self.log_failure(self.ports.publish_events(&events));
@@ -452,6 +479,17 @@ impl Io {
             flex: frame.flex,
             touching: frame.touching,
             grasp_type: frame.grasp as u32,
+            hand: self.hand_side as u32,
+            tracked: 1,
+            segment_count: u32::try_from(frame.segments.len().min(HAND_SEGMENT_COUNT))
+                .expect("at most 16"),
+            reserved: 0,
+            segments: std::array::from_fn(|i| {
+                frame
+                    .segments
+                    .get(i)
+                    .map_or(WirePose::IDENTITY, WirePose::from_isometry)
+            }),
         };
         self.log_failure(self.ports.publish_hand(hand));
     }
@@ -505,6 +543,14 @@ impl Io {
             tracing::error!("{error}");
         }
     }
+}
+
+/// The side of `scene`'s hand; right for a scene without a hand model (its tracked hand).
+fn hand_side(scene: &crate::scene::Scene) -> HandSide {
+    scene
+        .hand
+        .as_ref()
+        .map_or(HandSide::Right, |hand| wire_side(hand.model.side()))
 }
 
 fn part_state(id: u32, pose: &nalgebra::Isometry3<f64>, flags: u32) -> PartState {

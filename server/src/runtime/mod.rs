@@ -14,6 +14,7 @@
 
 mod control;
 pub mod frames;
+mod geometry;
 mod inputs;
 pub mod interaction;
 mod io;
@@ -23,7 +24,7 @@ mod ports;
 pub mod rendezvous;
 pub mod verify;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use iceoryx2::prelude::*;
@@ -39,6 +40,9 @@ use loops::{Links, Loops};
 pub struct RunOptions {
     /// The scene file to load.
     pub scene: PathBuf,
+    /// The folder of the scenes that clients may load by name (a renderer's page offers
+    /// them); `None` takes the scene file's folder.
+    pub scenes: Option<PathBuf>,
     /// iceoryx2 prefix of every resource, so that servers (and tests) on different prefixes
     /// never meet; `None` uses the iceoryx2 configuration's.
     pub prefix: Option<String>,
@@ -145,7 +149,12 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         publish_hz = scene.rates.publish_hz,
         "scene loaded"
     );
-    let (session, start) = Session::start(scene)?;
+    let folder = (options.scenes.clone())
+        .or_else(|| options.scene.parent().map(Path::to_path_buf))
+        .unwrap_or_default();
+    let catalogue = control::SceneCatalogue::of(folder);
+    tracing::info!(scenes = ?catalogue.names(), "scenes offered by name");
+    let (session, start) = Session::start(scene, catalogue)?;
     if termination_requested(&node) {
         return Ok(());
     }
@@ -154,9 +163,9 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     let manager = io::InteractionManager::new(
         &node,
         session,
-        std::sync::Arc::clone(&links.inputs),
+        &start,
+        &links,
         verified_out,
-        std::sync::Arc::clone(&links.io_watch),
         options.lockstep,
         config.clone(),
     )?;
@@ -167,7 +176,7 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         verified_in,
         Box::new(move || ports::verified_waker(&waker_config)),
     )?;
-    let served = manager.serve(start, &loops);
+    let served = manager.serve(start.into_change(), &loops);
     links.inputs.close();
     loops.join();
     served

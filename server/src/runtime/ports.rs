@@ -10,7 +10,7 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use vas_protocol::services::{self, output};
 use vas_protocol::{
-    ControlRequest, ControlResponse, ForceFrame, GloveSample, HandFrame, PartState,
+    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame, PartState,
     PartsFrameHeader, SimEvent, TrackerSample,
 };
 
@@ -70,6 +70,8 @@ pub(super) struct Ports {
     pub(super) glove: Subscriber<ipc::Service, GloveSample, ()>,
     parts: Publisher<ipc::Service, [PartState], PartsFrameHeader>,
     parts_notifier: Notifier<ipc::Service>,
+    geometry: Publisher<ipc::Service, [u8], GeometryHeader>,
+    geometry_notifier: Notifier<ipc::Service>,
     hand: Publisher<ipc::Service, HandFrame, ()>,
     hand_notifier: Notifier<ipc::Service>,
     events: Publisher<ipc::Service, SimEvent, ()>,
@@ -95,12 +97,14 @@ fn port<T>(
 
 impl Ports {
     /// Opens every service and creates the ports and listeners; `part_count` sizes the parts
-    /// frames (they grow if a larger scene is loaded later).
+    /// frames and `geometry_bytes` the geometry samples (both grow if a larger scene is loaded
+    /// later), so that shared memory is sized to the scene.
     pub(super) fn open(
         node: &Node<ipc::Service>,
         part_count: usize,
+        geometry_bytes: usize,
     ) -> Result<(Self, Wakeups), RuntimeError> {
-        use services::{CONTROL, EVENTS, FORCE, GLOVE, HAND, PARTS, TRACKER};
+        use services::{CONTROL, EVENTS, FORCE, GEOMETRY, GLOVE, HAND, PARTS, TRACKER};
         let wakeup = |name| services::open_wakeup(node, name);
         let listener = |name| port(name, wakeup(name)?.listener_builder().create());
         let notifier = |name| port(name, wakeup(name)?.notifier_builder().create());
@@ -135,6 +139,15 @@ impl Ports {
             )?,
             parts,
             parts_notifier: notifier(PARTS)?,
+            geometry: port(
+                GEOMETRY,
+                services::open_geometry(node)?
+                    .publisher_builder()
+                    .initial_max_slice_len(geometry_bytes.max(1))
+                    .allocation_strategy(AllocationStrategy::PowerOfTwo)
+                    .create(),
+            )?,
+            geometry_notifier: notifier(GEOMETRY)?,
             hand: port(
                 HAND,
                 services::open_hand(node)?.publisher_builder().create(),
@@ -177,6 +190,27 @@ impl Ports {
         self.parts_notifier
             .notify()
             .map_err(|error| RuntimeError::ipc("notify parts readers", error))?;
+        Ok(())
+    }
+
+    /// Publishes a scene generation's geometry and wakes its readers.
+    pub(super) fn publish_geometry(
+        &self,
+        header: GeometryHeader,
+        bytes: &[u8],
+    ) -> Result<(), RuntimeError> {
+        let mut sample = self
+            .geometry
+            .loan_slice_uninit(bytes.len())
+            .map_err(|error| RuntimeError::ipc("loan a geometry sample", error))?;
+        *sample.user_header_mut() = header;
+        sample
+            .write_from_slice(bytes)
+            .send()
+            .map_err(|error| RuntimeError::ipc("send the geometry", error))?;
+        self.geometry_notifier
+            .notify()
+            .map_err(|error| RuntimeError::ipc("notify geometry readers", error))?;
         Ok(())
     }
 
@@ -236,6 +270,9 @@ impl Ports {
         self.force
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new force readers", error))?;
+        self.geometry
+            .update_connections()
+            .map_err(|error| RuntimeError::ipc("connect new geometry readers", error))?;
         self.parts
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new parts readers", error))

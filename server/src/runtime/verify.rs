@@ -12,13 +12,13 @@
 //! and the clasp already keeps fingers out of the part. Contacts between parts and between the hand
 //! and parts are turned into begin and end events here, where the frame is final.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
 use nalgebra::Isometry3;
 use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOUCHING};
 
-use super::frames::{CandidateFrame, Event, VerifiedFrame, VerifiedPart, wire_grasp};
+use super::frames::{CandidateFrame, ContactAt, Event, VerifiedFrame, VerifiedPart, wire_grasp};
 use crate::collision::DopTree;
 use crate::collision::pipeline::{
     CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
@@ -75,7 +75,8 @@ pub struct Verifier {
     hand_root: Isometry3<f64>,
     flex: [f32; vas_protocol::FLEX_COUNT],
     touching: u32,
-    contacts: BTreeSet<(PartId, u32)>,
+    /// The contacts of the last frame, by (part, other), each with where it was.
+    contacts: BTreeMap<(PartId, u32), ContactAt>,
     held: Option<PartId>,
     /// The pairs colliding after the last pipeline frame.
     colliding: BTreeSet<(ObjectId, ObjectId)>,
@@ -159,11 +160,22 @@ impl Verifier {
             hand_root: Isometry3::identity(),
             flex: [0.0; vas_protocol::FLEX_COUNT],
             touching: 0,
-            contacts: BTreeSet::new(),
+            contacts: BTreeMap::new(),
             held: None,
             colliding,
             refused_moves: 0,
         }
+    }
+
+    /// Each hand segment's verified pose in the world; empty without a hand model.
+    fn segment_poses(&self) -> Vec<Isometry3<f64>> {
+        let Some(hand) = &self.hand else {
+            return Vec::new();
+        };
+        let flex: FlexVector = self.flex.map(f64::from);
+        (hand.model.segment_poses(&flex).iter())
+            .map(|local| self.hand_root * local)
+            .collect()
     }
 
     /// Moves put back because they collided, since the start.
@@ -326,36 +338,53 @@ impl Verifier {
                     grasp: wire_grasp(Some(grasp)),
                     part,
                     other: HAND_PART_ID,
+                    at: None,
                 },
                 GraspEvent::Release { part, .. } => Event {
                     kind: EventKind::Release,
                     grasp: wire_grasp(None),
                     part,
                     other: HAND_PART_ID,
+                    at: None,
                 },
             });
         }
-        let mut contacts = BTreeSet::new();
+        let mut contacts = BTreeMap::new();
         if hand_accepted || self.hand.is_none() {
-            for parts in &candidate.hand.touching {
-                contacts.extend(parts.iter().map(|&part| (part, HAND_PART_ID)));
+            for (segment, touches) in (0u32..).zip(&candidate.hand.touching) {
+                for touch in touches {
+                    let at = ContactAt {
+                        segment,
+                        point: touch.point,
+                        normal: touch.normal.into_inner(),
+                    };
+                    contacts.entry((touch.part, HAND_PART_ID)).or_insert(at);
+                }
             }
         } else {
             // The hand stays where it was verified: so do its contacts.
             contacts.extend(
                 self.contacts
                     .iter()
-                    .filter(|&&(_, other)| other == HAND_PART_ID),
+                    .filter(|&(&(_, other), _)| other == HAND_PART_ID),
             );
         }
         if let Some(held) = &candidate.held {
-            contacts.extend(held.touching.iter().map(|&other| (held.part, other)));
+            contacts.extend(
+                held.touching
+                    .iter()
+                    .map(|&(other, at)| ((held.part, other), at)),
+            );
         }
-        for &(part, other) in self.contacts.difference(&contacts) {
-            events.push(contact_event(EventKind::ContactEnd, part, other));
+        for (&(part, other), &at) in &self.contacts {
+            if !contacts.contains_key(&(part, other)) {
+                events.push(contact_event(EventKind::ContactEnd, part, other, at));
+            }
         }
-        for &(part, other) in contacts.difference(&self.contacts) {
-            events.push(contact_event(EventKind::ContactBegin, part, other));
+        for (&(part, other), &at) in &contacts {
+            if !self.contacts.contains_key(&(part, other)) {
+                events.push(contact_event(EventKind::ContactBegin, part, other, at));
+            }
         }
         let held = candidate.held.as_ref().map(|held| held.part);
         let released = self.held.is_some() && held.is_none();
@@ -363,7 +392,7 @@ impl Verifier {
         for (id, part) in self.verified.iter_mut().enumerate() {
             let id = id as PartId;
             let touching = contacts
-                .iter()
+                .keys()
                 .any(|&(a, b)| a == id || (b == id && b != HAND_PART_ID));
             let sliding = candidate
                 .held
@@ -379,6 +408,7 @@ impl Verifier {
             epoch: candidate.epoch,
             hand_root: self.hand_root,
             flex: self.flex,
+            segments: self.segment_poses(),
             touching: self.touching,
             grasp: candidate.hand.grasp,
             parts: self.verified.clone(),
@@ -396,12 +426,13 @@ fn pairs(colliding: &[CollidingPair]) -> BTreeSet<(ObjectId, ObjectId)> {
     colliding.iter().map(|pair| (pair.a, pair.b)).collect()
 }
 
-fn contact_event(kind: EventKind, part: PartId, other: u32) -> Event {
+fn contact_event(kind: EventKind, part: PartId, other: u32, at: ContactAt) -> Event {
     Event {
         kind,
         grasp: wire_grasp(None),
         part,
         other,
+        at: Some(at),
     }
 }
 

@@ -144,6 +144,9 @@ pub struct Part {
     /// Where the mesh came from: the resolved file path, or `shape:KIND:...` for a procedural
     /// shape.
     pub mesh_source: String,
+    /// The uniform scale the config applies to a mesh file (1 for shapes), already applied to
+    /// [`Part::mesh`].
+    pub scale: f64,
     /// Initial pose of the part's frame in the world.
     pub pose: Isometry3<f64>,
     /// Whether the part can be grasped and moved; static parts never move.
@@ -610,6 +613,7 @@ impl Loader<'_> {
             name: part.name,
             mesh,
             mesh_source,
+            scale: part.scale.unwrap_or(1.0),
             pose,
             movable: part.movable,
             group: part.group,

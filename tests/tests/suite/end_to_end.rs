@@ -12,7 +12,10 @@ use vas_protocol::{
     SlidingMetaphor, TrackerSample, wall_clock_ns,
 };
 use vas_server::scene::{Scene, default_scene_path};
-use vas_tests::{PATIENCE, Server, configs_dir, fixtures_dir, tracker};
+use vas_tests::{
+    PATIENCE, Server, Spawned, binary, configs_dir, fixtures_dir, forget_prefix, tracker,
+    unique_prefix,
+};
 
 /// Waits for frames and receives them, failing the test after [`PATIENCE`].
 fn next_frames(client: &mut Client, what: &str) -> Vec<Frame> {
@@ -346,15 +349,66 @@ fn watch_prints_frames_as_json_lines() {
         .expect("watch ends after 5 frames");
     assert!(status.success(), "{}", watch.log());
     assert_eq!(lines.len(), 5);
+    let scene = Scene::load(&configs_dir().join("default.toml")).expect("loads");
+    let json =
+        |line: &String| -> serde_json::Value { serde_json::from_str(line).expect("a JSON line") };
+    // The scene's geometry comes first, from the service's history.
+    let geometry = json(&lines[0]);
+    assert_eq!(geometry["geometry"]["generation"], 1, "{geometry}");
+    assert_eq!(
+        geometry["geometry"]["parts"],
+        scene.parts.len(),
+        "{geometry}"
+    );
     let mut frames = Vec::new();
-    for line in &lines {
-        let json: serde_json::Value = serde_json::from_str(line).expect("a JSON line");
+    for line in &lines[1..] {
+        let json = json(line);
         frames.push(json["parts"]["frame"].as_u64().expect("a parts frame"));
+        let names: Vec<&str> = (json["parts"]["parts"].as_array().expect("parts").iter())
+            .map(|part| part["name"].as_str().expect("a part's name"))
+            .collect();
+        let expected: Vec<&str> = scene.parts.iter().map(|part| part.name.as_str()).collect();
+        assert_eq!(names, expected, "parts by name: {line}");
     }
     assert!(
         frames.windows(2).all(|pair| pair[0] < pair[1]),
         "{frames:?}"
     );
+}
+
+#[test]
+fn watch_says_when_no_server_answers_and_takes_the_one_that_comes() {
+    let prefix = unique_prefix("watch_wait");
+    let mut watch = Spawned::start(
+        &binary("vas-client"),
+        &["--prefix", &prefix, "watch", "--count", "1"],
+        Stdio::piped(),
+    );
+    assert!(
+        watch.wait_for_log("no vas server answers", PATIENCE),
+        "watch says it waits: {}",
+        watch.log()
+    );
+    let mut server = Spawned::start(
+        &binary("vas-server"),
+        &["run", "--prefix", &prefix],
+        Stdio::null(),
+    );
+    let stdout = watch.take_stdout().expect("piped");
+    let line = BufReader::new(stdout)
+        .lines()
+        .next()
+        .expect("a frame")
+        .expect("read");
+    assert!(line.starts_with('{'), "{line}");
+    let status = watch
+        .wait_exit(PATIENCE)
+        .expect("watch ends after its frame");
+    assert!(status.success(), "{}", watch.log());
+    server.stop();
+    drop((watch, server));
+    // SAFETY: the server and the tool have ended.
+    unsafe { forget_prefix(&prefix) };
 }
 
 #[test]

@@ -7,7 +7,7 @@ use std::process::Stdio;
 use std::time::Instant;
 
 use vas_client::recording::Recording;
-use vas_client::{Frame, Wake};
+use vas_client::{Frame, HandSegment, Wake};
 use vas_tests::{PATIENCE, Server, Spawned, configs_dir, example, fixtures_dir, tracker};
 
 /// Runs the example `name` with `args`, and returns its stdout lines once it exited
@@ -65,55 +65,76 @@ fn close(list: &str, expected: &[f64]) -> bool {
             .all(|(v, e)| (v - e).abs() < 1e-12)
 }
 
+/// Whether a printed list is `expected` to within `tolerance`.
+fn near(list: &str, expected: &[f64], tolerance: f64) -> bool {
+    let values = floats(list);
+    values.len() == expected.len()
+        && (values.iter().zip(expected)).all(|(v, e)| (v - e).abs() <= tolerance)
+}
+
+/// A renderer built only from the wire: it draws each part's mesh with the bounding box of the
+/// server's own collision mesh (scale applied), each part at its pose, and each hand segment
+/// where the server's hand model puts it for the verified root and flex values.
 #[test]
-fn the_renderer_example_prints_every_part_of_the_scene_and_the_hand() {
+fn the_renderer_example_draws_what_the_server_holds() {
     let mut server = Server::start("ex_renderer");
     let mut client = server.connect();
     let scene = client.scene_info(PATIENCE).expect("scene info");
+    let own = vas_server::scene::Scene::load(&configs_dir().join("default.toml")).expect("loads");
     // A hand frame for the renderer to find in the hand stream's history when it connects.
     let sample = tracker(1, [0.05, -0.1, 1.2]);
     client.send_tracker(&sample).expect("send");
     let deadline = Instant::now() + PATIENCE;
-    loop {
+    let answer = loop {
         assert!(Instant::now() < deadline, "no answer to the tracker sample");
         assert_eq!(
             client.wait(PATIENCE).expect("wait"),
             Wake::Ready,
             "no frame"
         );
-        let frames = client.receive().expect("receive");
-        if frames
-            .iter()
-            .any(|frame| matches!(frame, Frame::Hand(hand) if hand.tracker == sample.stamp()))
-        {
-            break;
+        let answer =
+            (client.receive().expect("receive").into_iter()).find_map(|frame| match frame {
+                Frame::Hand(hand) if hand.tracker == sample.stamp() => Some(hand),
+                _ => None,
+            });
+        if let Some(answer) = answer {
+            break answer;
         }
-    }
+    };
 
     let lines = run_example("renderer", &["--prefix", server.prefix(), "--frames", "5"]);
+    let starting = |word: &str| -> Vec<&String> {
+        (lines.iter())
+            .filter(|line| line.starts_with(&format!("{word} ")))
+            .collect()
+    };
+    let meshes = starting("mesh");
     assert_eq!(
-        lines[0],
-        format!("scene {:?} parts={}", scene.name, scene.parts.len())
+        meshes.len(),
+        own.parts.len(),
+        "one mesh per part: {lines:#?}"
     );
-    let parts_frames: Vec<u64> = lines
-        .iter()
-        .filter(|line| line.starts_with("parts "))
-        .map(|line| field(line, "frame").parse().expect("a frame number"))
-        .collect();
-    assert!(!parts_frames.is_empty(), "{lines:#?}");
-    assert!(
-        parts_frames.windows(2).all(|pair| pair[0] < pair[1]),
-        "{parts_frames:?}"
-    );
-    let part_lines: Vec<&String> = lines.iter().filter(|l| l.starts_with("part ")).collect();
-    assert_eq!(
-        part_lines.len(),
-        parts_frames.len() * scene.parts.len(),
-        "every parts frame lists every part: {lines:#?}"
-    );
+    for (id, (line, part)) in meshes.iter().zip(&own.parts).enumerate() {
+        assert_eq!(field(line, "part"), id.to_string());
+        assert_eq!(field(line, "name"), format!("{:?}", part.name));
+        let vertices = part.mesh.vertices();
+        let (min, max): (Vec<f64>, Vec<f64>) = (0..3)
+            .map(|axis| {
+                let values = vertices.iter().map(|v| v[axis]);
+                let min = values.clone().fold(f64::INFINITY, f64::min);
+                (min, values.fold(f64::NEG_INFINITY, f64::max))
+            })
+            .unzip();
+        // f32 on the wire: a micrometre at the sizes of the demo's parts.
+        assert!(near(field(line, "min"), &min, 1e-6), "{line} vs {min:?}");
+        assert!(near(field(line, "max"), &max, 1e-6), "{line} vs {max:?}");
+        let triangles = part.mesh.triangles().len().to_string();
+        assert_eq!(field(line, "triangles"), triangles);
+    }
+    let part_lines = starting("part");
+    assert!(!part_lines.is_empty(), "{lines:#?}");
     for part in &scene.parts {
-        let line = part_lines
-            .iter()
+        let line = (part_lines.iter())
             .find(|line| field(line, "name") == format!("{:?}", part.name))
             .unwrap_or_else(|| panic!("{} is not printed: {lines:#?}", part.name));
         assert_eq!(field(line, "id"), part.id.to_string());
@@ -122,16 +143,40 @@ fn the_renderer_example_prints_every_part_of_the_scene_and_the_hand() {
         assert!(close(field(line, "position"), &pose.position), "{line}");
         assert!(close(field(line, "rotation"), &pose.rotation), "{line}");
     }
-    let hand = lines
-        .iter()
-        .find(|line| line.starts_with("hand "))
+    let hand = starting("hand");
+    let hand = hand
+        .first()
         .unwrap_or_else(|| panic!("no hand line: {lines:#?}"));
     assert!(
-        close(field(hand, "position"), &sample.hand.position),
+        close(field(hand, "position"), &answer.root.position),
         "{hand}"
     );
-    assert_eq!(field(hand, "grasp"), "None");
-    assert_eq!(field(hand, "touching"), "none");
+    assert_eq!(field(hand, "side"), "right");
+    assert_eq!(field(hand, "grasp"), "none");
+    let frame = field(hand, "frame");
+    let segments: Vec<&String> = (starting("segment").into_iter())
+        .filter(|line| field(line, "frame") == frame)
+        .collect();
+    let model = &own.hand.as_ref().expect("the demo has a hand").model;
+    let flex = answer.flex.map(f64::from);
+    let local = model.segment_poses(&flex);
+    assert_eq!(
+        segments.len(),
+        local.len(),
+        "a line per segment: {lines:#?}"
+    );
+    let root = answer.root.to_isometry();
+    for ((line, segment), local) in segments.iter().zip(HandSegment::ALL).zip(&local) {
+        assert_eq!(field(line, "name"), segment.name());
+        let expected = root * local;
+        let position = expected.translation.vector;
+        assert!(
+            near(field(line, "position"), position.as_slice(), 1e-9),
+            "{line}"
+        );
+        let q = expected.rotation.coords;
+        assert!(near(field(line, "rotation"), q.as_slice(), 1e-9), "{line}");
+    }
 }
 
 #[test]

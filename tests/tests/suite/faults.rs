@@ -296,7 +296,12 @@ fn bad_scenes_under_load_are_refused_and_the_stream_goes_on() {
                 match frame {
                     Frame::Hand(hand) => {
                         let root = hand.root.position.iter().chain(&hand.root.rotation);
-                        assert!(root.copied().all(f64::is_finite), "{hand:?}");
+                        let segments = (hand.segments.iter())
+                            .flat_map(|pose| pose.position.iter().chain(&pose.rotation));
+                        assert!(
+                            root.chain(segments).copied().all(f64::is_finite),
+                            "{hand:?}"
+                        );
                         assert!(hand.tracker.seq >= last_seq, "answers in order");
                         last_seq = hand.tracker.seq;
                         frames += 1;
@@ -307,7 +312,7 @@ fn bad_scenes_under_load_are_refused_and_the_stream_goes_on() {
                             .chain(&part.rotation)
                             .all(|c| c.is_finite())
                     })),
-                    Frame::Event(_) | Frame::Force(_) => {}
+                    Frame::Event(_) | Frame::Force(_) | Frame::Geometry(_) => {}
                 }
             }
         }
@@ -380,11 +385,14 @@ fn the_old_scene_is_served_while_a_requested_one_loads() {
             "the load ended before it was seen under way"
         );
         match client.load_scene(missing, PATIENCE) {
-            Err(ClientError::Refused { status, .. }) if status == ControlStatus::Busy => break,
+            Err(ClientError::Refused {
+                status: ControlStatus::Busy,
+                ..
+            }) => break,
             Err(ClientError::Refused { status, .. }) => {
                 assert_eq!(status, ControlStatus::SceneLoadFailed)
             }
-            other => panic!("a missing scene cannot load: {other:?}"),
+            other => panic!("a scene the server does not offer cannot load: {other:?}"),
         }
     }
     let during = client

@@ -10,6 +10,7 @@ use nalgebra::Isometry3;
 use vas_client::recording::Recording;
 use vas_client::{Client, Frame};
 use vas_protocol::{EventKind, GraspType, HandFrame, wall_clock_ns};
+use vas_server::grasping::HandModel;
 use vas_server::runtime::frames::Restart;
 use vas_server::scene::Scene;
 use vas_tests::offline::{Oracle, VisibleHand};
@@ -46,7 +47,12 @@ struct Replay {
 
 /// Sends every sample of `recording`, each after the answer to the previous one, and gathers
 /// what the server published.
-fn replay(client: &mut Client, scene: &Scene, oracle: &Oracle, recording: &Recording) -> Replay {
+fn replay(
+    client: &mut Client,
+    scene: &Scene,
+    (oracle, model): (&Oracle, &HandModel),
+    recording: &Recording,
+) -> Replay {
     let mut out = Replay {
         answers: Vec::new(),
         events: Vec::new(),
@@ -74,6 +80,7 @@ fn replay(client: &mut Client, scene: &Scene, oracle: &Oracle, recording: &Recor
             flex: answer.flex.map(f64::from),
             held: seen.held,
         };
+        assert_segments_placed(&answer, &hand, model, index);
         out.penetrations
             .extend(oracle.penetrations(scene, &seen.poses, &hand, index));
         let [x, y, z] = answer.root.position;
@@ -90,6 +97,28 @@ fn replay(client: &mut Client, scene: &Scene, oracle: &Oracle, recording: &Recor
     seen.take(&mut out, client.receive().expect("receive"));
     out.final_poses = seen.poses;
     out
+}
+
+/// Checks that the hand frame's segment poses are the hand's verified root and flex values
+/// through the model's kinematics: where a renderer draws the segments is where the oracle
+/// judged them.
+fn assert_segments_placed(answer: &HandFrame, hand: &VisibleHand, model: &HandModel, index: usize) {
+    let expected = model.segment_poses(&hand.flex);
+    assert_eq!(
+        answer.segment_poses().len(),
+        expected.len(),
+        "sample {index}"
+    );
+    for (segment, (wire, local)) in answer.segment_poses().iter().zip(&expected).enumerate() {
+        let expected = hand.root * local;
+        let wire = wire.to_isometry();
+        let offset = (wire.translation.vector - expected.translation.vector).norm();
+        let angle = wire.rotation.angle_to(&expected.rotation);
+        assert!(
+            offset < 1e-9 && angle < 1e-9,
+            "sample {index}, segment {segment}: {offset:.1e} m, {angle:.1e} rad off"
+        );
+    }
 }
 
 /// The state the frames received so far show: the latest part poses and the held part.
@@ -122,7 +151,7 @@ impl Seen {
                         .push([event.kind, event.grasp_type, event.part, event.other]);
                 }
                 Frame::Hand(hand) => hands.push(hand),
-                Frame::Force(_) => {}
+                Frame::Force(_) | Frame::Geometry(_) => {}
             }
         }
         hands
@@ -145,9 +174,10 @@ fn check(scenario: &Scenario) {
     );
     let mut client = server.connect();
 
-    let first = replay(&mut client, &scene, &oracle, &recording);
+    let judge = (&oracle, bodies.model.as_ref());
+    let first = replay(&mut client, &scene, judge, &recording);
     client.reset(PATIENCE).expect("reset");
-    let second = replay(&mut client, &scene, &oracle, &recording);
+    let second = replay(&mut client, &scene, judge, &recording);
 
     assert_eq!(first.answers.len(), recording.samples.len(), "{name}");
     assert!(

@@ -1,0 +1,144 @@
+//! The wire's codes in words: parts by name, events and grasps by kind, for tools and pages
+//! that show them to people ("grasp peg (power) at sample 44").
+
+use vas_protocol::{EventKind, GraspType, HAND_PART_ID, HandSide, SimEvent};
+
+use crate::SceneInfo;
+
+/// Names for one scene's codes.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct SceneWords {
+    parts: Vec<String>,
+}
+
+impl SceneWords {
+    /// The words of `scene`'s parts.
+    pub fn new(scene: &SceneInfo) -> Self {
+        Self {
+            parts: scene.parts.iter().map(|part| part.name.clone()).collect(),
+        }
+    }
+
+    /// Part `id`'s name; "hand" for [`HAND_PART_ID`], and "part N" for an id the scene does not
+    /// have (a frame of another scene).
+    pub fn part(&self, id: u32) -> String {
+        match self.parts.get(id as usize) {
+            Some(name) => name.clone(),
+            None if id == HAND_PART_ID => "hand".to_owned(),
+            None => format!("part {id}"),
+        }
+    }
+
+    /// The event in a sentence: "grasp peg (power) at sample 44", "release peg at sample 90",
+    /// "contact begin peg – block at sample 61". The sample is the input that caused it (the
+    /// newer of the frame's tracker and glove samples).
+    pub fn event(&self, event: &SimEvent) -> String {
+        let sample = if event.glove.timestamp_ns > event.tracker.timestamp_ns {
+            event.glove.seq
+        } else {
+            event.tracker.seq
+        };
+        let part = self.part(event.part);
+        let what = match EventKind::try_from(event.kind) {
+            Ok(EventKind::Grasp) => format!("grasp {part} ({})", grasp_name(event.grasp_type)),
+            Ok(EventKind::Release) => format!("release {part}"),
+            Ok(kind @ (EventKind::ContactBegin | EventKind::ContactEnd)) => {
+                let verb = kind.name().replace('_', " ");
+                format!("{verb} {part} – {}", self.part(event.other))
+            }
+            Err(unknown) => format!("{unknown} about {part}"),
+        };
+        format!("{what} at sample {sample}")
+    }
+}
+
+/// A grasp type code in words (`power`, `tip_pinch`...), or "unknown" for a code this client
+/// does not know.
+pub fn grasp_name(code: u32) -> &'static str {
+    GraspType::try_from(code).map_or("unknown", GraspType::name)
+}
+
+/// An event kind code in words (`grasp`, `contact_begin`...), or "unknown".
+pub fn event_name(code: u32) -> &'static str {
+    EventKind::try_from(code).map_or("unknown", EventKind::name)
+}
+
+/// A hand side code in words (`right`, `left`), or "unknown".
+pub fn hand_name(code: u32) -> &'static str {
+    HandSide::try_from(code).map_or("unknown", HandSide::name)
+}
+
+#[cfg(test)]
+mod tests {
+    use vas_protocol::{InputStamp, InputStats, WirePose};
+
+    use super::*;
+    use crate::PartInfo;
+
+    fn words() -> SceneWords {
+        let part = |id: u32, name: &str| PartInfo {
+            id,
+            name: name.to_owned(),
+            group: String::new(),
+            mesh_source: String::new(),
+            movable: true,
+            initial_pose: WirePose::IDENTITY,
+            scale: 1.0,
+            truncated: false,
+        };
+        SceneWords::new(&SceneInfo {
+            name: "s".into(),
+            source: "s.toml".into(),
+            parts: vec![part(0, "block"), part(1, "peg")],
+            stats: InputStats::default(),
+            up: [0.0, 0.0, 1.0],
+            metres_per_unit: 1.0,
+            hands: Vec::new(),
+            scenes_offered: 0,
+        })
+    }
+
+    fn event(kind: EventKind, grasp: GraspType, part: u32, other: u32) -> SimEvent {
+        SimEvent {
+            frame: 3,
+            tracker: InputStamp {
+                seq: 44,
+                timestamp_ns: 2,
+            },
+            glove: InputStamp {
+                seq: 7,
+                timestamp_ns: 1,
+            },
+            timestamp_ns: 5,
+            kind: kind as u32,
+            grasp_type: grasp as u32,
+            part,
+            other,
+            hand: HandSide::Right as u32,
+            segment: 0,
+            point: [0.0; 3],
+            normal: [0.0; 3],
+        }
+    }
+
+    #[test]
+    fn events_read_as_sentences_with_part_names() {
+        let words = words();
+        let grasp = event(EventKind::Grasp, GraspType::Power, 1, HAND_PART_ID);
+        assert_eq!(words.event(&grasp), "grasp peg (power) at sample 44");
+        let contact = event(EventKind::ContactBegin, GraspType::None, 1, 0);
+        assert_eq!(
+            words.event(&contact),
+            "contact begin peg – block at sample 44"
+        );
+        let mut release = event(EventKind::Release, GraspType::None, 1, HAND_PART_ID);
+        release.glove.timestamp_ns = 9;
+        assert_eq!(words.event(&release), "release peg at sample 7");
+        assert_eq!(words.part(HAND_PART_ID), "hand");
+        assert_eq!(words.part(5), "part 5");
+        assert_eq!(
+            (grasp_name(99), event_name(0), hand_name(1)),
+            ("unknown", "unknown", "left")
+        );
+    }
+}
