@@ -101,9 +101,15 @@ export class View {
     this.sceneName = scene.name;
   }
 
-  // A mesh hidden until its first pose (a part without geometry stays hidden).
+  // A mesh hidden until its first pose (a part without geometry stays hidden). Both sides are
+  // drawn: CAD meshes may be polygon soups whose winding means nothing.
   addMesh(geometry, colour) {
-    const material = new THREE.MeshStandardMaterial({ color: colour, roughness: 0.6, metalness: 0.05 });
+    const material = new THREE.MeshStandardMaterial({
+      color: colour,
+      roughness: 0.6,
+      metalness: 0.05,
+      side: THREE.DoubleSide,
+    });
     const mesh = new THREE.Mesh(geometry ?? new THREE.BufferGeometry(), material);
     mesh.visible = false;
     mesh.userData.hasGeometry = geometry !== undefined;

@@ -7,14 +7,17 @@
 //! server", and the link waits for one on the same prefix and starts afresh (new ports, so that
 //! the new server's scene arrives as a late joiner's history).
 
+use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, TryRecvError};
+use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 
-use vas_client::{Client, ClientError, Frame, HandFrame, PartsFrame, SceneInfo, Wake};
+use vas_client::{
+    Client, ClientError, Frame, HandFrame, PartsFrame, SceneGeometry, SceneInfo, SceneWords, Wake,
+};
 
 use crate::commands::Command;
-use crate::hub::{CommandRequest, Hub, SceneMessages};
+use crate::hub::{CommandRequest, Hub};
 use crate::stats::Stats;
 use crate::{events, messages, scene};
 
@@ -69,13 +72,13 @@ impl Link<'_> {
             return Ok(());
         }
         let mut client = Client::connect(prefix)?;
-        let scene = client.scene_info(CONTROL_TIMEOUT)?;
+        let mut scene = client.scene_info(CONTROL_TIMEOUT)?;
+        let scene_names = client.scene_names(CONTROL_TIMEOUT)?;
         tracing::info!(scene = scene.name, parts = scene.parts.len(), "server found");
         self.hub.stats.server.store(true, Ordering::Relaxed);
         self.hub
             .status
-            .send_replace(Some(messages::status(true, &[])));
-        self.publish_scene(&scene);
+            .send_replace(Some(messages::status(true, &scene_names)));
 
         let mut latest = Latest::default();
         let mut last_heard = Instant::now();
@@ -84,7 +87,18 @@ impl Link<'_> {
             match client.wait(WAIT)? {
                 Wake::Ready => {
                     last_heard = Instant::now();
-                    self.pass_on(&mut latest, client.receive()?, &scene);
+                    let frames = client.receive()?;
+                    if let Some(geometry) = new_geometry(&frames, latest.generation) {
+                        // A load or a reset: the names may have changed with the scene.
+                        scene = client.scene_info(CONTROL_TIMEOUT)?;
+                        latest = Latest {
+                            generation: Some(geometry.generation),
+                            words: SceneWords::new(&scene),
+                            ..Latest::default()
+                        };
+                        self.publish_scene(&scene, geometry);
+                    }
+                    self.pass_on(&mut latest, frames);
                 }
                 Wake::Timeout if last_heard.elapsed() >= QUIET => {
                     client.input_stats(CONTROL_TIMEOUT)?;
@@ -115,28 +129,28 @@ impl Link<'_> {
 
     /// Answers every waiting command with `carry_out`.
     fn serve_commands(&self, mut carry_out: impl FnMut(&Command) -> Result<String, String>) {
-        loop {
-            match self.commands.try_recv() {
-                Ok(request) => {
-                    let answer = carry_out(&request.command);
-                    tracing::info!(command = request.command.name(), ?answer, "page command");
-                    // The page may have gone meanwhile.
-                    let _ = request.reply.send(answer);
-                }
-                Err(TryRecvError::Empty | TryRecvError::Disconnected) => return,
-            }
+        while let Ok(request) = self.commands.try_recv() {
+            let answer = carry_out(&request.command);
+            tracing::info!(command = request.command.name(), ?answer, "page command");
+            // The page may have gone meanwhile.
+            let _ = request.reply.send(answer);
         }
     }
 
-    fn publish_scene(&mut self, scene: &SceneInfo) {
+    fn publish_scene(&mut self, scene: &SceneInfo, geometry: &SceneGeometry) {
         self.scene_version += 1;
-        let messages: SceneMessages = scene::messages(self.scene_version, scene);
+        tracing::info!(
+            scene = scene.name,
+            generation = geometry.generation,
+            "passing the scene on"
+        );
+        let messages = scene::messages(self.scene_version, scene, geometry);
         self.hub.scene.send_replace(messages);
         Stats::count(&self.hub.stats.scenes);
     }
 
-    /// Passes on received frames: events each, parts and hand as the newest state.
-    fn pass_on(&mut self, latest: &mut Latest, frames: Vec<Frame>, scene: &SceneInfo) {
+    /// Passes on received frames: events each, parts and hands as the newest state.
+    fn pass_on(&mut self, latest: &mut Latest, frames: Vec<Frame>) {
         let mut changed = false;
         for frame in frames {
             match frame {
@@ -145,36 +159,51 @@ impl Link<'_> {
                     changed = true;
                 }
                 Frame::Hand(hand) => {
-                    latest.hand = Some(hand);
+                    latest.hands.insert(hand.hand, hand);
                     changed = true;
                 }
                 Frame::Event(event) => {
+                    let message = events::message(self.scene_version, &event, &latest.words);
                     // No page connected is not an error.
-                    let _ = self
-                        .hub
-                        .events
-                        .send(events::message(self.scene_version, &event, scene));
+                    let _ = self.hub.events.send(message);
                 }
-                Frame::Force(_) => {}
+                Frame::Geometry(_) | Frame::Force(_) => {}
             }
         }
-        if changed {
+        // Frames before the first geometry have no scene to be drawn in.
+        if changed && latest.generation.is_some() {
             Stats::count(&self.hub.stats.frames);
             let message = messages::frame(
                 self.scene_version,
                 latest.parts.as_ref(),
-                latest.hand.as_ref(),
+                latest.hands.values(),
             );
             self.hub.frame.send_replace(Some(message));
         }
     }
 }
 
-/// The newest frames received.
+/// The newest geometry among `frames` when its generation is not `current`.
+fn new_geometry(frames: &[Frame], current: Option<u64>) -> Option<&SceneGeometry> {
+    frames
+        .iter()
+        .rev()
+        .find_map(|frame| match frame {
+            Frame::Geometry(geometry) => Some(geometry.as_ref()),
+            _ => None,
+        })
+        .filter(|geometry| Some(geometry.generation) != current)
+}
+
+/// What the link passes on of the current scene: its newest frames, and its words for events.
 #[derive(Default)]
 struct Latest {
+    /// The geometry generation the frames belong to; `None` before the first geometry.
+    generation: Option<u64>,
+    words: SceneWords,
     parts: Option<PartsFrame>,
-    hand: Option<HandFrame>,
+    /// Each hand's newest frame, by side code.
+    hands: BTreeMap<u32, HandFrame>,
 }
 
 /// Carries out a page's command on the server; the answer in words either way.
@@ -184,13 +213,9 @@ fn carry_out(client: &Client, command: &Command) -> Result<String, String> {
         Command::SetMetaphor { metaphor } => client
             .set_metaphor((*metaphor).into(), CONTROL_TIMEOUT)
             .map(|_| format!("grasp metaphor: {}", metaphor.words())),
-        Command::LoadScene { name } => {
-            let _ = (name, LOAD_TIMEOUT);
-            Err(ClientError::Ipc {
-                action: "load a scene by name",
-                reason: "not offered by this server".into(),
-            })
-        }
+        Command::LoadScene { name } => client
+            .load_named_scene(name, LOAD_TIMEOUT)
+            .map(|_| format!("loaded {name}")),
     };
     done.map_err(|error| match error {
         ClientError::Refused { message, .. } => message,

@@ -7,6 +7,7 @@
 use axum::extract::ws::Message;
 use serde::Serialize;
 use serde_json::json;
+use vas_client::words::grasp_name;
 use vas_client::{HandFrame, PartState, PartsFrame, WirePose};
 
 /// `{"type": "status"}`: whether a server answers, and the scenes it offers.
@@ -51,24 +52,35 @@ struct PartsView<'a> {
 /// One hand's newest frame in a frame message.
 #[derive(Debug, Serialize)]
 struct HandView<'a> {
+    /// The side's code (right 0, left 1), as the scene's hands name it.
+    hand: u32,
     frame: u64,
+    /// The answered tracker sample's timestamp (ns since the Unix epoch), for the latency.
     tracker_ns: u64,
     published_ns: u64,
+    tracked: bool,
     root: &'a WirePose,
-    grasp: String,
+    /// Each segment's verified world pose, in the order of the scene's segment meshes.
+    segments: &'a [WirePose],
+    grasp: &'static str,
     /// Bit per [`vas_client::HandSegment`]: that segment touches a part.
     touching: u32,
 }
 
-/// `{"type": "frame"}`: the newest parts frame and hand frame, for the scene numbered `scene`.
-pub fn frame(scene: u64, parts: Option<&PartsFrame>, hand: Option<&HandFrame>) -> Message {
+/// `{"type": "frame"}`: the newest parts frame and each hand's newest frame, for the scene
+/// numbered `scene`.
+pub fn frame<'a>(
+    scene: u64,
+    parts: Option<&PartsFrame>,
+    hands: impl IntoIterator<Item = &'a HandFrame>,
+) -> Message {
     let parts = parts.map(|frame| PartsView {
         frame: frame.header.frame,
         tracker_ns: frame.header.tracker.timestamp_ns,
         published_ns: frame.header.timestamp_ns,
         parts: frame.parts.iter().map(part_view).collect(),
     });
-    let hands: Vec<HandView> = hand.into_iter().map(hand_view).collect();
+    let hands: Vec<HandView> = hands.into_iter().map(hand_view).collect();
     text(&json!({ "type": "frame", "scene": scene, "parts": parts, "hands": hands }))
 }
 
@@ -83,12 +95,14 @@ fn part_view(part: &PartState) -> PartView<'_> {
 
 fn hand_view(hand: &HandFrame) -> HandView<'_> {
     HandView {
+        hand: hand.hand,
         frame: hand.frame,
         tracker_ns: hand.tracker.timestamp_ns,
         published_ns: hand.timestamp_ns,
+        tracked: hand.tracked != 0,
         root: &hand.root,
-        grasp: vas_client::GraspType::try_from(hand.grasp_type)
-            .map_or_else(|_| "unknown".to_owned(), |grasp| format!("{grasp:?}")),
+        segments: hand.segment_poses(),
+        grasp: grasp_name(hand.grasp_type),
         touching: hand.touching,
     }
 }
