@@ -88,7 +88,13 @@ mod tests {
     #[test]
     fn only_exact_paths_are_found() {
         assert!(find("/main.js").is_some());
-        for path in ["/main.js/", "/./main.js", "//main.js", "/../main.js", "/%6Dain.js"] {
+        for path in [
+            "/main.js/",
+            "/./main.js",
+            "//main.js",
+            "/../main.js",
+            "/%6Dain.js",
+        ] {
             assert!(find(path).is_none(), "{path} was found");
         }
     }

@@ -33,12 +33,7 @@ const LOAD_TIMEOUT: Duration = Duration::from_secs(60);
 const LOOK: Duration = Duration::from_millis(250);
 
 /// Runs the link until `stop` is set.
-pub fn run(
-    prefix: Option<&str>,
-    hub: &Hub,
-    commands: Receiver<CommandRequest>,
-    stop: &AtomicBool,
-) {
+pub fn run(prefix: Option<&str>, hub: &Hub, commands: Receiver<CommandRequest>, stop: &AtomicBool) {
     let mut link = Link {
         hub,
         commands,
@@ -74,7 +69,11 @@ impl Link<'_> {
         let mut client = Client::connect(prefix)?;
         let mut scene = client.scene_info(CONTROL_TIMEOUT)?;
         let scene_names = client.scene_names(CONTROL_TIMEOUT)?;
-        tracing::info!(scene = scene.name, parts = scene.parts.len(), "server found");
+        tracing::info!(
+            scene = scene.name,
+            parts = scene.parts.len(),
+            "server found"
+        );
         self.hub.stats.server.store(true, Ordering::Relaxed);
         self.hub
             .status
@@ -209,7 +208,9 @@ struct Latest {
 /// Carries out a page's command on the server; the answer in words either way.
 fn carry_out(client: &Client, command: &Command) -> Result<String, String> {
     let done = match command {
-        Command::Reset {} => client.reset(CONTROL_TIMEOUT).map(|_| "scene reset".to_owned()),
+        Command::Reset {} => client
+            .reset(CONTROL_TIMEOUT)
+            .map(|_| "scene reset".to_owned()),
         Command::SetMetaphor { metaphor } => client
             .set_metaphor((*metaphor).into(), CONTROL_TIMEOUT)
             .map(|_| format!("grasp metaphor: {}", metaphor.words())),

@@ -42,7 +42,10 @@ pub async fn serve(mut socket: WebSocket, hub: Arc<Hub>) {
             Refusal::Oversized => &hub.stats.refused_oversized,
             Refusal::Unknown => &hub.stats.refused_unknown,
         });
-        tracing::warn!(reason = refusal.reason(), "a page sent a bad message; closed it");
+        tracing::warn!(
+            reason = refusal.reason(),
+            "a page sent a bad message; closed it"
+        );
         let close = CloseFrame {
             code: close_code::POLICY,
             reason: refusal.reason().into(),

@@ -52,7 +52,12 @@ fn encode(index: usize, mesh: &MeshData) -> Bytes {
     } else {
         &[]
     };
-    let counts = [index, mesh.positions.len(), normals.len(), mesh.triangles.len()];
+    let counts = [
+        index,
+        mesh.positions.len(),
+        normals.len(),
+        mesh.triangles.len(),
+    ];
     let floats = 3 * (mesh.positions.len() + normals.len());
     let mut bytes = Vec::with_capacity(4 * (counts.len() + floats + 3 * mesh.triangles.len()));
     for count in counts {

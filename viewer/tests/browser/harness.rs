@@ -159,11 +159,8 @@ fn dechunk(mut chunked: &[u8]) -> Vec<u8> {
             .windows(2)
             .position(|window| window == b"\r\n")
             .expect("a chunk size line");
-        let size = usize::from_str_radix(
-            String::from_utf8_lossy(&chunked[..line_end]).trim(),
-            16,
-        )
-        .expect("a hexadecimal chunk size");
+        let size = usize::from_str_radix(String::from_utf8_lossy(&chunked[..line_end]).trim(), 16)
+            .expect("a hexadecimal chunk size");
         if size == 0 {
             return body;
         }
@@ -241,9 +238,7 @@ impl Browser {
             )
             .connect(&driver_url)
             .await
-            .unwrap_or_else(|error| {
-                panic!("cannot start Chromium through chromedriver: {error}")
-            });
+            .unwrap_or_else(|error| panic!("cannot start Chromium through chromedriver: {error}"));
         Self {
             client,
             driver,
@@ -337,7 +332,12 @@ impl Screenshot {
     }
 
     /// Whether some pixel within `radius` of (x, y) satisfies `matches`.
-    pub fn any_near(&self, (x, y): (f64, f64), radius: i64, matches: impl Fn([u8; 3]) -> bool) -> bool {
+    pub fn any_near(
+        &self,
+        (x, y): (f64, f64),
+        radius: i64,
+        matches: impl Fn([u8; 3]) -> bool,
+    ) -> bool {
         let (cx, cy) = (x.round() as i64, y.round() as i64);
         (-radius..=radius).any(|dy| {
             (-radius..=radius).any(|dx| {
@@ -364,7 +364,10 @@ fn free_port() -> u16 {
 async fn wait_for_port(port: u16) {
     let deadline = Instant::now() + PATIENCE;
     while TcpStream::connect(("127.0.0.1", port)).await.is_err() {
-        assert!(Instant::now() < deadline, "chromedriver does not listen on {port}");
+        assert!(
+            Instant::now() < deadline,
+            "chromedriver does not listen on {port}"
+        );
         tokio::time::sleep(POLL).await;
     }
 }

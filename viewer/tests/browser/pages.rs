@@ -51,7 +51,11 @@ async fn sixteen_pages_each_get_frames() {
         browser
             .wait_for("window.vasViewer?.scene?.name === 'peg insert' && window.vasViewer.received.frames > 0")
             .await;
-        seen.push(browser.eval::<u64>("window.vasViewer.received.lastParts").await);
+        seen.push(
+            browser
+                .eval::<u64>("window.vasViewer.received.lastParts")
+                .await,
+        );
     }
     for (window, seen) in windows.iter().zip(seen) {
         browser

@@ -49,8 +49,8 @@ async fn the_page_draws_the_published_poses_and_the_held_peg_where_it_is() {
         .await;
 
     // The recording in two halves: the peg is held after the first.
-    let recording = std::fs::read_to_string(fixtures_dir().join("peg_insert.jsonl"))
-        .expect("the fixture");
+    let recording =
+        std::fs::read_to_string(fixtures_dir().join("peg_insert.jsonl")).expect("the fixture");
     let samples = Recording::load(&fixtures_dir().join("peg_insert.jsonl"))
         .expect("the fixture parses")
         .samples
@@ -157,7 +157,12 @@ async fn drawn_as_published(browser: &Browser, published: &PartsFrame) -> Vec<Dr
 
 /// Checks in `shot` that the peg (a cylinder 24 cm long along its own z) is drawn in the grasped
 /// colour at the projections of points on its axis, and not beside it.
-async fn check_drawn_at(browser: &Browser, shot: &Screenshot, position: [f64; 3], rotation: [f64; 4]) {
+async fn check_drawn_at(
+    browser: &Browser,
+    shot: &Screenshot,
+    position: [f64; 3],
+    rotation: [f64; 4],
+) {
     let axis = rotate(rotation, [0.0, 0.0, 1.0]);
     let side = rotate(rotation, [1.0, 0.0, 0.0]);
     let at = |along: f64, beside: f64| -> [f64; 3] {

@@ -14,8 +14,14 @@ const ASSETS: &[(&str, &str)] = &[
     ("/view.js", "view.js"),
     ("/panel.js", "panel.js"),
     ("/xr.js", "xr.js"),
-    ("/vendor/three/three.module.min.js", "vendor/three/three.module.min.js"),
-    ("/vendor/three/three.core.min.js", "vendor/three/three.core.min.js"),
+    (
+        "/vendor/three/three.module.min.js",
+        "vendor/three/three.module.min.js",
+    ),
+    (
+        "/vendor/three/three.core.min.js",
+        "vendor/three/three.core.min.js",
+    ),
     (
         "/vendor/three/addons/controls/OrbitControls.js",
         "vendor/three/addons/controls/OrbitControls.js",

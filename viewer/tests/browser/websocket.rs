@@ -61,10 +61,7 @@ async fn bad_messages_close_their_page_only_and_are_counted() {
     assert_eq!(scene["name"], "peg insert");
     let before = next_frame_number(&mut good).await;
 
-    let oversized = format!(
-        r#"{{"type":"load_scene","name":"{}"}}"#,
-        "x".repeat(5000)
-    );
+    let oversized = format!(r#"{{"type":"load_scene","name":"{}"}}"#, "x".repeat(5000));
     let bad = [
         Message::text("not json"),
         Message::text(r#"{"type":"reset","extra":1}"#),

@@ -11,8 +11,7 @@ const IWER: &str = include_str!("vendor/iwer/iwer.min.js");
 
 /// Installs an emulated Meta Quest 3 as the page's `navigator.xr`, over Chromium's own (which
 /// has no headset to offer).
-const INSTALL: &str =
-    "new IWER.XRDevice(IWER.metaQuest3).installRuntime({ forceInstall: true });";
+const INSTALL: &str = "new IWER.XRDevice(IWER.metaQuest3).installRuntime({ forceInstall: true });";
 
 #[tokio::test]
 async fn entering_vr_draws_the_scene_in_an_xr_session() {
