@@ -1,0 +1,173 @@
+// The viewer page: receives the scene and frames from vas-viewer over a WebSocket and draws the
+// newest frame at the display's rate, on the screen or in a WebXR session.
+//
+// Frames arrive faster or slower than the display draws; only the newest is drawn (a frame
+// that arrived while another was waiting replaces it). The latency shown is from the input
+// sample a hand frame answers (its tracker timestamp, wall clock) to the moment the frame was
+// drawn. Everything tests look at is on `window.vasViewer`.
+
+import { Connection } from './connection.js';
+import { Panel } from './panel.js';
+import { View, stateOf } from './view.js';
+import { setupXr } from './xr.js';
+
+// Latencies kept for the median shown and for tests.
+const LATENCY_WINDOW = 200;
+// Events kept for tests (the panel shows fewer).
+const EVENT_WINDOW = 1000;
+
+const view = new View(document.getElementById('view'));
+const state = {
+  open: false,
+  server: false,
+  scene: null,
+  sceneNames: [],
+  waiting: null, // the newest frame not drawn yet
+  received: { frames: 0, events: 0, scenes: 0, lastParts: 0, lastHand: 0 },
+  drawn: { frames: 0, lastParts: 0, lastHand: 0 },
+  events: [],
+  replies: [],
+  warnings: [],
+  latencies: [],
+  xrFrames: 0,
+  fps: 0,
+};
+
+const connection = new Connection({
+  open(open) {
+    state.open = open;
+    if (!open) state.server = false;
+    panel.showStatus(state.open, state.server);
+  },
+  status(message) {
+    state.server = message.server;
+    state.sceneNames = message.scene_names;
+    panel.showStatus(state.open, state.server);
+    panel.showSceneNames(message.scene_names);
+  },
+  scene(scene, meshes) {
+    state.scene = scene;
+    state.waiting = null;
+    state.received.scenes += 1;
+    view.setScene(scene, meshes);
+    panel.showScene(scene.name);
+  },
+  frame(frame) {
+    if (frame.scene !== state.scene?.version) return;
+    state.received.frames += 1;
+    state.received.lastParts = frame.parts?.frame ?? state.received.lastParts;
+    if (frame.hands.length > 0) {
+      state.received.lastHand = Math.max(...frame.hands.map((hand) => hand.frame));
+    }
+    state.waiting = frame;
+  },
+  event(event) {
+    state.received.events += 1;
+    state.events.push(event.text);
+    if (state.events.length > EVENT_WINDOW) state.events.shift();
+    panel.addEvent(event.text);
+    if (event.point && (event.kind === 'contact_begin' || event.kind === 'contact_end')) {
+      view.addMarker(event.point, event.kind === 'contact_begin', performance.now());
+    }
+  },
+  reply(reply) {
+    state.replies.push(reply);
+    panel.showReply(reply.message, !reply.ok);
+  },
+  warning(warning) {
+    state.warnings.push(warning.message);
+    panel.showReply(warning.message, true);
+  },
+});
+const panel = new Panel((command) => connection.send(command));
+setupXr(view, panel);
+
+// Wall clock in milliseconds since the Unix epoch, as the frames' timestamps count it.
+const wallClockMs = () => performance.timeOrigin + performance.now();
+
+let fpsWindow = { start: performance.now(), frames: 0 };
+view.renderer.setAnimationLoop((now) => {
+  const frame = state.waiting;
+  state.waiting = null;
+  if (frame) view.applyFrame(frame);
+  view.render(now);
+  if (view.renderer.xr.isPresenting) state.xrFrames += 1;
+  if (frame) noteDrawn(frame);
+  fpsWindow.frames += 1;
+  if (now - fpsWindow.start >= 1000) {
+    state.fps = (fpsWindow.frames * 1000) / (now - fpsWindow.start);
+    fpsWindow = { start: now, frames: 0 };
+    panel.showPerf(state.fps, median(state.latencies));
+  }
+});
+
+// Records that `frame` is on the screen, and the latency of a hand frame drawn for the first time.
+function noteDrawn(frame) {
+  state.drawn.frames += 1;
+  state.drawn.lastParts = frame.parts?.frame ?? state.drawn.lastParts;
+  for (const hand of frame.hands) {
+    if (hand.frame <= state.drawn.lastHand) continue;
+    state.drawn.lastHand = hand.frame;
+    if (hand.tracker_ns > 0) {
+      state.latencies.push(wallClockMs() - hand.tracker_ns / 1e6);
+      if (state.latencies.length > LATENCY_WINDOW) state.latencies.shift();
+    }
+  }
+}
+
+function median(values) {
+  if (values.length === 0) return null;
+  const sorted = [...values].sort((a, b) => a - b);
+  return sorted[Math.floor(sorted.length / 2)];
+}
+
+const hex = (colour) => `#${colour.getHexString()}`;
+
+// What the page draws, for tests and for a look from the console.
+window.vasViewer = {
+  get open() { return state.open; },
+  get server() { return state.server; },
+  get scene() { return state.scene && { version: state.scene.version, name: state.scene.name }; },
+  get sceneNames() { return state.sceneNames; },
+  get received() { return { ...state.received }; },
+  get drawn() { return { ...state.drawn }; },
+  get events() { return [...state.events]; },
+  get replies() { return [...state.replies]; },
+  get warnings() { return [...state.warnings]; },
+  get latencies() { return [...state.latencies]; },
+  get xrFrames() { return state.xrFrames; },
+  get fps() { return state.fps; },
+  get markers() { return view.markers.map((marker) => marker.position.toArray()); },
+  // Every part as drawn: pose in the vas world, state and colour.
+  parts() {
+    return view.parts.map((mesh) => ({
+      id: mesh.userData.id,
+      name: mesh.name,
+      visible: mesh.visible,
+      position: mesh.position.toArray(),
+      quaternion: mesh.quaternion.toArray(),
+      state: mesh.userData.state,
+      colour: hex(mesh.material.color),
+    }));
+  },
+  // Every hand's segments as drawn.
+  hands() {
+    return [...view.hands.entries()].map(([hand, segments]) => ({
+      hand,
+      segments: segments.map((mesh) => ({
+        visible: mesh.visible,
+        position: mesh.position.toArray(),
+        quaternion: mesh.quaternion.toArray(),
+        colour: hex(mesh.material.color),
+      })),
+    }));
+  },
+  // The pixel (CSS pixels from the canvas's top left) a vas world point is drawn at.
+  project: (x, y, z) => view.project(x, y, z),
+  // The canvas's place on the page, in CSS pixels.
+  canvasRect() {
+    const { left, top, width, height } = view.renderer.domElement.getBoundingClientRect();
+    return { left, top, width, height };
+  },
+  stateOf,
+};

@@ -1,0 +1,225 @@
+// The three.js view: the parts and hands the server published, drawn where it put them.
+//
+// Everything vas sends lives in `world`, a group in vas's frame (metres, z up). On a screen the
+// group is left as it is and the camera's up is z; in a WebXR session (y up) xr.js turns the
+// group. Nothing here computes a pose: each part and each hand segment is placed at the pose of
+// the newest frame, and coloured by the state flags the server set.
+
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+// PartState flags, as in protocol/src/output.rs.
+const PART_GRASPED = 1;
+const PART_TOUCHING = 2;
+const PART_SLIDING = 4;
+
+// One colour per state; the panel's legend (style.css) shows the same.
+export const COLOURS = {
+  resting: 0x8c9aab,
+  touching: 0xf2b233,
+  sliding: 0xb066f0,
+  grasped: 0x2fd15a,
+};
+const HAND_COLOUR = 0xd8a27e;
+const HAND_TOUCHING_COLOUR = 0xff7a45;
+const CONTACT_BEGIN_COLOUR = 0xff3b30;
+const CONTACT_END_COLOUR = 0x35a7ff;
+// How long a contact marker stays, in milliseconds.
+const MARKER_MS = 1500;
+
+// A part's state from its flags; grasped shows over sliding over touching.
+export function stateOf(flags) {
+  if (flags & PART_GRASPED) return 'grasped';
+  if (flags & PART_SLIDING) return 'sliding';
+  if (flags & PART_TOUCHING) return 'touching';
+  return 'resting';
+}
+
+export class View {
+  constructor(container) {
+    this.container = container;
+    this.renderer = new THREE.WebGLRenderer({ antialias: true });
+    this.renderer.setPixelRatio(window.devicePixelRatio);
+    this.renderer.xr.enabled = true;
+    container.appendChild(this.renderer.domElement);
+
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0x1d2126);
+    this.world = new THREE.Group();
+    this.scene.add(this.world);
+
+    this.camera = new THREE.PerspectiveCamera(45, 1, 0.01, 100);
+    this.camera.up.set(0, 0, 1);
+    this.camera.position.set(0.5, -0.8, 0.5);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+
+    const sky = new THREE.HemisphereLight(0xffffff, 0x445060, 2.0);
+    sky.position.set(0, 0, 1);
+    const sun = new THREE.DirectionalLight(0xffffff, 1.5);
+    sun.position.set(1, -1.5, 2);
+    const floor = new THREE.GridHelper(2, 40, 0x59636e, 0x3a4149);
+    floor.rotation.x = Math.PI / 2;
+    this.world.add(sky, sun, floor);
+
+    this.parts = [];
+    this.hands = new Map();
+    this.markers = [];
+    this.sceneName = null;
+    this.fitPending = false;
+
+    new ResizeObserver(() => this.resize()).observe(container);
+    this.resize();
+  }
+
+  resize() {
+    const { clientWidth: width, clientHeight: height } = this.container;
+    if (width === 0 || height === 0 || this.renderer.xr.isPresenting) return;
+    this.renderer.setSize(width, height);
+    this.camera.aspect = width / height;
+    this.camera.updateProjectionMatrix();
+  }
+
+  // Replaces the drawn scene by `scene` (the viewer's scene message) and its `meshes`.
+  setScene(scene, meshes) {
+    for (const part of this.parts) this.dispose(part);
+    for (const hand of this.hands.values()) hand.forEach((segment) => this.dispose(segment));
+    const geometries = meshes.map(geometryOf);
+    this.parts = scene.parts.map((part) => {
+      const mesh = this.addMesh(geometries[part.mesh], COLOURS.resting);
+      mesh.name = part.name;
+      Object.assign(mesh.userData, { id: part.id, state: 'resting' });
+      return mesh;
+    });
+    this.hands = new Map(
+      scene.hands.map((hand) => [
+        hand.hand,
+        hand.segments.map((mesh) => this.addMesh(geometries[mesh], HAND_COLOUR)),
+      ]),
+    );
+    // A new scene is framed once its parts have poses; the same scene again keeps the camera.
+    if (scene.name !== this.sceneName) this.fitPending = true;
+    this.sceneName = scene.name;
+  }
+
+  // A mesh hidden until its first pose (a part without geometry stays hidden). Both sides are
+  // drawn: CAD meshes may be polygon soups whose winding means nothing.
+  addMesh(geometry, colour) {
+    const material = new THREE.MeshStandardMaterial({
+      color: colour,
+      roughness: 0.6,
+      metalness: 0.05,
+      side: THREE.DoubleSide,
+    });
+    const mesh = new THREE.Mesh(geometry ?? new THREE.BufferGeometry(), material);
+    mesh.visible = false;
+    mesh.userData.hasGeometry = geometry !== undefined;
+    this.world.add(mesh);
+    return mesh;
+  }
+
+  dispose(mesh) {
+    this.world.remove(mesh);
+    mesh.geometry.dispose();
+    mesh.material.dispose();
+  }
+
+  // Places every part and hand segment at its pose in `frame` (the viewer's frame message).
+  applyFrame(frame) {
+    for (const part of frame.parts?.parts ?? []) {
+      const mesh = this.parts[part.id];
+      if (!mesh) continue;
+      place(mesh, part.position, part.rotation);
+      const state = stateOf(part.flags);
+      if (state !== mesh.userData.state) {
+        mesh.userData.state = state;
+        mesh.material.color.setHex(COLOURS[state]);
+      }
+    }
+    for (const hand of frame.hands) {
+      const segments = this.hands.get(hand.hand) ?? [];
+      hand.segments.forEach((pose, index) => {
+        const mesh = segments[index];
+        if (!mesh) return;
+        place(mesh, pose.position, pose.rotation);
+        const touching = (hand.touching >> index) & 1;
+        mesh.material.color.setHex(touching ? HAND_TOUCHING_COLOUR : HAND_COLOUR);
+      });
+    }
+    if (this.fitPending && this.parts.some((mesh) => mesh.visible)) {
+      this.fitPending = false;
+      this.fit();
+    }
+  }
+
+  // Points the camera at the parts from the front, above and to the right.
+  fit() {
+    const box = new THREE.Box3();
+    for (const mesh of this.parts) if (mesh.visible) box.expandByObject(mesh);
+    const centre = box.getCenter(new THREE.Vector3());
+    const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 0.05);
+    const direction = new THREE.Vector3(0.6, -1.2, 0.8).normalize();
+    this.camera.position.copy(centre).addScaledVector(direction, radius * 2.8);
+    this.camera.near = radius / 100;
+    this.camera.far = radius * 100;
+    this.camera.updateProjectionMatrix();
+    this.controls.target.copy(centre);
+    this.controls.update();
+  }
+
+  // Marks a contact event at `point` (vas world) for a short while.
+  addMarker(point, begin, now) {
+    const geometry = new THREE.SphereGeometry(0.004, 12, 8);
+    const colour = begin ? CONTACT_BEGIN_COLOUR : CONTACT_END_COLOUR;
+    const material = new THREE.MeshBasicMaterial({ color: colour, transparent: true, depthTest: false });
+    const marker = new THREE.Mesh(geometry, material);
+    marker.position.set(...point);
+    marker.renderOrder = 1;
+    marker.userData.until = now + MARKER_MS;
+    this.world.add(marker);
+    this.markers.push(marker);
+  }
+
+  // Draws one frame; `now` is the animation clock in milliseconds.
+  render(now) {
+    this.markers = this.markers.filter((marker) => {
+      const left = marker.userData.until - now;
+      if (left > 0) {
+        marker.material.opacity = Math.min(1, left / 500);
+        return true;
+      }
+      this.dispose(marker);
+      return false;
+    });
+    if (!this.renderer.xr.isPresenting) this.controls.update();
+    this.renderer.render(this.scene, this.camera);
+  }
+
+  // The pixel (CSS pixels from the canvas's top left) where the vas world point (x, y, z) is
+  // drawn on the screen.
+  project(x, y, z) {
+    this.world.updateMatrixWorld();
+    const point = this.world.localToWorld(new THREE.Vector3(x, y, z)).project(this.camera);
+    const { clientWidth: width, clientHeight: height } = this.renderer.domElement;
+    return [((point.x + 1) / 2) * width, ((1 - point.y) / 2) * height];
+  }
+}
+
+function place(mesh, position, rotation) {
+  mesh.position.set(position[0], position[1], position[2]);
+  mesh.quaternion.set(rotation[0], rotation[1], rotation[2], rotation[3]);
+  mesh.visible = mesh.userData.hasGeometry;
+}
+
+// A BufferGeometry from a decoded mesh (see connection.js); normals computed when not sent.
+function geometryOf(mesh) {
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(mesh.positions, 3));
+  geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
+  if (mesh.normals) {
+    geometry.setAttribute('normal', new THREE.BufferAttribute(mesh.normals, 3));
+  } else {
+    geometry.computeVertexNormals();
+  }
+  geometry.computeBoundingSphere();
+  return geometry;
+}

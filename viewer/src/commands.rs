@@ -1,0 +1,153 @@
+//! The commands a page may send, and how a page's message is judged.
+//!
+//! A page sends small JSON objects with a `type`. Anything else (binary, not JSON, an unknown
+//! type, unexpected or missing fields, more than [`MAX_COMMAND_BYTES`]) is refused: the page
+//! that sent it is broken or hostile, so its connection is closed and the refusal counted.
+
+use serde::Deserialize;
+use vas_client::SlidingMetaphor;
+
+/// The largest command a page may send, in bytes.
+pub const MAX_COMMAND_BYTES: usize = 4096;
+
+/// A command from a page, carried out by the link thread on the vas server.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Command {
+    /// Put the scene back to its initial state. (A struct variant: serde lets a unit variant
+    /// of a tagged enum through with any other fields.)
+    Reset {},
+    /// Load one of the scenes the server offers, by name (never a path).
+    LoadScene {
+        /// The scene's name, as the server lists it.
+        name: String,
+    },
+    /// Slide grasped parts with another metaphor.
+    SetMetaphor {
+        /// Which one.
+        metaphor: Metaphor,
+    },
+}
+
+impl Command {
+    /// The command's `type`, for replies and logs.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Reset {} => "reset",
+            Self::LoadScene { .. } => "load_scene",
+            Self::SetMetaphor { .. } => "set_metaphor",
+        }
+    }
+}
+
+/// The grasp metaphors as the page names them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Metaphor {
+    /// The rubber band: position pulled to the ghost.
+    RubberBand,
+    /// Rubber band and spiral spring: position and orientation pulled to the ghost.
+    SpiralSpring,
+    /// Incremental motion: the part repeats the ghost's increments.
+    Incremental,
+}
+
+impl Metaphor {
+    /// The metaphor in words, as the page shows it.
+    pub fn words(self) -> &'static str {
+        match self {
+            Self::RubberBand => "rubber band",
+            Self::SpiralSpring => "rubber band and spiral spring",
+            Self::Incremental => "incremental motion",
+        }
+    }
+}
+
+impl From<Metaphor> for SlidingMetaphor {
+    fn from(metaphor: Metaphor) -> Self {
+        match metaphor {
+            Metaphor::RubberBand => Self::RubberBand,
+            Metaphor::SpiralSpring => Self::RubberBandSpiralSpring,
+            Metaphor::Incremental => Self::IncrementalMotion,
+        }
+    }
+}
+
+/// Why a page's message was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refusal {
+    /// Not a well-formed command.
+    Malformed,
+    /// Longer than [`MAX_COMMAND_BYTES`].
+    Oversized,
+    /// A `type` this viewer does not know.
+    Unknown,
+}
+
+impl Refusal {
+    /// The refusal in words, for the close frame and the log.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Self::Malformed => "malformed command",
+            Self::Oversized => "command too long",
+            Self::Unknown => "unknown command",
+        }
+    }
+}
+
+/// The command in a page's text message.
+pub fn parse(text: &str) -> Result<Command, Refusal> {
+    if text.len() > MAX_COMMAND_BYTES {
+        return Err(Refusal::Oversized);
+    }
+    let value: serde_json::Value = serde_json::from_str(text).map_err(|_| Refusal::Malformed)?;
+    let kind = value
+        .get("type")
+        .and_then(serde_json::Value::as_str)
+        .ok_or(Refusal::Malformed)?;
+    if !matches!(kind, "reset" | "load_scene" | "set_metaphor") {
+        return Err(Refusal::Unknown);
+    }
+    serde_json::from_value(value).map_err(|_| Refusal::Malformed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_three_commands_parse() {
+        assert_eq!(parse(r#"{"type":"reset"}"#), Ok(Command::Reset {}));
+        assert_eq!(
+            parse(r#"{"type":"load_scene","name":"peg insert"}"#),
+            Ok(Command::LoadScene {
+                name: "peg insert".into()
+            })
+        );
+        assert_eq!(
+            parse(r#"{"type":"set_metaphor","metaphor":"spiral_spring"}"#),
+            Ok(Command::SetMetaphor {
+                metaphor: Metaphor::SpiralSpring
+            })
+        );
+    }
+
+    #[test]
+    fn anything_else_is_refused_with_its_reason() {
+        for malformed in [
+            "",
+            "reset",
+            "[]",
+            r#"{"kind":"reset"}"#,
+            r#"{"type":7}"#,
+            r#"{"type":"reset","extra":1}"#,
+            r#"{"type":"load_scene"}"#,
+            r#"{"type":"set_metaphor","metaphor":"glue"}"#,
+        ] {
+            assert_eq!(parse(malformed), Err(Refusal::Malformed), "{malformed}");
+        }
+        assert_eq!(parse(r#"{"type":"shutdown"}"#), Err(Refusal::Unknown));
+        let long = format!(r#"{{"type":"load_scene","name":"{}"}}"#, "x".repeat(5000));
+        assert_eq!(parse(&long), Err(Refusal::Oversized));
+    }
+}

@@ -1,0 +1,225 @@
+//! The link thread: the viewer's vas client, on the one thread its iceoryx2 ports may live on.
+//!
+//! It waits for a server, passes the scene and every frame and event on to the [`Hub`], and
+//! carries out the pages' commands. In lockstep a server publishes only when it gets input, so
+//! silence alone says nothing; after [`QUIET`] without a frame the link asks the server for its
+//! counters, and a server that does not answer is taken as gone: the pages are told "no
+//! server", and the link waits for one on the same prefix and starts afresh (new ports, so that
+//! the new server's scene arrives as a late joiner's history).
+
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::Receiver;
+use std::time::{Duration, Instant};
+
+use vas_client::{
+    Client, ClientError, Frame, HandFrame, PartsFrame, SceneGeometry, SceneInfo, SceneWords, Wake,
+};
+
+use crate::commands::Command;
+use crate::hub::{CommandRequest, Hub};
+use crate::stats::Stats;
+use crate::{events, messages, scene};
+
+/// How long one wait for frames lasts: bounds how late a command or a stop is noticed.
+const WAIT: Duration = Duration::from_millis(10);
+/// Silence after which the link checks that the server is still there.
+const QUIET: Duration = Duration::from_secs(1);
+/// How long a server has to answer a control request before it is taken as gone.
+const CONTROL_TIMEOUT: Duration = Duration::from_secs(2);
+/// How long a scene may take to load.
+const LOAD_TIMEOUT: Duration = Duration::from_secs(60);
+/// How long one look for a server lasts while there is none.
+const LOOK: Duration = Duration::from_millis(250);
+
+/// Runs the link until `stop` is set.
+pub fn run(prefix: Option<&str>, hub: &Hub, commands: Receiver<CommandRequest>, stop: &AtomicBool) {
+    let mut link = Link {
+        hub,
+        commands,
+        stop,
+        scene_version: 0,
+    };
+    hub.status.send_replace(Some(messages::status(false, &[])));
+    while !stop.load(Ordering::Relaxed) {
+        match link.session(prefix) {
+            Ok(()) => {}
+            Err(error) => tracing::warn!(%error, "lost the vas server"),
+        }
+        hub.stats.server.store(false, Ordering::Relaxed);
+        hub.status.send_replace(Some(messages::status(false, &[])));
+    }
+}
+
+struct Link<'a> {
+    hub: &'a Hub,
+    commands: Receiver<CommandRequest>,
+    stop: &'a AtomicBool,
+    /// Counts the scenes passed on; frames name the scene they belong to.
+    scene_version: u64,
+}
+
+impl Link<'_> {
+    /// One server's lifetime: waits for it, then passes on its output until it goes away or the
+    /// viewer stops (then `Ok`).
+    fn session(&mut self, prefix: Option<&str>) -> Result<(), ClientError> {
+        if !self.wait_for_server(prefix)? {
+            return Ok(());
+        }
+        let mut client = Client::connect(prefix)?;
+        let mut scene = client.scene_info(CONTROL_TIMEOUT)?;
+        let scene_names = client.scene_names(CONTROL_TIMEOUT)?;
+        tracing::info!(
+            scene = scene.name,
+            parts = scene.parts.len(),
+            "server found"
+        );
+        self.hub.stats.server.store(true, Ordering::Relaxed);
+        self.hub
+            .status
+            .send_replace(Some(messages::status(true, &scene_names)));
+
+        let mut latest = Latest::default();
+        let mut last_heard = Instant::now();
+        while !self.stop.load(Ordering::Relaxed) {
+            self.serve_commands(|command| carry_out(&client, command));
+            match client.wait(WAIT)? {
+                Wake::Ready => {
+                    last_heard = Instant::now();
+                    let frames = client.receive()?;
+                    if let Some(geometry) = new_geometry(&frames, latest.generation) {
+                        // A load or a reset: the names may have changed with the scene.
+                        scene = client.scene_info(CONTROL_TIMEOUT)?;
+                        latest = Latest {
+                            generation: Some(geometry.generation),
+                            words: SceneWords::new(&scene),
+                            ..Latest::default()
+                        };
+                        self.publish_scene(&scene, geometry);
+                    }
+                    self.pass_on(&mut latest, frames);
+                }
+                Wake::Timeout if last_heard.elapsed() >= QUIET => {
+                    client.input_stats(CONTROL_TIMEOUT)?;
+                    last_heard = Instant::now();
+                }
+                Wake::Timeout => {}
+                Wake::Terminated => return Ok(()),
+            }
+        }
+        Ok(())
+    }
+
+    /// Looks for a server until one answers (true) or the viewer stops (false); commands meanwhile
+    /// are refused.
+    fn wait_for_server(&mut self, prefix: Option<&str>) -> Result<bool, ClientError> {
+        let client = Client::connect(prefix)?;
+        while !self.stop.load(Ordering::Relaxed) {
+            match client.input_stats(LOOK) {
+                Ok(_) => return Ok(true),
+                Err(ClientError::Timeout { .. }) => {
+                    self.serve_commands(|_| Err("no vas server answers".to_owned()));
+                }
+                Err(error) => return Err(error),
+            }
+        }
+        Ok(false)
+    }
+
+    /// Answers every waiting command with `carry_out`.
+    fn serve_commands(&self, mut carry_out: impl FnMut(&Command) -> Result<String, String>) {
+        while let Ok(request) = self.commands.try_recv() {
+            let answer = carry_out(&request.command);
+            tracing::info!(command = request.command.name(), ?answer, "page command");
+            // The page may have gone meanwhile.
+            let _ = request.reply.send(answer);
+        }
+    }
+
+    fn publish_scene(&mut self, scene: &SceneInfo, geometry: &SceneGeometry) {
+        self.scene_version += 1;
+        tracing::info!(
+            scene = scene.name,
+            generation = geometry.generation,
+            "passing the scene on"
+        );
+        let messages = scene::messages(self.scene_version, scene, geometry);
+        self.hub.scene.send_replace(messages);
+        Stats::count(&self.hub.stats.scenes);
+    }
+
+    /// Passes on received frames: events each, parts and hands as the newest state.
+    fn pass_on(&mut self, latest: &mut Latest, frames: Vec<Frame>) {
+        let mut changed = false;
+        for frame in frames {
+            match frame {
+                Frame::Parts(parts) => {
+                    latest.parts = Some(parts);
+                    changed = true;
+                }
+                Frame::Hand(hand) => {
+                    latest.hands.insert(hand.hand, hand);
+                    changed = true;
+                }
+                Frame::Event(event) => {
+                    let message = events::message(self.scene_version, &event, &latest.words);
+                    // No page connected is not an error.
+                    let _ = self.hub.events.send(message);
+                }
+                Frame::Geometry(_) | Frame::Force(_) => {}
+            }
+        }
+        // Frames before the first geometry have no scene to be drawn in.
+        if changed && latest.generation.is_some() {
+            Stats::count(&self.hub.stats.frames);
+            let message = messages::frame(
+                self.scene_version,
+                latest.parts.as_ref(),
+                latest.hands.values(),
+            );
+            self.hub.frame.send_replace(Some(message));
+        }
+    }
+}
+
+/// The newest geometry among `frames` when its generation is not `current`.
+fn new_geometry(frames: &[Frame], current: Option<u64>) -> Option<&SceneGeometry> {
+    frames
+        .iter()
+        .rev()
+        .find_map(|frame| match frame {
+            Frame::Geometry(geometry) => Some(geometry.as_ref()),
+            _ => None,
+        })
+        .filter(|geometry| Some(geometry.generation) != current)
+}
+
+/// What the link passes on of the current scene: its newest frames, and its words for events.
+#[derive(Default)]
+struct Latest {
+    /// The geometry generation the frames belong to; `None` before the first geometry.
+    generation: Option<u64>,
+    words: SceneWords,
+    parts: Option<PartsFrame>,
+    /// Each hand's newest frame, by side code.
+    hands: BTreeMap<u32, HandFrame>,
+}
+
+/// Carries out a page's command on the server; the answer in words either way.
+fn carry_out(client: &Client, command: &Command) -> Result<String, String> {
+    let done = match command {
+        Command::Reset {} => client
+            .reset(CONTROL_TIMEOUT)
+            .map(|_| "scene reset".to_owned()),
+        Command::SetMetaphor { metaphor } => client
+            .set_metaphor((*metaphor).into(), CONTROL_TIMEOUT)
+            .map(|_| format!("grasp metaphor: {}", metaphor.words())),
+        Command::LoadScene { name } => client
+            .load_named_scene(name, LOAD_TIMEOUT)
+            .map(|_| format!("loaded {name}")),
+    };
+    done.map_err(|error| match error {
+        ClientError::Refused { message, .. } => message,
+        other => other.to_string(),
+    })
+}

@@ -1,0 +1,139 @@
+//! One page's WebSocket: what it is sent, and the commands it may send.
+//!
+//! On connecting, a page is sent the server's status, the scene and the newest frame; then
+//! whatever changes, newest state first-come (see [`crate::hub`]): a slow page is sent the
+//! newest frame when it is ready for one, never a backlog. A page has at most one command
+//! waiting for the server; it is not read from again until that command is answered.
+
+use std::sync::Arc;
+
+use axum::extract::ws::{CloseFrame, Message, WebSocket, close_code};
+use tokio::sync::broadcast::error::RecvError;
+
+use crate::commands::{self, MAX_COMMAND_BYTES, Refusal};
+use crate::hub::Hub;
+use crate::messages;
+use crate::stats::Stats;
+
+/// The largest WebSocket message or frame read from a page at all: beyond it the connection
+/// fails in the WebSocket layer. Between [`MAX_COMMAND_BYTES`] and this, a message is read and
+/// refused as oversized.
+pub const MAX_READ_BYTES: usize = 4 * MAX_COMMAND_BYTES;
+
+/// Why a page's connection ended.
+enum End {
+    /// The page closed it, or it broke.
+    Gone,
+    /// The page sent something that is not a command.
+    Refused(Refusal),
+}
+
+/// Serves one page until it goes away or is refused.
+pub async fn serve(mut socket: WebSocket, hub: Arc<Hub>) {
+    Stats::count(&hub.stats.pages_served);
+    Stats::count(&hub.stats.pages_open);
+    let end = run(&mut socket, &hub).await;
+    hub.stats
+        .pages_open
+        .fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
+    if let End::Refused(refusal) = end {
+        Stats::count(match refusal {
+            Refusal::Malformed => &hub.stats.refused_malformed,
+            Refusal::Oversized => &hub.stats.refused_oversized,
+            Refusal::Unknown => &hub.stats.refused_unknown,
+        });
+        tracing::warn!(
+            reason = refusal.reason(),
+            "a page sent a bad message; closed it"
+        );
+        let close = CloseFrame {
+            code: close_code::POLICY,
+            reason: refusal.reason().into(),
+        };
+        // The page may be gone already; nothing else to do then.
+        let _ = socket.send(Message::Close(Some(close))).await;
+    }
+}
+
+async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
+    let mut scene = hub.scene.subscribe();
+    let mut frame = hub.frame.subscribe();
+    let mut status = hub.status.subscribe();
+    let mut events = hub.events.subscribe();
+    // Everything current counts as changed, so the first turns of the loop send it all.
+    scene.mark_changed();
+    frame.mark_changed();
+    status.mark_changed();
+    let mut waiting: Option<(&'static str, tokio::sync::oneshot::Receiver<_>)> = None;
+
+    loop {
+        // Biased: the status and scene go before the frames that refer to them, and answers
+        // and events before the next frame.
+        let sent = tokio::select! {
+            biased;
+            Ok(()) = status.changed() => {
+                let message = status.borrow_and_update().clone();
+                send_all(socket, message).await
+            }
+            Ok(()) = scene.changed() => {
+                let messages = scene.borrow_and_update().clone();
+                send_all(socket, messages.description.into_iter().chain(messages.meshes)).await
+            }
+            answer = async { (&mut waiting.as_mut().expect("guarded").1).await },
+                if waiting.is_some() =>
+            {
+                let (command, _) = waiting.take().expect("guarded");
+                let answer = answer.unwrap_or_else(|_| Err("the viewer is stopping".to_owned()));
+                Stats::count(&hub.stats.commands);
+                send_all(socket, Some(messages::reply(command, &answer))).await
+            }
+            event = events.recv() => match event {
+                Ok(message) => send_all(socket, Some(message)).await,
+                Err(RecvError::Lagged(missed)) => {
+                    hub.stats
+                        .events_dropped
+                        .fetch_add(missed, std::sync::atomic::Ordering::Relaxed);
+                    tracing::warn!(missed, "a page fell behind; it missed the oldest events");
+                    let warning = format!("{missed} events were dropped: this page fell behind");
+                    send_all(socket, Some(messages::warning(&warning))).await
+                }
+                Err(RecvError::Closed) => return End::Gone,
+            },
+            Ok(()) = frame.changed() => {
+                let message = frame.borrow_and_update().clone();
+                send_all(socket, message).await
+            }
+            received = socket.recv(), if waiting.is_none() => match received {
+                Some(Ok(Message::Text(text))) => match commands::parse(text.as_str()) {
+                    Ok(command) => {
+                        waiting = Some((command.name(), hub.submit(command)));
+                        true
+                    }
+                    Err(refusal) => return End::Refused(refusal),
+                },
+                Some(Ok(Message::Binary(bytes))) if bytes.len() > MAX_COMMAND_BYTES => {
+                    return End::Refused(Refusal::Oversized);
+                }
+                Some(Ok(Message::Binary(_))) => return End::Refused(Refusal::Malformed),
+                // The WebSocket layer answers pings itself.
+                Some(Ok(Message::Ping(_) | Message::Pong(_))) => true,
+                Some(Ok(Message::Close(_))) | None => return End::Gone,
+                // A broken frame, or one beyond `MAX_READ_BYTES`.
+                Some(Err(_)) => return End::Refused(Refusal::Malformed),
+            },
+        };
+        if !sent {
+            return End::Gone;
+        }
+    }
+}
+
+/// Sends `messages` in order; false once the page is gone.
+async fn send_all(socket: &mut WebSocket, messages: impl IntoIterator<Item = Message>) -> bool {
+    for message in messages {
+        if socket.send(message).await.is_err() {
+            return false;
+        }
+    }
+    true
+}

@@ -1,0 +1,58 @@
+//! The viewer's counters, served as JSON on `GET /stats` for operators and tests.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+use serde_json::{Value, json};
+
+/// Counters shared by the link thread and every page.
+#[derive(Debug, Default)]
+pub struct Stats {
+    /// Pages connected now.
+    pub pages_open: AtomicU64,
+    /// Pages connected since start.
+    pub pages_served: AtomicU64,
+    /// Page messages refused for not being a well-formed command (not JSON, wrong fields,
+    /// binary, or a broken WebSocket frame).
+    pub refused_malformed: AtomicU64,
+    /// Page messages refused for their size.
+    pub refused_oversized: AtomicU64,
+    /// Page messages refused for an unknown command type.
+    pub refused_unknown: AtomicU64,
+    /// Events a slow page missed because its queue was full (the oldest go first).
+    pub events_dropped: AtomicU64,
+    /// Commands carried out or refused by the server.
+    pub commands: AtomicU64,
+    /// Frames the link thread received and passed on (each page may skip some).
+    pub frames: AtomicU64,
+    /// Scenes passed on (a first scene, a new generation, a server that came back).
+    pub scenes: AtomicU64,
+    /// Whether a vas server answers now.
+    pub server: AtomicBool,
+}
+
+impl Stats {
+    /// Adds one to `counter`.
+    pub fn count(counter: &AtomicU64) {
+        counter.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// The counters as a JSON object.
+    pub fn snapshot(&self) -> Value {
+        let get = |counter: &AtomicU64| counter.load(Ordering::Relaxed);
+        let refused = json!({
+            "malformed": get(&self.refused_malformed),
+            "oversized": get(&self.refused_oversized),
+            "unknown": get(&self.refused_unknown),
+        });
+        json!({
+            "server": self.server.load(Ordering::Relaxed),
+            "pages_open": get(&self.pages_open),
+            "pages_served": get(&self.pages_served),
+            "refused": refused,
+            "events_dropped": get(&self.events_dropped),
+            "commands": get(&self.commands),
+            "frames": get(&self.frames),
+            "scenes": get(&self.scenes),
+        })
+    }
+}

@@ -1,0 +1,371 @@
+//! What the viewer's tests run: the `vas-viewer` binary, plain HTTP and WebSocket requests to
+//! it, and headless Chromium driven through chromedriver.
+
+use std::io::{BufRead, BufReader};
+use std::net::SocketAddr;
+use std::path::Path;
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+use fantoccini::{Client, ClientBuilder};
+use serde::de::DeserializeOwned;
+use serde_json::{Value, json};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::TcpStream;
+use vas_tests::{PATIENCE, Spawned};
+
+/// How often a condition is looked at again while a test waits for it.
+const POLL: Duration = Duration::from_millis(20);
+
+/// A `vas-viewer` on its own port, stopped when dropped.
+pub struct Viewer {
+    process: Spawned,
+    /// Where it serves.
+    pub address: SocketAddr,
+}
+
+impl Viewer {
+    /// Starts a viewer for the server on `prefix`, on a free port of 127.0.0.1.
+    pub fn start(prefix: &str) -> Self {
+        let program = Path::new(env!("CARGO_BIN_EXE_vas-viewer"));
+        let args = ["--prefix", prefix, "--listen", "127.0.0.1:0"];
+        let mut process = Spawned::start(program, &args, Stdio::piped());
+        let stdout = process.take_stdout().expect("stdout is piped");
+        let mut line = String::new();
+        BufReader::new(stdout)
+            .read_line(&mut line)
+            .expect("read the viewer's stdout");
+        let address = line
+            .trim()
+            .strip_prefix("vas-viewer: open http://")
+            .and_then(|rest| rest.strip_suffix('/'))
+            .and_then(|address| address.parse().ok())
+            .unwrap_or_else(|| {
+                panic!(
+                    "the viewer did not print its URL (got {line:?}):\n{}",
+                    process.log()
+                )
+            });
+        Self { process, address }
+    }
+
+    /// The page's URL.
+    pub fn url(&self) -> String {
+        format!("http://{}/", self.address)
+    }
+
+    /// The WebSocket's URL.
+    pub fn ws_url(&self) -> String {
+        format!("ws://{}/ws", self.address)
+    }
+
+    /// `GET /stats`.
+    pub async fn stats(&self) -> Value {
+        let (status, body) = http_get(self.address, "/stats").await;
+        assert_eq!(status, 200, "GET /stats");
+        serde_json::from_slice(&body).expect("/stats is JSON")
+    }
+
+    /// Waits until `/stats` satisfies `condition`, and returns it.
+    pub async fn wait_for_stats(&self, what: &str, condition: impl Fn(&Value) -> bool) -> Value {
+        let deadline = Instant::now() + PATIENCE;
+        loop {
+            let stats = self.stats().await;
+            if condition(&stats) {
+                return stats;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "waited for {what}; stats: {stats}\n{}",
+                self.process.log()
+            );
+            tokio::time::sleep(POLL).await;
+        }
+    }
+}
+
+/// A `GET path` sent as written (no client normalises it): the status and the body.
+pub async fn http_get(address: SocketAddr, path: &str) -> (u16, Vec<u8>) {
+    http_request(address, "GET", path, None).await
+}
+
+/// One HTTP/1.1 request with an optional JSON body, on its own connection: the status and the
+/// body of the answer.
+async fn http_request(
+    address: SocketAddr,
+    method: &str,
+    path: &str,
+    json_body: Option<&str>,
+) -> (u16, Vec<u8>) {
+    let mut stream = TcpStream::connect(address).await.expect("connect");
+    let mut request = format!("{method} {path} HTTP/1.1\r\nHost: {address}\r\n");
+    if let Some(body) = json_body {
+        request += &format!(
+            "Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+            body.len()
+        );
+    } else {
+        request += "\r\n";
+    }
+    stream
+        .write_all(request.as_bytes())
+        .await
+        .expect("send the request");
+    let mut response = Vec::new();
+    let head_end = loop {
+        if let Some(end) = response.windows(4).position(|window| window == b"\r\n\r\n") {
+            break end + 4;
+        }
+        read_more(&mut stream, &mut response).await;
+    };
+    let head = String::from_utf8_lossy(&response[..head_end]).to_ascii_lowercase();
+    let status = head
+        .split(' ')
+        .nth(1)
+        .and_then(|code| code.parse().ok())
+        .unwrap_or_else(|| panic!("no status in {head:?}"));
+    let mut body = response.split_off(head_end);
+    if head.contains("transfer-encoding: chunked") {
+        while !body.ends_with(b"0\r\n\r\n") {
+            read_more(&mut stream, &mut body).await;
+        }
+        return (status, dechunk(&body));
+    }
+    let length = head
+        .lines()
+        .find_map(|line| line.strip_prefix("content-length:"))
+        .and_then(|length| length.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no length in {head:?}"));
+    while body.len() < length {
+        read_more(&mut stream, &mut body).await;
+    }
+    (status, body)
+}
+
+/// Appends what `stream` has next to `buffer`; panics at its end.
+async fn read_more(stream: &mut TcpStream, buffer: &mut Vec<u8>) {
+    let mut chunk = [0; 16 * 1024];
+    let read = stream.read(&mut chunk).await.expect("read the response");
+    assert!(read > 0, "the response ended early");
+    buffer.extend_from_slice(&chunk[..read]);
+}
+
+/// The body of a chunked transfer.
+fn dechunk(mut chunked: &[u8]) -> Vec<u8> {
+    let mut body = Vec::new();
+    loop {
+        let line_end = chunked
+            .windows(2)
+            .position(|window| window == b"\r\n")
+            .expect("a chunk size line");
+        let size = usize::from_str_radix(String::from_utf8_lossy(&chunked[..line_end]).trim(), 16)
+            .expect("a hexadecimal chunk size");
+        if size == 0 {
+            return body;
+        }
+        let start = line_end + 2;
+        body.extend_from_slice(&chunked[start..start + size]);
+        chunked = &chunked[start + size + 2..];
+    }
+}
+
+/// Only one browser at a time: two Chromiums rendering with SwiftShader on a small machine would
+/// each take longer than both in turn. Async, because a test holds its turn across awaits (each
+/// test has a runtime of its own; this lock needs none).
+static ONE_BROWSER: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+const CHROMEDRIVER: &str = "/usr/bin/chromedriver";
+
+/// Headless Chromium in a fresh profile, driven over WebDriver; ended when dropped.
+pub struct Browser {
+    /// The WebDriver session.
+    pub client: Client,
+    driver: Spawned,
+    driver_port: u16,
+    _profile: tempfile::TempDir,
+    _turn: tokio::sync::MutexGuard<'static, ()>,
+}
+
+impl Browser {
+    /// Starts chromedriver and a headless Chromium whose window is `width` × `height`.
+    pub async fn start(width: u32, height: u32) -> Self {
+        for program in [CHROMIUM, CHROMEDRIVER] {
+            assert!(
+                Path::new(program).exists(),
+                "{program} is missing: the viewer's browser tests need Debian's chromium and \
+                 chromium-driver (apt-get install chromium chromium-driver)"
+            );
+        }
+        let turn = ONE_BROWSER.lock().await;
+        let port = free_port();
+        let driver = Spawned::start(
+            Path::new(CHROMEDRIVER),
+            &[&format!("--port={port}")],
+            Stdio::null(),
+        );
+        let driver_url = format!("http://127.0.0.1:{port}");
+        wait_for_port(port).await;
+        let profile = tempfile::tempdir().expect("a profile directory");
+        let args = [
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--use-gl=swiftshader",
+            "--enable-unsafe-swiftshader",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            "--disable-quic",
+            // Pages in background tabs keep their timers and sockets running.
+            "--disable-background-timer-throttling",
+            "--disable-renderer-backgrounding",
+            &format!("--user-data-dir={}", profile.path().display()),
+            &format!("--window-size={width},{height}"),
+        ];
+        let capabilities = json!({
+            "goog:chromeOptions": { "binary": CHROMIUM, "args": args }
+        });
+        let client = ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
+            .capabilities(
+                capabilities
+                    .as_object()
+                    .expect("capabilities are an object")
+                    .clone(),
+            )
+            .connect(&driver_url)
+            .await
+            .unwrap_or_else(|error| panic!("cannot start Chromium through chromedriver: {error}"));
+        Self {
+            client,
+            driver,
+            driver_port: port,
+            _profile: profile,
+            _turn: turn,
+        }
+    }
+
+    /// Evaluates `expression` in the current page and returns its value.
+    pub async fn eval<T: DeserializeOwned>(&self, expression: &str) -> T {
+        let value = self
+            .client
+            .execute(&format!("return {expression};"), Vec::new())
+            .await
+            .unwrap_or_else(|error| panic!("evaluating {expression}: {error}"));
+        serde_json::from_value(value.clone())
+            .unwrap_or_else(|error| panic!("{expression} gave {value}: {error}"))
+    }
+
+    /// Waits until `expression` is truthy in the current page.
+    pub async fn wait_for(&self, expression: &str) {
+        let deadline = Instant::now() + PATIENCE;
+        loop {
+            let value: Value = self.eval(&format!("!!({expression})")).await;
+            if value == Value::Bool(true) {
+                return;
+            }
+            assert!(Instant::now() < deadline, "waited for {expression}");
+            tokio::time::sleep(POLL).await;
+        }
+    }
+
+    /// Sends a Chrome DevTools Protocol command to the current page through chromedriver.
+    pub async fn cdp(&self, command: &str, params: Value) {
+        let session = self
+            .client
+            .session_id()
+            .await
+            .expect("session id")
+            .expect("a session");
+        let body = json!({ "cmd": command, "params": params }).to_string();
+        let address = SocketAddr::from(([127, 0, 0, 1], self.driver_port));
+        let path = format!("/session/{session}/goog/cdp/execute");
+        let (status, answer) = http_request(address, "POST", &path, Some(&body)).await;
+        assert_eq!(
+            status,
+            200,
+            "CDP {command} failed: {}",
+            String::from_utf8_lossy(&answer)
+        );
+    }
+
+    /// A screenshot of the window, decoded: (width, height, RGBA rows).
+    pub async fn screenshot(&self) -> Screenshot {
+        let png = self.client.screenshot().await.expect("screenshot");
+        let decoder = png::Decoder::new(std::io::Cursor::new(png));
+        let mut reader = decoder.read_info().expect("a PNG");
+        let mut pixels = vec![0; reader.output_buffer_size().expect("a buffer size")];
+        let info = reader.next_frame(&mut pixels).expect("a frame");
+        assert_eq!(info.bit_depth, png::BitDepth::Eight, "8-bit screenshot");
+        let channels = info.color_type.samples();
+        Screenshot {
+            width: info.width,
+            height: info.height,
+            channels,
+            pixels,
+        }
+    }
+
+    /// Ends the session and the browser.
+    pub async fn close(mut self) {
+        let _ = self.client.clone().close().await;
+        self.driver.stop();
+    }
+}
+
+/// A decoded screenshot.
+pub struct Screenshot {
+    pub width: u32,
+    pub height: u32,
+    channels: usize,
+    pixels: Vec<u8>,
+}
+
+impl Screenshot {
+    /// The RGB colour at pixel (x, y).
+    pub fn rgb(&self, x: u32, y: u32) -> [u8; 3] {
+        let at = (y as usize * self.width as usize + x as usize) * self.channels;
+        [self.pixels[at], self.pixels[at + 1], self.pixels[at + 2]]
+    }
+
+    /// Whether some pixel within `radius` of (x, y) satisfies `matches`.
+    pub fn any_near(
+        &self,
+        (x, y): (f64, f64),
+        radius: i64,
+        matches: impl Fn([u8; 3]) -> bool,
+    ) -> bool {
+        let (cx, cy) = (x.round() as i64, y.round() as i64);
+        (-radius..=radius).any(|dy| {
+            (-radius..=radius).any(|dx| {
+                let (px, py) = (cx + dx, cy + dy);
+                px >= 0
+                    && py >= 0
+                    && px < i64::from(self.width)
+                    && py < i64::from(self.height)
+                    && matches(self.rgb(px as u32, py as u32))
+            })
+        })
+    }
+}
+
+/// A port nobody listens on now.
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|listener| listener.local_addr())
+        .expect("a free port")
+        .port()
+}
+
+/// Waits until something accepts connections on `port`.
+async fn wait_for_port(port: u16) {
+    let deadline = Instant::now() + PATIENCE;
+    while TcpStream::connect(("127.0.0.1", port)).await.is_err() {
+        assert!(
+            Instant::now() < deadline,
+            "chromedriver does not listen on {port}"
+        );
+        tokio::time::sleep(POLL).await;
+    }
+}

@@ -1,0 +1,11 @@
+//! The viewer's tests, in one test binary: the real `vas-viewer` (and, where frames are needed,
+//! the real `vas-server` and `vas-client` binaries), plain HTTP and WebSocket clients, and
+//! headless Chromium through chromedriver. Chromium and chromedriver are required: without them
+//! the browser tests fail and say what to install.
+
+mod harness;
+mod pages;
+mod replay;
+mod serving;
+mod websocket;
+mod xr;

@@ -1,0 +1,221 @@
+//! A recorded scenario replayed through the real server while headless Chromium shows the page:
+//! the page draws every part at the pose last published, the held peg in the grasped colour
+//! where its published pose projects through the page's camera.
+
+use std::process::Stdio;
+
+use serde::Deserialize;
+use vas_client::recording::Recording;
+use vas_client::{Client, PART_GRASPED, PartsFrame};
+use vas_tests::{PATIENCE, Server, configs_dir, fixtures_dir};
+
+use crate::harness::{Browser, Screenshot, Viewer};
+
+/// A part as the page reports it on `window.vasViewer.parts()`.
+#[derive(Debug, Deserialize)]
+struct DrawnPart {
+    id: u32,
+    name: String,
+    visible: bool,
+    position: [f64; 3],
+    quaternion: [f64; 4],
+    state: String,
+    colour: String,
+}
+
+/// The page's grasped colour (view.js `COLOURS.grasped`).
+const GRASPED: &str = "#2fd15a";
+
+/// How far (CSS pixels) the drawn peg may be from where its pose projects.
+const PIXELS: i64 = 3;
+
+#[tokio::test]
+async fn the_page_draws_the_published_poses_and_the_held_peg_where_it_is() {
+    let scene = configs_dir().join("peg_insert.toml");
+    let mut server = Server::start_with(
+        "viewer_replay",
+        &["--lockstep", "--scene", scene.to_str().expect("UTF-8")],
+    );
+    let mut client = server.connect();
+    let viewer = Viewer::start(server.prefix());
+    let browser = Browser::start(1280, 800).await;
+    browser
+        .client
+        .goto(&viewer.url())
+        .await
+        .expect("open the page");
+    browser
+        .wait_for("window.vasViewer?.server && window.vasViewer.drawn.lastParts > 0")
+        .await;
+
+    // The recording in two halves: the peg is held after the first.
+    let recording =
+        std::fs::read_to_string(fixtures_dir().join("peg_insert.jsonl")).expect("the fixture");
+    let samples = Recording::load(&fixtures_dir().join("peg_insert.jsonl"))
+        .expect("the fixture parses")
+        .samples
+        .len();
+    let mut lines = recording.lines();
+    let header = lines.next().expect("a header line");
+    let (first, second): (Vec<_>, Vec<_>) = lines
+        .enumerate()
+        .partition(|(index, _)| *index < samples / 2);
+    let halves = tempfile::tempdir().expect("a directory");
+    let mut files = Vec::new();
+    for (name, half) in [("first.jsonl", first), ("second.jsonl", second)] {
+        let path = halves.path().join(name);
+        let body: Vec<&str> = std::iter::once(header)
+            .chain(half.into_iter().map(|(_, line)| line))
+            .collect();
+        std::fs::write(&path, body.join("\n") + "\n").expect("write a half");
+        files.push(path);
+    }
+
+    replay(&server, &files[0]);
+    let published = newest_parts(&mut client);
+    let peg = published
+        .parts
+        .iter()
+        .find(|part| part.flags & PART_GRASPED != 0)
+        .expect("the peg is held halfway through the recording");
+    let drawn = drawn_as_published(&browser, &published).await;
+    let drawn_peg = &drawn[peg.id as usize];
+    assert_eq!(drawn_peg.name, "peg");
+    assert_eq!(
+        (drawn_peg.state.as_str(), drawn_peg.colour.as_str()),
+        ("grasped", GRASPED)
+    );
+    let shot = browser.screenshot().await;
+    check_drawn_at(&browser, &shot, peg.position, peg.rotation).await;
+
+    replay(&server, &files[1]);
+    let published = newest_parts(&mut client);
+    let drawn = drawn_as_published(&browser, &published).await;
+    assert!(
+        drawn.iter().all(|part| part.state != "grasped"),
+        "the peg is released at the end: {drawn:?}"
+    );
+    let events: Vec<String> = browser.eval("window.vasViewer.events").await;
+    let grasp = events
+        .iter()
+        .position(|text| text.starts_with("grasp peg (power)"))
+        .unwrap_or_else(|| panic!("a grasp in words: {events:?}"));
+    assert!(
+        events[grasp..]
+            .iter()
+            .any(|text| text.starts_with("release peg")),
+        "a release after the grasp: {events:?}"
+    );
+    let latencies: Vec<f64> = browser.eval("window.vasViewer.latencies").await;
+    assert!(
+        !latencies.is_empty() && latencies.iter().all(|ms| ms.is_finite() && *ms >= 0.0),
+        "input-to-drawn latencies measured: {latencies:?}"
+    );
+    browser.close().await;
+}
+
+/// Replays `file` in lockstep with the `vas-client` tool and waits for it to finish.
+fn replay(server: &Server, file: &std::path::Path) {
+    let file = file.to_str().expect("UTF-8");
+    let mut tool = server.client_tool(&["replay", "--lockstep", file], Stdio::null());
+    let status = tool.wait_exit(PATIENCE * 4).expect("the replay finishes");
+    assert!(status.success(), "the replay failed:\n{}", tool.log());
+}
+
+/// The newest parts frame the server published, read as any renderer reads it.
+fn newest_parts(client: &mut Client) -> PartsFrame {
+    client.poll().expect("poll");
+    client.latest_parts().cloned().expect("a parts frame")
+}
+
+/// Waits until the page has drawn every part at its pose in `published`, and returns the parts
+/// as drawn. The poses travel as JSON numbers printed to round-trip, so they must be equal.
+async fn drawn_as_published(browser: &Browser, published: &PartsFrame) -> Vec<DrawnPart> {
+    let expected: Vec<([f64; 3], [f64; 4])> = published
+        .parts
+        .iter()
+        .map(|part| (part.position, part.rotation))
+        .collect();
+    let deadline = std::time::Instant::now() + PATIENCE;
+    loop {
+        let drawn: Vec<DrawnPart> = browser.eval("window.vasViewer.parts()").await;
+        let poses: Vec<([f64; 3], [f64; 4])> = drawn
+            .iter()
+            .map(|part| (part.position, part.quaternion))
+            .collect();
+        if poses == expected && drawn.iter().all(|part| part.visible) {
+            for (index, part) in drawn.iter().enumerate() {
+                assert_eq!(part.id as usize, index);
+            }
+            return drawn;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the page draws {drawn:?}, the server published {expected:?}"
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+    }
+}
+
+/// Checks in `shot` that the peg (a cylinder 24 cm long along its own z) is drawn in the grasped
+/// colour at the projections of points on its axis, and not beside it.
+async fn check_drawn_at(
+    browser: &Browser,
+    shot: &Screenshot,
+    position: [f64; 3],
+    rotation: [f64; 4],
+) {
+    let axis = rotate(rotation, [0.0, 0.0, 1.0]);
+    let side = rotate(rotation, [1.0, 0.0, 0.0]);
+    let at = |along: f64, beside: f64| -> [f64; 3] {
+        std::array::from_fn(|i| position[i] + along * axis[i] + beside * side[i])
+    };
+    let rect: serde_json::Value = browser.eval("window.vasViewer.canvasRect()").await;
+    let offset = (
+        rect["left"].as_f64().expect("left"),
+        rect["top"].as_f64().expect("top"),
+    );
+    let pixel = |point: [f64; 3]| async move {
+        let [x, y, z] = point;
+        let [px, py]: [f64; 2] = browser
+            .eval(&format!("window.vasViewer.project({x}, {y}, {z})"))
+            .await;
+        (px + offset.0, py + offset.1)
+    };
+    for along in [-0.1, -0.06, 0.06, 0.1] {
+        let point = pixel(at(along, 0.0)).await;
+        assert!(
+            shot.any_near(point, PIXELS, is_grasped_colour),
+            "the held peg is not drawn at {point:?} ({along} m along its axis)"
+        );
+    }
+    for beside in [-0.06, 0.06] {
+        let point = pixel(at(0.1, beside)).await;
+        assert!(
+            !shot.any_near(point, 0, is_grasped_colour),
+            "something grasped is drawn at {point:?}, {beside} m beside the peg"
+        );
+    }
+}
+
+/// Green well above red and blue: the grasped colour under any of the page's lights.
+fn is_grasped_colour([r, g, b]: [u8; 3]) -> bool {
+    let (r, g, b) = (i32::from(r), i32::from(g), i32::from(b));
+    g > 60 && g > r + 40 && g > b + 40
+}
+
+/// `v` rotated by the unit quaternion `q` (x, y, z, w).
+fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+    let [x, y, z, w] = q;
+    let u = [x, y, z];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let t = cross(u, v).map(|c| 2.0 * c);
+    let ut = cross(u, t);
+    std::array::from_fn(|i| v[i] + w * t[i] + ut[i])
+}
