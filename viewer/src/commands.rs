@@ -4,14 +4,14 @@
 //! type, unexpected or missing fields, more than [`MAX_COMMAND_BYTES`]) is refused: the page
 //! that sent it is broken or hostile, so its connection is closed and the refusal counted.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use vas_client::SlidingMetaphor;
 
 /// The largest command a page may send, in bytes.
 pub const MAX_COMMAND_BYTES: usize = 4096;
 
 /// A command from a page, carried out by the link thread on the vas server.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Command {
     /// Put the scene back to its initial state. (A struct variant: serde lets a unit variant
@@ -41,7 +41,7 @@ impl Command {
 }
 
 /// The grasp metaphors as the page names them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Metaphor {
     /// The rubber band: position pulled to the ghost.

@@ -1,20 +1,5 @@
-//! `vas-viewer`: the reference renderer. A vas client that serves a browser page (and a WebXR
-//! session on a headset) drawing the scene, over HTTP and one WebSocket per page.
-//!
-//! Two halves meet in the [`hub::Hub`]: the link thread ([`link`]) owns the vas client (its
-//! iceoryx2 ports cannot leave their thread) and writes the newest state into the hub; the tokio
-//! side ([`http`], [`page`]) serves the embedded assets and sends each page what the hub holds.
-
-mod assets;
-mod commands;
-mod events;
-mod http;
-mod hub;
-mod link;
-mod messages;
-mod page;
-mod scene;
-mod stats;
+//! `vas-viewer`: serves a browser and WebXR view of a running vas server (see the library's
+//! documentation for how it is built).
 
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -22,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Context;
 use clap::Parser;
+use vas_viewer::{http, hub, link};
 
 /// Serves a browser and WebXR view of a running vas server.
 #[derive(Debug, Parser)]

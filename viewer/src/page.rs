@@ -104,20 +104,16 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
                 send_all(socket, message).await
             }
             received = socket.recv(), if waiting.is_none() => match received {
-                Some(Ok(Message::Text(text))) => match commands::parse(text.as_str()) {
-                    Ok(command) => {
+                Some(Ok(message)) => match judge(&message) {
+                    Judged::Command(command) => {
                         waiting = Some((command.name(), hub.submit(command)));
                         true
                     }
-                    Err(refusal) => return End::Refused(refusal),
+                    Judged::Refused(refusal) => return End::Refused(refusal),
+                    Judged::Nothing => true,
+                    Judged::Closed => return End::Gone,
                 },
-                Some(Ok(Message::Binary(bytes))) if bytes.len() > MAX_COMMAND_BYTES => {
-                    return End::Refused(Refusal::Oversized);
-                }
-                Some(Ok(Message::Binary(_))) => return End::Refused(Refusal::Malformed),
-                // The WebSocket layer answers pings itself.
-                Some(Ok(Message::Ping(_) | Message::Pong(_))) => true,
-                Some(Ok(Message::Close(_))) | None => return End::Gone,
+                None => return End::Gone,
                 // A broken frame, or one beyond `MAX_READ_BYTES`.
                 Some(Err(_)) => return End::Refused(Refusal::Malformed),
             },
@@ -125,6 +121,35 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
         if !sent {
             return End::Gone;
         }
+    }
+}
+
+/// What a message from a page comes to.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Judged {
+    /// A command to carry out.
+    Command(commands::Command),
+    /// Not a command: the page is closed, and the refusal counted.
+    Refused(Refusal),
+    /// Nothing to do (the WebSocket layer answers pings itself).
+    Nothing,
+    /// The page closes its connection.
+    Closed,
+}
+
+/// Judges one message from a page: only a text message holding a command is carried out.
+pub fn judge(message: &Message) -> Judged {
+    match message {
+        Message::Text(text) => match commands::parse(text.as_str()) {
+            Ok(command) => Judged::Command(command),
+            Err(refusal) => Judged::Refused(refusal),
+        },
+        Message::Binary(bytes) if bytes.len() > MAX_COMMAND_BYTES => {
+            Judged::Refused(Refusal::Oversized)
+        }
+        Message::Binary(_) => Judged::Refused(Refusal::Malformed),
+        Message::Ping(_) | Message::Pong(_) => Judged::Nothing,
+        Message::Close(_) => Judged::Closed,
     }
 }
 

@@ -1,0 +1,17 @@
+//! The reference renderer, `vas-viewer`. A vas client that serves a browser page (and a WebXR
+//! session on a headset) drawing the scene, over HTTP and one WebSocket per page.
+//!
+//! Two halves meet in the [`hub::Hub`]: the link thread ([`link`]) owns the vas client (its
+//! iceoryx2 ports cannot leave their thread) and writes the newest state into the hub; the tokio
+//! side ([`http`], [`page`]) serves the embedded assets and sends each page what the hub holds.
+
+pub mod assets;
+pub mod commands;
+pub mod events;
+pub mod http;
+pub mod hub;
+pub mod link;
+pub mod messages;
+pub mod page;
+pub mod scene;
+pub mod stats;
