@@ -13,18 +13,18 @@ use crate::harness::{Browser, Screenshot, Viewer};
 
 /// A part as the page reports it on `window.vasViewer.parts()`.
 #[derive(Debug, Deserialize)]
-struct DrawnPart {
+pub struct DrawnPart {
     id: u32,
-    name: String,
+    pub name: String,
     visible: bool,
     position: [f64; 3],
     quaternion: [f64; 4],
-    state: String,
-    colour: String,
+    pub state: String,
+    pub colour: String,
 }
 
 /// The page's grasped colour (view.js `COLOURS.grasped`).
-const GRASPED: &str = "#2fd15a";
+pub const GRASPED: &str = "#2fd15a";
 
 /// How far (CSS pixels) the drawn peg may be from where its pose projects.
 const PIXELS: i64 = 3;
@@ -49,28 +49,7 @@ async fn the_page_draws_the_published_poses_and_the_held_peg_where_it_is() {
         .await;
 
     // The recording in two halves: the peg is held after the first.
-    let recording =
-        std::fs::read_to_string(fixtures_dir().join("peg_insert.jsonl")).expect("the fixture");
-    let samples = Recording::load(&fixtures_dir().join("peg_insert.jsonl"))
-        .expect("the fixture parses")
-        .samples
-        .len();
-    let mut lines = recording.lines();
-    let header = lines.next().expect("a header line");
-    let (first, second): (Vec<_>, Vec<_>) = lines
-        .enumerate()
-        .partition(|(index, _)| *index < samples / 2);
-    let halves = tempfile::tempdir().expect("a directory");
-    let mut files = Vec::new();
-    for (name, half) in [("first.jsonl", first), ("second.jsonl", second)] {
-        let path = halves.path().join(name);
-        let body: Vec<&str> = std::iter::once(header)
-            .chain(half.into_iter().map(|(_, line)| line))
-            .collect();
-        std::fs::write(&path, body.join("\n") + "\n").expect("write a half");
-        files.push(path);
-    }
-
+    let (_halves, files) = recording_halves();
     replay(&server, &files[0]);
     let published = newest_parts(&mut client);
     let peg = published
@@ -114,8 +93,34 @@ async fn the_page_draws_the_published_poses_and_the_held_peg_where_it_is() {
     browser.close().await;
 }
 
+/// `peg_insert.jsonl` cut in two recordings (in a temporary folder, returned with them): after
+/// the first the peg is held, after the second it lies in the hole.
+pub fn recording_halves() -> (tempfile::TempDir, [std::path::PathBuf; 2]) {
+    let recording =
+        std::fs::read_to_string(fixtures_dir().join("peg_insert.jsonl")).expect("the fixture");
+    let samples = Recording::load(&fixtures_dir().join("peg_insert.jsonl"))
+        .expect("the fixture parses")
+        .samples
+        .len();
+    let mut lines = recording.lines();
+    let header = lines.next().expect("a header line");
+    let (first, second): (Vec<_>, Vec<_>) = lines
+        .enumerate()
+        .partition(|(index, _)| *index < samples / 2);
+    let folder = tempfile::tempdir().expect("a directory");
+    let files = [("first.jsonl", first), ("second.jsonl", second)].map(|(name, half)| {
+        let path = folder.path().join(name);
+        let body: Vec<&str> = std::iter::once(header)
+            .chain(half.into_iter().map(|(_, line)| line))
+            .collect();
+        std::fs::write(&path, body.join("\n") + "\n").expect("write a half");
+        path
+    });
+    (folder, files)
+}
+
 /// Replays `file` in lockstep with the `vas-client` tool and waits for it to finish.
-fn replay(server: &Server, file: &std::path::Path) {
+pub fn replay(server: &Server, file: &std::path::Path) {
     let file = file.to_str().expect("UTF-8");
     let mut tool = server.client_tool(&["replay", "--lockstep", file], Stdio::null());
     let status = tool.wait_exit(PATIENCE * 4).expect("the replay finishes");
@@ -123,14 +128,14 @@ fn replay(server: &Server, file: &std::path::Path) {
 }
 
 /// The newest parts frame the server published, read as any renderer reads it.
-fn newest_parts(client: &mut Client) -> PartsFrame {
+pub fn newest_parts(client: &mut Client) -> PartsFrame {
     client.poll().expect("poll");
     client.latest_parts().cloned().expect("a parts frame")
 }
 
 /// Waits until the page has drawn every part at its pose in `published`, and returns the parts
 /// as drawn. The poses travel as JSON numbers printed to round-trip, so they must be equal.
-async fn drawn_as_published(browser: &Browser, published: &PartsFrame) -> Vec<DrawnPart> {
+pub async fn drawn_as_published(browser: &Browser, published: &PartsFrame) -> Vec<DrawnPart> {
     let expected: Vec<([f64; 3], [f64; 4])> = published
         .parts
         .iter()

@@ -1,10 +1,14 @@
 //! "Enter VR" in an emulated headset: Meta's iwer stands in for WebXR in headless Chromium,
-//! injected before the page's own scripts, and the page's XR loop must draw frames.
+//! injected before the page's own scripts. The page's XR loop must draw frames, and, while the
+//! recorded peg insertion replays, every part where the server last published it, the held peg
+//! in the grasped colour.
 
 use serde_json::json;
+use vas_client::PART_GRASPED;
 use vas_tests::{Server, configs_dir};
 
 use crate::harness::{Browser, Viewer};
+use crate::replay::{GRASPED, drawn_as_published, newest_parts, recording_halves, replay};
 
 /// iwer's build, which defines `window.IWER` (see `vendor/README.md`).
 const IWER: &str = include_str!("vendor/iwer/iwer.min.js");
@@ -16,8 +20,11 @@ const INSTALL: &str = "new IWER.XRDevice(IWER.metaQuest3).installRuntime({ force
 #[tokio::test]
 async fn entering_vr_draws_the_scene_in_an_xr_session() {
     let scene = configs_dir().join("peg_insert.toml");
-    let mut server = Server::start_with("viewer_xr", &["--scene", scene.to_str().expect("UTF-8")]);
-    let _client = server.connect();
+    let mut server = Server::start_with(
+        "viewer_xr",
+        &["--lockstep", "--scene", scene.to_str().expect("UTF-8")],
+    );
+    let mut client = server.connect();
     let viewer = Viewer::start(server.prefix());
     let browser = Browser::start(1280, 800).await;
     browser
@@ -51,7 +58,24 @@ async fn entering_vr_draws_the_scene_in_an_xr_session() {
     let (xr_frames, drawn): (u64, u64) = browser
         .eval("[window.vasViewer.xrFrames, window.vasViewer.drawn.frames]")
         .await;
-    // The XR loop goes on, and draws the frames the server keeps publishing.
+    // In lockstep the server publishes only what input asks for: the replay's frames are drawn
+    // in the session, the peg held after the first half and released after the second.
+    let (_halves, files) = recording_halves();
+    replay(&server, &files[0]);
+    let published = newest_parts(&mut client);
+    let peg = (published.parts.iter())
+        .find(|part| part.flags & PART_GRASPED != 0)
+        .expect("the peg is held halfway through the recording");
+    let held = drawn_as_published(&browser, &published).await;
+    let drawn_peg = &held[peg.id as usize];
+    assert_eq!(
+        (drawn_peg.state.as_str(), drawn_peg.colour.as_str()),
+        ("grasped", GRASPED)
+    );
+    replay(&server, &files[1]);
+    let published = newest_parts(&mut client);
+    let released = drawn_as_published(&browser, &published).await;
+    assert!(released.iter().all(|part| part.state != "grasped"));
     browser
         .wait_for(&format!(
             "window.vasViewer.xrFrames > {xr_frames} + 10 && window.vasViewer.drawn.frames > {drawn}"
