@@ -293,7 +293,7 @@ impl Browser {
     /// A screenshot of the window, decoded: (width, height, RGBA rows).
     pub async fn screenshot(&self) -> Screenshot {
         let png = self.client.screenshot().await.expect("screenshot");
-        let decoder = png::Decoder::new(std::io::Cursor::new(png));
+        let decoder = png::Decoder::new(std::io::Cursor::new(png.clone()));
         let mut reader = decoder.read_info().expect("a PNG");
         let mut pixels = vec![0; reader.output_buffer_size().expect("a buffer size")];
         let info = reader.next_frame(&mut pixels).expect("a frame");
@@ -304,6 +304,7 @@ impl Browser {
             height: info.height,
             channels,
             pixels,
+            png,
         }
     }
 
@@ -320,6 +321,8 @@ pub struct Screenshot {
     pub height: u32,
     channels: usize,
     pixels: Vec<u8>,
+    /// The screenshot as Chromium encoded it.
+    pub png: Vec<u8>,
 }
 
 impl Screenshot {

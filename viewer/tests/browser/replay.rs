@@ -66,6 +66,10 @@ async fn the_page_draws_the_published_poses_and_the_held_peg_where_it_is() {
     );
     let shot = browser.screenshot().await;
     check_drawn_at(&browser, &shot, peg.position, peg.rotation).await;
+    // The README's picture of the viewer is this moment (viewer/README.md says how to make it).
+    if let Some(file) = std::env::var_os("VAS_VIEWER_SCREENSHOT") {
+        std::fs::write(&file, &shot.png).expect("write the screenshot");
+    }
 
     replay(&server, &files[1]);
     let published = newest_parts(&mut client);
