@@ -21,8 +21,10 @@ pub struct ReplayArgs {
     /// lines, the same every time but for the timestamps.
     #[arg(long)]
     lockstep: bool,
-    /// In lockstep, how long to wait for each answer before going on without it, in ms.
-    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
+    /// In lockstep, how long to wait for each answer before going on without it, in ms. The
+    /// first answer may take seconds on a busy machine: the loops build the parts' trees on
+    /// first use.
+    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
     answer_timeout_ms: u64,
 }
 
