@@ -169,6 +169,17 @@ fn dechunk(mut chunked: &[u8]) -> Vec<u8> {
     }
 }
 
+/// The last `count` lines of the text file at `path`, or why it cannot be read.
+fn last_lines(path: &Path, count: usize) -> String {
+    match std::fs::read_to_string(path) {
+        Ok(text) => {
+            let lines: Vec<&str> = text.lines().collect();
+            lines[lines.len().saturating_sub(count)..].join("\n")
+        }
+        Err(error) => format!("({} cannot be read: {error})", path.display()),
+    }
+}
+
 /// Only one browser at a time: two Chromiums rendering with SwiftShader on a small machine would
 /// each take longer than both in turn. Async, because a test holds its turn across awaits (each
 /// test has a runtime of its own; this lock needs none).
@@ -183,7 +194,8 @@ pub struct Browser {
     pub client: Client,
     driver: Spawned,
     driver_port: u16,
-    _profile: tempfile::TempDir,
+    /// Chromium's profile and chromedriver's log.
+    _scratch: tempfile::TempDir,
     _turn: tokio::sync::MutexGuard<'static, ()>,
 }
 
@@ -198,15 +210,23 @@ impl Browser {
             );
         }
         let turn = ONE_BROWSER.lock().await;
+        let scratch = tempfile::tempdir().expect("a scratch directory");
+        let profile = scratch.path().join("profile");
+        // The log, with Chromium's own output in it, says why a browser that would not start
+        // exited; a failed start prints its end.
+        let log = scratch.path().join("chromedriver.log");
         let port = free_port();
         let driver = Spawned::start(
             Path::new(CHROMEDRIVER),
-            &[&format!("--port={port}")],
+            &[
+                &format!("--port={port}"),
+                &format!("--log-path={}", log.display()),
+                "--enable-chrome-logs",
+            ],
             Stdio::null(),
         );
         let driver_url = format!("http://127.0.0.1:{port}");
         wait_for_port(port).await;
-        let profile = tempfile::tempdir().expect("a profile directory");
         let args = [
             "--headless",
             "--no-sandbox",
@@ -218,10 +238,12 @@ impl Browser {
             "--disable-sync",
             "--no-first-run",
             "--disable-quic",
+            // Shared memory from a temporary file, so a small /dev/shm cannot end the browser.
+            "--disable-dev-shm-usage",
             // Pages in background tabs keep their timers and sockets running.
             "--disable-background-timer-throttling",
             "--disable-renderer-backgrounding",
-            &format!("--user-data-dir={}", profile.path().display()),
+            &format!("--user-data-dir={}", profile.display()),
             &format!("--window-size={width},{height}"),
         ];
         let capabilities = json!({
@@ -236,12 +258,18 @@ impl Browser {
             )
             .connect(&driver_url)
             .await
-            .unwrap_or_else(|error| panic!("cannot start Chromium through chromedriver: {error}"));
+            .unwrap_or_else(|error| {
+                panic!(
+                    "cannot start Chromium through chromedriver: {error}\n\
+                     the end of chromedriver's log:\n{}",
+                    last_lines(&log, 80)
+                )
+            });
         Self {
             client,
             driver,
             driver_port: port,
-            _profile: profile,
+            _scratch: scratch,
             _turn: turn,
         }
     }
