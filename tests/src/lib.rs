@@ -101,14 +101,22 @@ pub struct Spawned {
 impl Spawned {
     /// Starts `program` with `args`, stdout discarded or piped as asked, stderr collected.
     pub fn start(program: &Path, args: &[&str], stdout: Stdio) -> Self {
-        let mut child = Command::new(program)
-            .args(args)
+        let mut command = Command::new(program);
+        command.args(args).stdout(stdout);
+        Self::spawn(command)
+    }
+
+    /// Starts `command` (its program, arguments, environment and stdout set by the caller) with
+    /// no stdin, `RUST_LOG=info` and stderr collected.
+    pub fn spawn(mut command: Command) -> Self {
+        let mut child = command
             .env("RUST_LOG", "info")
             .stdin(Stdio::null())
-            .stdout(stdout)
             .stderr(Stdio::piped())
             .spawn()
-            .unwrap_or_else(|error| panic!("cannot start {}: {error}", program.display()));
+            .unwrap_or_else(|error| {
+                panic!("cannot start {}: {error}", command.get_program().display())
+            });
         let log = Arc::new((Mutex::new(Vec::new()), Condvar::new()));
         let stderr = child.stderr.take().expect("stderr is piped");
         let collector = Arc::clone(&log);

@@ -4,7 +4,7 @@
 use std::io::{BufRead, BufReader};
 use std::net::SocketAddr;
 use std::path::Path;
-use std::process::Stdio;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use fantoccini::{Client, ClientBuilder};
@@ -210,21 +210,26 @@ impl Browser {
             );
         }
         let turn = ONE_BROWSER.lock().await;
-        let scratch = tempfile::tempdir().expect("a scratch directory");
+        // Under /tmp whatever TMPDIR says, and Chromium's temporary files in it: Chromium puts its
+        // single-instance socket in TMPDIR and exits at once when that path is longer than a
+        // socket address may be (108 bytes).
+        let scratch = tempfile::Builder::new()
+            .prefix("vas-chromium-")
+            .tempdir_in("/tmp")
+            .expect("a scratch directory");
         let profile = scratch.path().join("profile");
         // The log, with Chromium's own output in it, says why a browser that would not start
         // exited; a failed start prints its end.
         let log = scratch.path().join("chromedriver.log");
         let port = free_port();
-        let driver = Spawned::start(
-            Path::new(CHROMEDRIVER),
-            &[
-                &format!("--port={port}"),
-                &format!("--log-path={}", log.display()),
-                "--enable-chrome-logs",
-            ],
-            Stdio::null(),
-        );
+        let mut driver = Command::new(CHROMEDRIVER);
+        driver
+            .arg(format!("--port={port}"))
+            .arg(format!("--log-path={}", log.display()))
+            .arg("--enable-chrome-logs")
+            .env("TMPDIR", scratch.path())
+            .stdout(Stdio::null());
+        let driver = Spawned::spawn(driver);
         let driver_url = format!("http://127.0.0.1:{port}");
         wait_for_port(port).await;
         let args = [
