@@ -113,7 +113,7 @@ const fn release(part: &'static str) -> ExpectedEvent {
 }
 
 /// Every recorded scenario and what its replay must give.
-pub const EXPECTED: [Scenario; 5] = [
+pub const EXPECTED: [Scenario; 6] = [
     Scenario {
         script: RecordedScenario::PegInsert,
         scene: "peg_insert.toml",
@@ -183,6 +183,21 @@ pub const EXPECTED: [Scenario; 5] = [
             position: [0.376_604_444, 0.264_278_761, 0.2],
             rpy_degrees: [0.0, 90.0, 40.0],
             position_tolerance: 0.003,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        script: RecordedScenario::DemoPegIntoBlock,
+        scene: "default.toml",
+        events: &[grasp("peg", GraspType::Power), release("peg")],
+        // Over the block's hole at (0.25, 0.15), 1 cm into it: its middle 3 cm above the block's
+        // top (z = 0.8), upright.
+        final_pose: ExpectedPose {
+            part: "peg",
+            position: [0.25, 0.15, 0.83],
+            rpy_degrees: [0.0, 0.0, 0.0],
+            position_tolerance: 0.002,
             angle_tolerance: 0.05,
         },
         min_held_back: 0.0,

@@ -113,6 +113,9 @@ fn at(translation: [f64; 3]) -> Isometry3<f64> {
     pose(translation, UnitQuaternion::identity())
 }
 
+/// The radius of the scripted power grasp's handle (metres).
+const HANDLE_RADIUS: f64 = 0.016;
+
 /// When a scripted grasp must have happened, in seconds from its start.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Milestones {
@@ -173,7 +176,7 @@ impl ScriptedGrasp {
     /// The part's mesh with about `triangles` triangles, in its own frame.
     pub fn part_mesh(self, triangles: usize) -> TriMesh {
         match self {
-            ScriptedGrasp::PowerOnHandle => shapes::cylinder(0.016, 0.12, triangles),
+            ScriptedGrasp::PowerOnHandle => shapes::cylinder(HANDLE_RADIUS, 0.12, triangles),
             ScriptedGrasp::TipPinchOfScrew => screw(triangles),
             ScriptedGrasp::GravityUnderBlock => {
                 shapes::cuboid(Vector3::new(0.04, 0.05, 0.03), triangles)
@@ -315,6 +318,9 @@ pub enum RecordedScenario {
     /// A power grasp on a handle, then the cart drives and turns while the hand stays still in
     /// the cart's frame; then the hand opens.
     NavigateHolding,
+    /// In the demo scene: a power grasp on the peg standing on the table, carried over the
+    /// block, lowered into its hole and released there.
+    DemoPegIntoBlock,
 }
 
 impl fmt::Display for RecordedScenario {
@@ -336,6 +342,11 @@ const PIPE_PASS_BEYOND: f64 = 0.06;
 /// How far the hand sinks while the pipe makes the second half of its way, before it comes back
 /// (metres): more than the hole's clearance, so the pipe slides along the sheet's rim.
 const PIPE_DRIFT: f64 = 0.004;
+/// How far above its middle the demo's peg is grasped (metres): the fingers stacked along the
+/// upright peg then stay clear of the table, and of the block's top while the peg goes in.
+const DEMO_GRASP_RAISE: f64 = 0.02;
+/// How deep the demo's peg goes into the block's hole (metres).
+const DEMO_INSERT_DEPTH: f64 = 0.01;
 /// The palm's inside face, this far from the hand root along -z (metres).
 const PALM_FACE: f64 = 0.0125;
 /// The palm's middle, this far from the hand root along +y (metres).
@@ -351,12 +362,13 @@ const CART_TURN_DEGREES: f64 = 40.0;
 
 impl RecordedScenario {
     /// Every recorded scenario, in the order of the fixtures' documentation.
-    pub const ALL: [RecordedScenario; 5] = [
+    pub const ALL: [RecordedScenario; 6] = [
         RecordedScenario::PegInsert,
         RecordedScenario::PipeThroughSheet,
         RecordedScenario::PrecisionPinch,
         RecordedScenario::Push,
         RecordedScenario::NavigateHolding,
+        RecordedScenario::DemoPegIntoBlock,
     ];
 
     /// The scenario's name: its fixture's file stem.
@@ -367,6 +379,7 @@ impl RecordedScenario {
             RecordedScenario::PrecisionPinch => "precision_pinch",
             RecordedScenario::Push => "push",
             RecordedScenario::NavigateHolding => "navigate_holding",
+            RecordedScenario::DemoPegIntoBlock => "demo_peg_into_block",
         }
     }
 
@@ -394,6 +407,10 @@ impl RecordedScenario {
                 "power grasp on the handle, then the cart drives 36 cm and turns 40 degrees with \
                  the hand still in the cart's frame, then the hand opens"
             }
+            RecordedScenario::DemoPegIntoBlock => {
+                "in the demo scene: power grasp on the peg, carried over the block, lowered 1 cm \
+                 into its hole (1 mm of clearance), released there"
+            }
         }
     }
 
@@ -417,6 +434,7 @@ impl RecordedScenario {
             RecordedScenario::PrecisionPinch => precision_pinch(part("pin")?),
             RecordedScenario::Push => push(part("block")?),
             RecordedScenario::NavigateHolding => navigate_holding(part("handle")?),
+            RecordedScenario::DemoPegIntoBlock => demo_peg_into_block(part("peg")?, part("block")?),
         })
     }
 }
@@ -429,8 +447,16 @@ const POWER_GRASP_PRESS: f64 = 0.005;
 /// (a cylinder along its z axis) is; then the hand eases its press, so that the held part, which
 /// follows the tracked hand from the grasp on, stays where it was grasped.
 fn power_grasp_on(part: &Part) -> Vec<Keyframe> {
+    power_grasp_at(&part.pose, HANDLE_RADIUS)
+}
+
+/// [`power_grasp_on`] a cylinder of `radius` whose axis and middle are at `handle` (its z axis):
+/// the hand comes as much closer to the axis as the cylinder is thinner than the script's
+/// handle, so that the palm meets its surface as it meets the handle's.
+fn power_grasp_at(handle: &Isometry3<f64>, radius: f64) -> Vec<Keyframe> {
     let script = ScriptedGrasp::PowerOnHandle;
-    let placement = part.pose * script.part_pose().inverse();
+    let thinner = Translation3::new(0.0, 0.0, HANDLE_RADIUS - radius);
+    let placement = handle * (thinner * script.part_pose()).inverse();
     let mut keys: Vec<Keyframe> = script
         .keyframes()
         .into_iter()
@@ -496,6 +522,32 @@ fn peg_insert(peg: &Part, block: &Part) -> Vec<Keyframe> {
     );
     then(&mut keys, 0.25, shift(drift - PEG_INSERT_DEPTH / 2.0 * up));
     then(&mut keys, 0.1, shift(-drift));
+    then(&mut keys, 0.05, |_| {});
+    open_and_rest(&mut keys);
+    keys
+}
+
+fn demo_peg_into_block(peg: &Part, block: &Part) -> Vec<Keyframe> {
+    let up = Vector3::z();
+    let (peg_bottom, _) = extent(peg, &up);
+    let (_, block_top) = extent(block, &up);
+    let lift = block_top + PEG_CARRY_GAP - peg_bottom;
+    let mut over = block.pose.translation.vector - peg.pose.translation.vector;
+    over.z = 0.0;
+    // The cylinder's axis taken downwards puts the thumb on top, clear of the table.
+    let handle = Translation3::new(0.0, 0.0, DEMO_GRASP_RAISE)
+        * peg.pose
+        * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI);
+    let (left, right) = extent(peg, &Vector3::x());
+    let mut keys = power_grasp_at(&handle, (right - left) / 2.0);
+    then(&mut keys, 0.3, shift(lift * up));
+    then(&mut keys, 0.6, shift(over));
+    then(&mut keys, 0.1, |_| {});
+    then(
+        &mut keys,
+        0.4,
+        shift(-(PEG_CARRY_GAP + DEMO_INSERT_DEPTH) * up),
+    );
     then(&mut keys, 0.05, |_| {});
     open_and_rest(&mut keys);
     keys

@@ -491,10 +491,10 @@ fn record_writes_the_samples_clients_send() {
     );
 }
 
-/// Replays the fixture in lockstep and returns the hand frames and events the tool prints,
-/// without their timestamps (which differ from run to run).
+/// Replays the demo scene's recording in lockstep and returns the hand frames and events the
+/// tool prints, without their timestamps (which differ from run to run).
 fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
-    let fixture = fixtures_dir().join("reach_and_close.jsonl");
+    let fixture = fixtures_dir().join("demo_peg_into_block.jsonl");
     let expected = Recording::load(&fixture)
         .expect("the fixture loads")
         .samples
@@ -548,11 +548,19 @@ fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
 fn a_lockstep_replay_answers_every_sample_the_same_way_twice() {
     let once = lockstep_answers("lockstep1");
     assert_eq!(once, lockstep_answers("lockstep2"));
-    // The fixture closes the fingers: the last answer is a bent hand.
-    let flex = once.last().expect("answers")["hand"]["flex"][5]
-        .as_f64()
-        .expect("a number");
-    assert!(flex > 0.5, "{flex}");
+    // What the README's walkthrough says the recording does.
+    let events: Vec<&str> = once
+        .iter()
+        .filter_map(|frame| frame["event"]["text"].as_str())
+        .collect();
+    assert_eq!(
+        events,
+        [
+            "contact begin peg – hand at sample 20",
+            "grasp peg (power) at sample 49",
+            "release peg at sample 219"
+        ]
+    );
 }
 
 /// Receives frames until a geometry frame of a generation after `after` arrives.

@@ -112,6 +112,11 @@ fn navigate_holding() {
 }
 
 #[test]
+fn demo_peg_into_block() {
+    check(&EXPECTED[5]);
+}
+
+#[test]
 fn the_fixtures_are_what_the_generator_writes_every_time() {
     let out = tempfile::tempdir().expect("a temporary folder");
     for scenario in &EXPECTED {
