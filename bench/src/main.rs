@@ -1,10 +1,11 @@
 //! `vas-bench`: the benchmarks of BENCHMARKS.md. B1-B6 run the simulation library in this
-//! process; B7 (`e2e`) and the soak talk to a running `vas-server` over iceoryx2. Every
-//! benchmark prints its table and, when asked, writes `--json FILE` and draws `--svg FILE`.
+//! process; B7 (`e2e`) and the soak talk to a running `vas-server` over iceoryx2, and B9
+//! (`browser`) to a server and a `vas-viewer` through headless Chromium. Every benchmark prints its table and, when asked, writes `--json FILE` and draws `--svg FILE`.
 
 mod args;
 mod baselines;
 mod bounce;
+mod browser;
 mod e2e;
 mod echo;
 mod grasp;
@@ -106,6 +107,18 @@ pacing sent samples; the server's resident memory at the start, the end, its max
 growth in KiB per minute."
     )]
     Soak(soak::SoakArgs),
+    /// B9: from the server's publish to the viewer's pages in a browser, and to the drawn frame.
+    #[command(
+        after_long_help = "Needs a running server and vas-viewer, and Debian's chromium and chromium-driver. Columns:
+pages (windows open in one headless Chromium); frames_per_page_per_s (frames each page
+received); transport_p50_ms, transport_p99_ms, transport_max_ms (from the server's publish
+stamp to the page's receipt, over every page's frames); draw_p50_ms, draw_p99_ms (from the
+receipt to the end of the animation frame that drew it); fps (animation frames per second per
+page); superseded_% (frames replaced by a newer one before they were drawn); viewer_cpu_%
+(the viewer's CPU time over the span, in percent of one core); clock_skew_ms (the page's
+high-resolution wall clock minus the system's: how far transport figures can be off)."
+    )]
+    Browser(browser::BrowserArgs),
     /// Answers every input sample at once with a hand frame (the raw path of `e2e`).
     #[command(hide = true)]
     Echo(args::ServerArgs),
@@ -128,6 +141,7 @@ fn main() -> ExitCode {
         Benchmark::Grasp(args) => grasp::run_cli(&args),
         Benchmark::E2e(args) => e2e::run(&args),
         Benchmark::Soak(args) => soak::run(&args),
+        Benchmark::Browser(args) => browser::run(&args),
         Benchmark::Echo(args) => echo::run(args.prefix.as_deref()),
     };
     match result {

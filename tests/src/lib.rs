@@ -1,7 +1,8 @@
 //! Helpers for the end-to-end tests: the real `vas-server` and `vas-client` binaries as child
 //! processes, each test on its own iceoryx2 prefix; and the recorded scenarios: their expected
 //! outcomes ([`scenarios`]), their fixture generator ([`fixtures`]) and their offline replay
-//! through the server's interaction model, checked by parry ([`offline`]).
+//! through the server's interaction model, checked by parry ([`offline`]). For the viewer's tests
+//! and its benchmark: headless Chromium ([`browser`]) and plain HTTP requests ([`http`]).
 //!
 //! Finding the binaries: a test of this crate cannot use `env!("CARGO_BIN_EXE_...")` (that only
 //! names binaries of the crate under test), so [`binary`] and [`example`] run `cargo build` for
@@ -312,7 +313,9 @@ pub fn fixtures_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
 }
 
+pub mod browser;
 pub mod fixtures;
+pub mod http;
 pub mod offline;
 pub mod scenarios;
 

@@ -1,7 +1,8 @@
 // The page's WebSocket to the viewer: decodes its messages, sends commands, and reconnects when
 // the viewer goes away.
 //
-// A scene arrives as one JSON message (`type: "scene"`, with `meshes`: how many follow) and then
+// Each handler gets the message and the wall-clock time it arrived. A scene arrives as one JSON
+// message (`type: "scene"`, with `meshes`: how many follow) and then
 // that many binary messages, one mesh each (little-endian, 4-byte aligned so typed arrays view it
 // in place):
 //   u32 mesh index, u32 vertex count, u32 normal count (0 or the vertex count), u32 triangle count,
@@ -30,7 +31,7 @@ export class Connection {
       this.handlers.open(false);
       setTimeout(() => this.connect(), RECONNECT_MS);
     };
-    socket.onmessage = (message) => this.receive(message.data);
+    socket.onmessage = (message) => this.receive(message.data, performance.timeOrigin + performance.now());
     this.socket = socket;
   }
 
@@ -41,7 +42,8 @@ export class Connection {
     return true;
   }
 
-  receive(data) {
+  // `arrivedMs`: when the message arrived, wall clock in milliseconds since the Unix epoch.
+  receive(data, arrivedMs) {
     if (data instanceof ArrayBuffer) {
       this.receiveMesh(data);
       return;
@@ -53,7 +55,7 @@ export class Connection {
       return;
     }
     const handler = this.handlers[message.type];
-    if (handler) handler(message);
+    if (handler) handler(message, arrivedMs);
   }
 
   receiveMesh(buffer) {

@@ -15,6 +15,8 @@ import { setupXr } from './xr.js';
 const LATENCY_WINDOW = 200;
 // Events kept for tests (the panel shows fewer).
 const EVENT_WINDOW = 1000;
+// Frames whose timing is kept for the browser benchmark (B9 in BENCHMARKS.md).
+const TIMING_WINDOW = 100000;
 
 const view = new View(document.getElementById('view'));
 const state = {
@@ -31,6 +33,10 @@ const state = {
   latencies: [],
   xrFrames: 0,
   fps: 0,
+  // Per frame, in milliseconds: from the server's publish to the page's receipt (transport), and
+  // from the receipt to the end of the animation frame that drew it (draw); and the frames a
+  // newer one replaced before they were drawn.
+  timing: { transport: [], draw: [], superseded: 0 },
 };
 
 const connection = new Connection({
@@ -52,9 +58,12 @@ const connection = new Connection({
     view.setScene(scene, meshes);
     panel.showScene(scene.name);
   },
-  frame(frame) {
+  frame(frame, arrivedMs) {
     if (frame.scene !== state.scene?.version) return;
     state.received.frames += 1;
+    keep(state.timing.transport, arrivedMs - publishedMs(frame), TIMING_WINDOW);
+    if (state.waiting) state.timing.superseded += 1;
+    frame.arrivedMs = arrivedMs;
     state.received.lastParts = frame.parts?.frame ?? state.received.lastParts;
     if (frame.hands.length > 0) {
       state.received.lastHand = Math.max(...frame.hands.map((hand) => hand.frame));
@@ -63,8 +72,7 @@ const connection = new Connection({
   },
   event(event) {
     state.received.events += 1;
-    state.events.push(event.text);
-    if (state.events.length > EVENT_WINDOW) state.events.shift();
+    keep(state.events, event.text, EVENT_WINDOW);
     panel.addEvent(event.text);
     if (event.point && (event.kind === 'contact_begin' || event.kind === 'contact_end')) {
       view.addMarker(event.point, event.kind === 'contact_begin', performance.now());
@@ -92,7 +100,10 @@ view.renderer.setAnimationLoop((now) => {
   if (frame) view.applyFrame(frame);
   view.render(now);
   if (view.renderer.xr.isPresenting) state.xrFrames += 1;
-  if (frame) noteDrawn(frame);
+  if (frame) {
+    noteDrawn(frame);
+    keep(state.timing.draw, wallClockMs() - frame.arrivedMs, TIMING_WINDOW);
+  }
   fpsWindow.frames += 1;
   if (now - fpsWindow.start >= 1000) {
     state.fps = (fpsWindow.frames * 1000) / (now - fpsWindow.start);
@@ -109,10 +120,24 @@ function noteDrawn(frame) {
     if (hand.frame <= state.drawn.lastHand) continue;
     state.drawn.lastHand = hand.frame;
     if (hand.tracker_ns > 0) {
-      state.latencies.push(wallClockMs() - hand.tracker_ns / 1e6);
-      if (state.latencies.length > LATENCY_WINDOW) state.latencies.shift();
+      keep(state.latencies, wallClockMs() - hand.tracker_ns / 1e6, LATENCY_WINDOW);
     }
   }
+}
+
+// When the server published the newest state in `frame` (the publish that made the viewer send
+// it), wall clock in milliseconds.
+function publishedMs(frame) {
+  const stamps = frame.hands.map((hand) => hand.published_ns);
+  if (frame.parts) stamps.push(frame.parts.published_ns);
+  return Math.max(...stamps) / 1e6;
+}
+
+// Appends `value` to `values`, keeping at least the newest `window` of them (trimmed in batches,
+// so that appending stays cheap however long the window).
+function keep(values, value, window) {
+  values.push(value);
+  if (values.length >= 2 * window) values.splice(0, values.length - window);
 }
 
 function median(values) {
@@ -136,6 +161,11 @@ window.vasViewer = {
   get warnings() { return [...state.warnings]; },
   get latencies() { return [...state.latencies]; },
   get xrFrames() { return state.xrFrames; },
+  get timing() {
+    const { transport, draw, superseded } = state.timing;
+    return { transport: [...transport], draw: [...draw], superseded };
+  },
+  resetTiming() { state.timing = { transport: [], draw: [], superseded: 0 }; },
   get fps() { return state.fps; },
   get markers() { return view.markers.map((marker) => marker.position.toArray()); },
   // Every part as drawn: pose in the vas world, state and colour.

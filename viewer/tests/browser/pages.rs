@@ -1,5 +1,5 @@
-//! Sixteen pages at once, in one headless Chromium: each gets the scene and keeps getting
-//! frames.
+//! Sixteen pages at once, in windows of one headless Chromium: each gets the scene and keeps
+//! getting frames, and draws them.
 
 use vas_tests::{Server, configs_dir};
 
@@ -14,25 +14,9 @@ async fn sixteen_pages_each_get_frames() {
         Server::start_with("viewer_pages", &["--scene", scene.to_str().expect("UTF-8")]);
     let _client = server.connect();
     let viewer = Viewer::start(server.prefix());
-    let browser = Browser::start(800, 600).await;
-
-    let mut windows = vec![browser.client.window().await.expect("the first window")];
-    for _ in 1..PAGES {
-        let tab = browser.client.new_window(true).await.expect("a new tab");
-        windows.push(tab.handle);
-    }
-    for window in &windows {
-        browser
-            .client
-            .switch_to_window(window.clone())
-            .await
-            .expect("switch tabs");
-        browser
-            .client
-            .goto(&viewer.url())
-            .await
-            .expect("open the page");
-    }
+    // Small windows: sixteen pages each draw with SwiftShader on the CPU.
+    let browser = Browser::start(320, 240).await;
+    let windows = browser.open_windows(&viewer.url(), PAGES).await;
     let stats = viewer
         .wait_for_stats("sixteen pages connected", |stats| {
             stats["pages_open"] == PAGES as u64
@@ -40,14 +24,10 @@ async fn sixteen_pages_each_get_frames() {
         .await;
     assert_eq!(stats["refused"]["malformed"], 0, "{stats}");
 
-    // Every page has the scene and frames; then each gets newer ones.
+    // Every page has the scene and frames; then each gets newer ones and draws them.
     let mut seen = Vec::new();
     for window in &windows {
-        browser
-            .client
-            .switch_to_window(window.clone())
-            .await
-            .expect("switch tabs");
+        browser.switch_to(window).await;
         browser
             .wait_for("window.vasViewer?.scene?.name === 'peg insert' && window.vasViewer.received.frames > 0")
             .await;
@@ -58,13 +38,9 @@ async fn sixteen_pages_each_get_frames() {
         );
     }
     for (window, seen) in windows.iter().zip(seen) {
+        browser.switch_to(window).await;
         browser
-            .client
-            .switch_to_window(window.clone())
-            .await
-            .expect("switch tabs");
-        browser
-            .wait_for(&format!("window.vasViewer.received.lastParts > {seen}"))
+            .wait_for(&format!("window.vasViewer.drawn.lastParts > {seen}"))
             .await;
     }
     browser.close().await;
