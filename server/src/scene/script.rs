@@ -502,17 +502,24 @@ fn extent(part: &Part, axis: &Vector3<f64>) -> (f64, f64) {
         })
 }
 
-fn peg_insert(peg: &Part, block: &Part) -> Vec<Keyframe> {
+/// How to carry `peg` over `block`'s hole: the lift (up, or down) that puts its lower end
+/// [`PEG_CARRY_GAP`] above the block's top, then the level move over the block's middle.
+fn carry_over(peg: &Part, block: &Part) -> (Vector3<f64>, Vector3<f64>) {
     let up = Vector3::z();
     let (peg_bottom, _) = extent(peg, &up);
     let (_, block_top) = extent(block, &up);
-    // Up (or down) to the carrying height.
-    let lift = block_top + PEG_CARRY_GAP - peg_bottom;
+    let lift = (block_top + PEG_CARRY_GAP - peg_bottom) * up;
     let mut over = block.pose.translation.vector - peg.pose.translation.vector;
     over.z = 0.0;
+    (lift, over)
+}
+
+fn peg_insert(peg: &Part, block: &Part) -> Vec<Keyframe> {
+    let up = Vector3::z();
+    let (lift, over) = carry_over(peg, block);
     let drift = PEG_DRIFT * Vector3::y();
     let mut keys = power_grasp_on(peg);
-    then(&mut keys, 0.2, shift(lift * up));
+    then(&mut keys, 0.2, shift(lift));
     then(&mut keys, 0.5, shift(over));
     then(&mut keys, 0.05, |_| {});
     then(
@@ -529,18 +536,14 @@ fn peg_insert(peg: &Part, block: &Part) -> Vec<Keyframe> {
 
 fn demo_peg_into_block(peg: &Part, block: &Part) -> Vec<Keyframe> {
     let up = Vector3::z();
-    let (peg_bottom, _) = extent(peg, &up);
-    let (_, block_top) = extent(block, &up);
-    let lift = block_top + PEG_CARRY_GAP - peg_bottom;
-    let mut over = block.pose.translation.vector - peg.pose.translation.vector;
-    over.z = 0.0;
+    let (lift, over) = carry_over(peg, block);
     // The cylinder's axis taken downwards puts the thumb on top, clear of the table.
     let handle = Translation3::new(0.0, 0.0, DEMO_GRASP_RAISE)
         * peg.pose
         * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI);
     let (left, right) = extent(peg, &Vector3::x());
     let mut keys = power_grasp_at(&handle, (right - left) / 2.0);
-    then(&mut keys, 0.3, shift(lift * up));
+    then(&mut keys, 0.3, shift(lift));
     then(&mut keys, 0.6, shift(over));
     then(&mut keys, 0.1, |_| {});
     then(
