@@ -71,8 +71,13 @@ impl Browser {
         // exited; a failed start prints its end.
         let log = scratch.path().join("chromedriver.log");
         let port = free_port();
-        let mut driver = Command::new(CHROMEDRIVER);
+        // Through sh, to set a umask that leaves the owner every bit: Chromium checks that the
+        // directory it makes for its single-instance socket has mode 0700 and crashes at start
+        // otherwise, which a umask such as 0222 (read-only files by default) gives it. `exec`
+        // keeps the process id, so dropping `Spawned` still ends chromedriver.
+        let mut driver = Command::new("/bin/sh");
         driver
+            .args(["-c", "umask 077 && exec \"$0\" \"$@\"", CHROMEDRIVER])
             .arg(format!("--port={port}"))
             .arg(format!("--log-path={}", log.display()))
             .arg("--enable-chrome-logs")
