@@ -299,12 +299,13 @@ fn dop_tree_against_brute_force() {
 }
 
 /// A message from a viewer page, as the viewer judges it: the first byte picks a text message
-/// (even) or a binary one (odd), the rest is its payload. A command comes only from a text
-/// message of at most `MAX_COMMAND_BYTES`, and reads back the same when written out again.
+/// (even) or a binary one (odd), the rest is its payload. A command or an acknowledgement comes
+/// only from a text message of at most `MAX_COMMAND_BYTES`, and a command reads back the same
+/// when written out again.
 #[test]
 fn websocket_messages() {
     use axum::extract::ws::Message;
-    use vas_viewer::commands::{MAX_COMMAND_BYTES, parse};
+    use vas_viewer::commands::{MAX_COMMAND_BYTES, PageMessage, parse};
     use vas_viewer::page::{Judged, judge};
     bolero::check!().for_each(|bytes: &[u8]| {
         let Some((&kind, payload)) = bytes.split_first() else {
@@ -316,13 +317,16 @@ fn websocket_messages() {
         } else {
             Message::Binary(payload.to_vec().into())
         };
-        if let Judged::Command(command) = judge(&message) {
+        let judged = judge(&message);
+        if matches!(judged, Judged::Command(_) | Judged::Ack) {
             assert!(
                 kind % 2 == 0 && text.len() <= MAX_COMMAND_BYTES,
-                "{command:?}"
+                "{judged:?}"
             );
+        }
+        if let Judged::Command(command) = judged {
             let written = serde_json::to_string(&command).expect("a command writes as JSON");
-            assert_eq!(parse(&written), Ok(command));
+            assert_eq!(parse(&written), Ok(PageMessage::Command(command)));
         }
     });
 }

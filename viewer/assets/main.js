@@ -2,7 +2,7 @@
 // newest frame at the display's rate, on the screen or in a WebXR session.
 //
 // Frames arrive faster or slower than the display draws; only the newest is drawn (a frame
-// that arrived while another was waiting replaces it). The latency shown is from the input
+// that arrived while another was waiting replaces it, here or in the link's worker). The latency shown is from the input
 // sample a hand frame answers (its tracker timestamp, wall clock) to the moment the frame was
 // drawn. Everything tests look at is on `window.vasViewer`.
 
@@ -33,9 +33,9 @@ const state = {
   latencies: [],
   xrFrames: 0,
   fps: 0,
-  // Per frame, in milliseconds: from the server's publish to the page's receipt (transport), and
-  // from the receipt to the end of the animation frame that drew it (draw); and the frames a
-  // newer one replaced before they were drawn.
+  // Per frame, in milliseconds: from the server's publish to its arrival at the page's link
+  // (transport), and from that arrival to the end of the animation frame that drew it (draw); and
+  // the frames a newer one replaced before they were drawn.
   timing: { transport: [], draw: [], superseded: 0 },
 };
 
@@ -58,10 +58,11 @@ const connection = new Connection({
     view.setScene(scene, meshes);
     panel.showScene(scene.name);
   },
-  frame(frame, arrivedMs) {
+  frame(frame, arrivedMs, transport, superseded) {
+    for (const milliseconds of transport) keep(state.timing.transport, milliseconds, TIMING_WINDOW);
+    state.timing.superseded += superseded;
     if (frame.scene !== state.scene?.version) return;
     state.received.frames += 1;
-    keep(state.timing.transport, arrivedMs - publishedMs(frame), TIMING_WINDOW);
     if (state.waiting) state.timing.superseded += 1;
     frame.arrivedMs = arrivedMs;
     state.received.lastParts = frame.parts?.frame ?? state.received.lastParts;
@@ -123,14 +124,6 @@ function noteDrawn(frame) {
       keep(state.latencies, wallClockMs() - hand.tracker_ns / 1e6, LATENCY_WINDOW);
     }
   }
-}
-
-// When the server published the newest state in `frame` (the publish that made the viewer send
-// it), wall clock in milliseconds.
-function publishedMs(frame) {
-  const stamps = frame.hands.map((hand) => hand.published_ns);
-  if (frame.parts) stamps.push(frame.parts.published_ns);
-  return Math.max(...stamps) / 1e6;
 }
 
 // Appends `value` to `values`, keeping at least the newest `window` of them (trimmed in batches,

@@ -38,6 +38,7 @@ static ASSETS: &[Asset] = &[
     asset!("/style.css", "style.css", CSS),
     asset!("/main.js", "main.js", JS),
     asset!("/connection.js", "connection.js", JS),
+    asset!("/link.js", "link.js", JS),
     asset!("/view.js", "view.js", JS),
     asset!("/panel.js", "panel.js", JS),
     asset!("/xr.js", "xr.js", JS),

@@ -1,4 +1,4 @@
-//! The commands a page may send, and how a page's message is judged.
+//! What a page may send: commands, and acknowledgements of the frames it was sent.
 //!
 //! A page sends small JSON objects with a `type`. Anything else (binary, not JSON, an unknown
 //! type, unexpected or missing fields, more than [`MAX_COMMAND_BYTES`]) is refused: the page
@@ -95,8 +95,18 @@ impl Refusal {
     }
 }
 
-/// The command in a page's text message.
-pub fn parse(text: &str) -> Result<Command, Refusal> {
+/// A page's text message.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PageMessage {
+    /// `{"type":"ack"}`: the page has taken a frame and may be sent another (see
+    /// [`crate::page::FRAMES_IN_FLIGHT`]).
+    Ack,
+    /// A command for the server.
+    Command(Command),
+}
+
+/// The command or acknowledgement in a page's text message.
+pub fn parse(text: &str) -> Result<PageMessage, Refusal> {
     if text.len() > MAX_COMMAND_BYTES {
         return Err(Refusal::Oversized);
     }
@@ -105,10 +115,14 @@ pub fn parse(text: &str) -> Result<Command, Refusal> {
         .get("type")
         .and_then(serde_json::Value::as_str)
         .ok_or(Refusal::Malformed)?;
-    if !matches!(kind, "reset" | "load_scene" | "set_metaphor") {
-        return Err(Refusal::Unknown);
+    match kind {
+        "ack" if value.as_object().is_some_and(|fields| fields.len() == 1) => Ok(PageMessage::Ack),
+        "ack" => Err(Refusal::Malformed),
+        "reset" | "load_scene" | "set_metaphor" => serde_json::from_value(value)
+            .map(PageMessage::Command)
+            .map_err(|_| Refusal::Malformed),
+        _ => Err(Refusal::Unknown),
     }
-    serde_json::from_value(value).map_err(|_| Refusal::Malformed)
 }
 
 #[cfg(test)]
@@ -116,20 +130,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_three_commands_parse() {
-        assert_eq!(parse(r#"{"type":"reset"}"#), Ok(Command::Reset {}));
+    fn the_three_commands_and_the_ack_parse() {
+        let command = |text| match parse(text) {
+            Ok(PageMessage::Command(command)) => command,
+            other => panic!("{text} gave {other:?}"),
+        };
+        assert_eq!(command(r#"{"type":"reset"}"#), Command::Reset {});
         assert_eq!(
-            parse(r#"{"type":"load_scene","name":"peg insert"}"#),
-            Ok(Command::LoadScene {
+            command(r#"{"type":"load_scene","name":"peg insert"}"#),
+            Command::LoadScene {
                 name: "peg insert".into()
-            })
+            }
         );
         assert_eq!(
-            parse(r#"{"type":"set_metaphor","metaphor":"spiral_spring"}"#),
-            Ok(Command::SetMetaphor {
+            command(r#"{"type":"set_metaphor","metaphor":"spiral_spring"}"#),
+            Command::SetMetaphor {
                 metaphor: Metaphor::SpiralSpring
-            })
+            }
         );
+        assert_eq!(parse(r#"{"type":"ack"}"#), Ok(PageMessage::Ack));
     }
 
     #[test]
@@ -143,6 +162,7 @@ mod tests {
             r#"{"type":"reset","extra":1}"#,
             r#"{"type":"load_scene"}"#,
             r#"{"type":"set_metaphor","metaphor":"glue"}"#,
+            r#"{"type":"ack","frame":3}"#,
         ] {
             assert_eq!(parse(malformed), Err(Refusal::Malformed), "{malformed}");
         }

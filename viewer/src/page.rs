@@ -1,16 +1,18 @@
 //! One page's WebSocket: what it is sent, and the commands it may send.
 //!
 //! On connecting, a page is sent the server's status, the scene and the newest frame; then
-//! whatever changes, newest state first-come (see [`crate::hub`]): a slow page is sent the
-//! newest frame when it is ready for one, never a backlog. A page has at most one command
-//! waiting for the server; it is not read from again until that command is answered.
+//! whatever changes, newest state first-come (see [`crate::hub`]). Frames are flow-controlled:
+//! a page acknowledges each frame it takes, and is sent a frame only while fewer than
+//! [`FRAMES_IN_FLIGHT`] are unacknowledged, so a slow page is sent the newest frame when it is
+//! ready for one and no backlog builds up in the socket or the browser. A page has at most one
+//! command waiting for the server; another sent meanwhile is answered with a refusal.
 
 use std::sync::Arc;
 
 use axum::extract::ws::{CloseFrame, Message, WebSocket, close_code};
 use tokio::sync::broadcast::error::RecvError;
 
-use crate::commands::{self, MAX_COMMAND_BYTES, Refusal};
+use crate::commands::{self, MAX_COMMAND_BYTES, PageMessage, Refusal};
 use crate::hub::Hub;
 use crate::messages;
 use crate::stats::Stats;
@@ -19,6 +21,32 @@ use crate::stats::Stats;
 /// fails in the WebSocket layer. Between [`MAX_COMMAND_BYTES`] and this, a message is read and
 /// refused as oversized.
 pub const MAX_READ_BYTES: usize = 4 * MAX_COMMAND_BYTES;
+
+/// Frames a page may have been sent and not yet acknowledged. Two keep one frame on its way
+/// while the page takes the other, so a fast page loses no time to the round trip.
+pub const FRAMES_IN_FLIGHT: u32 = 2;
+
+/// The frames sent to a page and not yet acknowledged.
+#[derive(Debug, Default)]
+pub struct InFlight(u32);
+
+impl InFlight {
+    /// Whether another frame may be sent.
+    pub fn has_room(&self) -> bool {
+        self.0 < FRAMES_IN_FLIGHT
+    }
+
+    /// Counts a frame sent.
+    pub fn sent(&mut self) {
+        self.0 += 1;
+    }
+
+    /// Counts an acknowledgement; one for no frame is refused (the page is broken or hostile).
+    pub fn acked(&mut self) -> Result<(), Refusal> {
+        self.0 = self.0.checked_sub(1).ok_or(Refusal::Malformed)?;
+        Ok(())
+    }
+}
 
 /// Why a page's connection ended.
 enum End {
@@ -65,6 +93,7 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
     frame.mark_changed();
     status.mark_changed();
     let mut waiting: Option<(&'static str, tokio::sync::oneshot::Receiver<_>)> = None;
+    let mut in_flight = InFlight::default();
 
     loop {
         // Biased: the status and scene go before the frames that refer to them, and answers
@@ -99,12 +128,26 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
                 }
                 Err(RecvError::Closed) => return End::Gone,
             },
-            Ok(()) = frame.changed() => {
-                let message = frame.borrow_and_update().clone();
-                send_all(socket, message).await
+            Ok(()) = frame.changed(), if in_flight.has_room() => {
+                let newest = frame.borrow_and_update().clone();
+                match newest {
+                    Some(message) => {
+                        in_flight.sent();
+                        send_all(socket, Some(message)).await
+                    }
+                    None => true,
+                }
             }
-            received = socket.recv(), if waiting.is_none() => match received {
+            received = socket.recv() => match received {
                 Some(Ok(message)) => match judge(&message) {
+                    Judged::Ack => match in_flight.acked() {
+                        Ok(()) => true,
+                        Err(refusal) => return End::Refused(refusal),
+                    },
+                    Judged::Command(command) if waiting.is_some() => {
+                        let busy = Err("the last command is not answered yet; try again".into());
+                        send_all(socket, Some(messages::reply(command.name(), &busy))).await
+                    }
                     Judged::Command(command) => {
                         waiting = Some((command.name(), hub.submit(command)));
                         true
@@ -127,6 +170,8 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
 /// What a message from a page comes to.
 #[derive(Debug, PartialEq, Eq)]
 pub enum Judged {
+    /// The page took a frame.
+    Ack,
     /// A command to carry out.
     Command(commands::Command),
     /// Not a command: the page is closed, and the refusal counted.
@@ -137,11 +182,13 @@ pub enum Judged {
     Closed,
 }
 
-/// Judges one message from a page: only a text message holding a command is carried out.
+/// Judges one message from a page: only a text message holding a command or an acknowledgement
+/// is taken.
 pub fn judge(message: &Message) -> Judged {
     match message {
         Message::Text(text) => match commands::parse(text.as_str()) {
-            Ok(command) => Judged::Command(command),
+            Ok(PageMessage::Ack) => Judged::Ack,
+            Ok(PageMessage::Command(command)) => Judged::Command(command),
             Err(refusal) => Judged::Refused(refusal),
         },
         Message::Binary(bytes) if bytes.len() > MAX_COMMAND_BYTES => {
@@ -161,4 +208,25 @@ async fn send_all(socket: &mut WebSocket, messages: impl IntoIterator<Item = Mes
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_wait_for_room_and_acks_for_no_frame_are_refused() {
+        let mut in_flight = InFlight::default();
+        for _ in 0..FRAMES_IN_FLIGHT {
+            assert!(in_flight.has_room());
+            in_flight.sent();
+        }
+        assert!(!in_flight.has_room());
+        assert_eq!(in_flight.acked(), Ok(()));
+        assert!(in_flight.has_room());
+        for _ in 1..FRAMES_IN_FLIGHT {
+            assert_eq!(in_flight.acked(), Ok(()));
+        }
+        assert_eq!(in_flight.acked(), Err(Refusal::Malformed));
+    }
 }

@@ -11,6 +11,7 @@ const ASSETS: &[(&str, &str)] = &[
     ("/style.css", "style.css"),
     ("/main.js", "main.js"),
     ("/connection.js", "connection.js"),
+    ("/link.js", "link.js"),
     ("/view.js", "view.js"),
     ("/panel.js", "panel.js"),
     ("/xr.js", "xr.js"),

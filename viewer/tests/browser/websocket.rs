@@ -1,5 +1,6 @@
-//! The WebSocket: a page that sends something other than a command is closed and counted, while
-//! another page keeps getting frames and its commands answered.
+//! The WebSocket: a page that sends something other than a command or an acknowledgement is
+//! closed and counted, while another page keeps getting frames and its commands answered; a page
+//! that does not acknowledge its frames is sent no more of them, and then the newest.
 
 use std::time::Instant;
 
@@ -42,11 +43,16 @@ async fn next_of(socket: &mut Socket, kind: &str) -> Value {
     }
 }
 
-/// The parts frame number of the next frame message.
+/// The parts frame number of the next frame message, acknowledged as a page does.
 async fn next_frame_number(socket: &mut Socket) -> u64 {
-    next_of(socket, "frame").await["parts"]["frame"]
+    let number = next_of(socket, "frame").await["parts"]["frame"]
         .as_u64()
-        .expect("a parts frame number")
+        .expect("a parts frame number");
+    socket
+        .send(Message::text(r#"{"type":"ack"}"#))
+        .await
+        .expect("send the ack");
+    number
 }
 
 #[tokio::test]
@@ -68,6 +74,7 @@ async fn bad_messages_close_their_page_only_and_are_counted() {
         Message::binary(vec![1, 2, 3]),
         Message::text(oversized),
         Message::text(r#"{"type":"shutdown"}"#),
+        Message::text(r#"{"type":"ack","frame":1}"#),
     ];
     for message in bad {
         let mut page = connect(&viewer).await;
@@ -90,7 +97,7 @@ async fn bad_messages_close_their_page_only_and_are_counted() {
 
     let stats = viewer
         .wait_for_stats("the refusals counted", |stats| {
-            stats["pages_open"] == 1 && stats["refused"]["malformed"] == 3
+            stats["pages_open"] == 1 && stats["refused"]["malformed"] == 4
         })
         .await;
     assert_eq!(stats["refused"]["oversized"], 1, "{stats}");
@@ -125,5 +132,51 @@ async fn bad_messages_close_their_page_only_and_are_counted() {
     assert!(
         !reply["message"].as_str().unwrap_or_default().is_empty(),
         "a refusal says why: {reply}"
+    );
+}
+
+#[tokio::test]
+async fn a_page_that_does_not_acknowledge_is_sent_no_more_frames_then_the_newest() {
+    let scene = configs_dir().join("peg_insert.toml");
+    let mut server = Server::start_with("viewer_ack", &["--scene", scene.to_str().expect("UTF-8")]);
+    let _client = server.connect();
+    let viewer = Viewer::start(server.prefix());
+
+    let mut slow = connect(&viewer).await;
+    next_of(&mut slow, "scene").await;
+    // The fast page sees the server publish a hundred frames more.
+    let mut fast = connect(&viewer).await;
+    let first = next_frame_number(&mut fast).await;
+    let mut newest = first;
+    while newest < first + 100 {
+        newest = next_frame_number(&mut fast).await;
+    }
+
+    // Meanwhile the slow page, which acknowledged nothing, was sent no more than its window.
+    let mut unacknowledged = Vec::new();
+    while let Ok(Some(message)) =
+        tokio::time::timeout(std::time::Duration::from_millis(300), slow.next()).await
+    {
+        if let Message::Text(text) = message.expect("a message") {
+            let value: Value = serde_json::from_str(&text).expect("JSON");
+            if value["type"] == "frame" {
+                unacknowledged.push(value["parts"]["frame"].as_u64().expect("a frame number"));
+            }
+        }
+    }
+    assert_eq!(
+        unacknowledged.len(),
+        vas_viewer::page::FRAMES_IN_FLIGHT as usize,
+        "frames sent to a page that acknowledged none: {unacknowledged:?}"
+    );
+
+    // Once it acknowledges one, it is sent the newest frame, not the next of a backlog.
+    slow.send(Message::text(r#"{"type":"ack"}"#))
+        .await
+        .expect("send the ack");
+    let next = next_frame_number(&mut slow).await;
+    assert!(
+        next >= newest,
+        "after the ack the page got frame {next}; the newest it could have had is {newest} or later"
     );
 }

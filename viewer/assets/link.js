@@ -1,0 +1,134 @@
+// The page's link to vas-viewer, run in a Web Worker so that drawing never delays it: it owns the
+// WebSocket, acknowledges each frame the moment it arrives (the viewer sends a page at most two
+// unacknowledged frames, so nothing queues in the socket), keeps only the newest frame until the
+// page takes it, decodes meshes, and reconnects when the viewer goes away.
+//
+// A scene arrives as one JSON message (`type: "scene"`, with `meshes`: how many follow) and then
+// that many binary messages, one mesh each (little-endian, 4-byte aligned so typed arrays view it
+// in place):
+//   u32 mesh index, u32 vertex count, u32 normal count (0 or the vertex count), u32 triangle count,
+//   f32 positions[3 * vertices], f32 normals[3 * normals], u32 indices[3 * triangles].
+//
+// To the page (postMessage):
+//   { kind: 'open', open }                  the WebSocket opened (true) or closed (false)
+//   { kind: 'message', message, arrivedMs } a status, event, reply or warning, in order
+//   { kind: 'scene', scene, meshes }        a scene and its meshes (their buffers transferred)
+//   { kind: 'frame', frame, arrivedMs, transport, superseded }
+//       the newest frame; `transport` lists, per frame that arrived since the last one posted,
+//       the milliseconds from the server's publish to its arrival here; `superseded` counts those
+//       this one replaced
+// From the page:
+//   { kind: 'command', command }  sent to the viewer
+//   { kind: 'took' }              the page took the last frame posted; the next may be posted
+//
+// Times are wall clock in milliseconds since the Unix epoch.
+
+const RECONNECT_MS = 1000;
+const ACK = JSON.stringify({ type: 'ack' });
+
+let socket = null;
+let pendingScene = null;
+// The newest frame not posted yet, and what the page is told with it.
+let newest = null;
+let transport = [];
+let superseded = 0;
+// Whether the page has taken the last frame posted.
+let pageReady = true;
+
+const wallClockMs = () => performance.timeOrigin + performance.now();
+
+function connect() {
+  const scheme = self.location.protocol === 'https:' ? 'wss:' : 'ws:';
+  socket = new WebSocket(`${scheme}//${self.location.host}/ws`);
+  socket.binaryType = 'arraybuffer';
+  socket.onopen = () => postMessage({ kind: 'open', open: true });
+  socket.onclose = () => {
+    socket = null;
+    pendingScene = null;
+    newest = null;
+    postMessage({ kind: 'open', open: false });
+    setTimeout(connect, RECONNECT_MS);
+  };
+  socket.onmessage = (message) => receive(message.data, wallClockMs());
+}
+
+function receive(data, arrivedMs) {
+  if (data instanceof ArrayBuffer) {
+    receiveMesh(data);
+    return;
+  }
+  const message = JSON.parse(data);
+  switch (message.type) {
+    case 'frame':
+      socket.send(ACK);
+      transport.push(arrivedMs - publishedMs(message));
+      if (newest) superseded += 1;
+      newest = { frame: message, arrivedMs };
+      postFrame();
+      break;
+    case 'scene':
+      pendingScene = { scene: message, meshes: new Array(message.meshes), received: 0 };
+      if (message.meshes === 0) finishScene();
+      break;
+    default:
+      postMessage({ kind: 'message', message, arrivedMs });
+  }
+}
+
+// When the server published the newest state in `frame` (the publish that made the viewer send
+// it).
+function publishedMs(frame) {
+  const stamps = frame.hands.map((hand) => hand.published_ns);
+  if (frame.parts) stamps.push(frame.parts.published_ns);
+  return Math.max(...stamps) / 1e6;
+}
+
+function postFrame() {
+  if (!newest || !pageReady) return;
+  postMessage({ kind: 'frame', ...newest, transport, superseded });
+  newest = null;
+  transport = [];
+  superseded = 0;
+  pageReady = false;
+}
+
+function receiveMesh(buffer) {
+  const pending = pendingScene;
+  if (!pending) return;
+  const [index, vertices, normals, triangles] = new Uint32Array(buffer, 0, 4);
+  if (index >= pending.meshes.length || pending.meshes[index]) return;
+  let offset = 16;
+  const positions = new Float32Array(buffer, offset, 3 * vertices);
+  offset += 12 * vertices;
+  const normalArray = new Float32Array(buffer, offset, 3 * normals);
+  offset += 12 * normals;
+  const indices = new Uint32Array(buffer, offset, 3 * triangles);
+  pending.meshes[index] = { positions, normals: normals > 0 ? normalArray : null, indices };
+  pending.received += 1;
+  if (pending.received === pending.meshes.length) finishScene();
+}
+
+function finishScene() {
+  const { scene, meshes } = pendingScene;
+  pendingScene = null;
+  // A frame of the old scene is no use to the page any more.
+  newest = null;
+  const buffers = meshes.map((mesh) => mesh.positions.buffer);
+  postMessage({ kind: 'scene', scene, meshes }, buffers);
+}
+
+self.onmessage = ({ data }) => {
+  if (data.kind === 'took') {
+    pageReady = true;
+    postFrame();
+  } else if (data.kind === 'command') {
+    if (socket?.readyState === WebSocket.OPEN) {
+      socket.send(JSON.stringify(data.command));
+    } else {
+      const warning = { type: 'warning', message: `not connected: ${data.command.type} not sent` };
+      postMessage({ kind: 'message', message: warning, arrivedMs: wallClockMs() });
+    }
+  }
+};
+
+connect();
