@@ -1,10 +1,12 @@
 //! `vas-bench browser` (B9): how soon the viewer's pages have what the server publishes.
 //!
-//! Against a running server and viewer, each case opens the viewer's page in a number of windows
-//! of one headless Chromium, feeds the server a tracker stream at a steady rate, and then reads
-//! each page's own timing of the frames it got: from the server's publish stamp to the page's
-//! receipt (transport), and from the receipt to the end of the animation frame that drew it
-//! (draw). The viewer's CPU time over the same span gives its share of a core.
+//! Against a running server and viewer, each case opens the viewer's page in a number of pages
+//! of one headless Chromium (one shown and drawing, the others in tabs not shown, which receive
+//! every frame but draw none: a software renderer per page would starve the machine's cores,
+//! where each real renderer has a GPU of its own), feeds the server a tracker stream at a steady
+//! rate, and then reads each page's own timing of the frames it got: from the server's publish
+//! stamp to the page's receipt (transport), and from the receipt to the end of the animation
+//! frame that drew it (draw). The viewer's CPU time over the same span gives its share of a core.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -41,7 +43,7 @@ pub struct BrowserArgs {
     /// case.
     #[arg(long)]
     viewer_pid: u32,
-    /// Page counts, one case each: every page is a window of one headless Chromium.
+    /// Page counts, one case each: one page shown and drawing, the others in tabs not shown.
     #[arg(long, value_delimiter = ',', default_value = "1,16",
           value_parser = clap::value_parser!(u32).range(1..=64))]
     pages: Vec<u32>,
@@ -75,12 +77,16 @@ pub struct CaseReport {
     pub frames_per_page_per_s: f64,
     /// From the server's publish stamp to a page's receipt, over every page's frames.
     pub transport: LatencySummary,
-    /// From a page's receipt of a frame to the end of the animation frame that drew it.
+    /// From a page's receipt of a frame to the end of the animation frame that drew it (the
+    /// shown page).
     pub draw: LatencySummary,
+    /// Drawn frames that were late, as a share of those drawn: an animation frame began after
+    /// the frame arrived and did not draw it.
+    pub late_share: f64,
     /// Frames a newer frame replaced before they were drawn, as a share of those received (a
     /// page draws only the newest at each animation frame).
     pub superseded_share: f64,
-    /// Animation frames per second, averaged over the pages.
+    /// Animation frames per second of the shown page.
     pub fps: f64,
     /// The viewer's CPU time over the span, in percent of one core.
     pub viewer_cpu_percent: f64,
@@ -95,6 +101,7 @@ struct PageTiming {
     transport: Vec<f64>,
     draw: Vec<f64>,
     superseded: u64,
+    late: u64,
 }
 
 /// Runs every case against the viewer at `--url` and the server on `--prefix`.
@@ -147,13 +154,16 @@ async fn measure_pages(
 ) -> anyhow::Result<CaseReport> {
     let (width, height) = args.window;
     let browser = Browser::start(width, height).await;
-    let windows = browser.open_windows(&args.url, pages as usize).await;
+    let mut windows = browser.open_windows(&args.url, 1).await;
+    windows.extend(browser.open_tabs(&args.url, pages as usize - 1).await);
     for window in &windows {
         browser.switch_to(window).await;
         browser
-            .wait_for("window.vasViewer?.scene && window.vasViewer.drawn.frames > 0")
+            .wait_for("window.vasViewer?.scene && window.vasViewer.received.frames > 0")
             .await;
     }
+    browser.switch_to(&windows[0]).await;
+    browser.wait_for("window.vasViewer.drawn.frames > 0").await;
     tokio::time::sleep(WARMUP).await;
     for window in &windows {
         browser.switch_to(window).await;
@@ -167,20 +177,20 @@ async fn measure_pages(
     let cpu = cpu_seconds(args.viewer_pid)? - cpu_before;
     let samples_sent = sent.load(Ordering::Acquire) - sent_before;
 
+    // The shown page first, before a switch shows another.
+    let fps = browser.eval::<f64>("window.vasViewer.fps").await;
+    let clock_skew_ms = browser.eval::<f64>(CLOCK_SKEW_JS).await;
     let mut timings = Vec::new();
-    let mut fps = 0.0;
     for window in &windows {
         browser.switch_to(window).await;
         timings.push(browser.eval::<PageTiming>("window.vasViewer.timing").await);
-        fps += browser.eval::<f64>("window.vasViewer.fps").await;
     }
-    browser.switch_to(&windows[0]).await;
-    let clock_skew_ms = browser.eval::<f64>(CLOCK_SKEW_JS).await;
     browser.close().await;
 
     let transport: Vec<f64> = timings.iter().flat_map(|t| t.transport.clone()).collect();
     let draw: Vec<f64> = timings.iter().flat_map(|t| t.draw.clone()).collect();
     let superseded: u64 = timings.iter().map(|t| t.superseded).sum();
+    let late: u64 = timings.iter().map(|t| t.late).sum();
     if transport.is_empty() || draw.is_empty() {
         bail!(
             "the pages received or drew no frame in {seconds:.1} s: is input reaching the server?"
@@ -194,8 +204,9 @@ async fn measure_pages(
         frames_per_page_per_s: transport.len() as f64 / f64::from(pages) / seconds,
         transport: summary(&transport)?,
         draw: summary(&draw)?,
+        late_share: late as f64 / draw.len() as f64,
         superseded_share: superseded as f64 / transport.len() as f64,
-        fps: fps / f64::from(pages),
+        fps,
         viewer_cpu_percent: 100.0 * cpu / seconds,
         clock_skew_ms,
     })
@@ -286,6 +297,7 @@ fn render(cases: &[CaseReport]) -> String {
         "transport_max_ms",
         "draw_p50_ms",
         "draw_p99_ms",
+        "late_%",
         "fps",
         "superseded_%",
         "viewer_cpu_%",
@@ -301,6 +313,7 @@ fn render(cases: &[CaseReport]) -> String {
             ms(case.transport.max_us),
             ms(case.draw.p50_us),
             ms(case.draw.p99_us),
+            format_number(100.0 * case.late_share),
             format_number(case.fps),
             format_number(100.0 * case.superseded_share),
             format_number(case.viewer_cpu_percent),

@@ -44,7 +44,7 @@ pub struct Browser {
     driver: Spawned,
     driver_port: u16,
     /// Chromium's profile and chromedriver's log.
-    _scratch: tempfile::TempDir,
+    scratch: tempfile::TempDir,
     _turn: tokio::sync::MutexGuard<'static, ()>,
 }
 
@@ -128,24 +128,61 @@ impl Browser {
             client,
             driver,
             driver_port: port,
-            _scratch: scratch,
+            scratch,
             _turn: turn,
         }
+    }
+
+    /// Panics with what failed and the end of chromedriver's log, which says why.
+    fn failed(&self, what: &str, error: impl std::fmt::Display) -> ! {
+        let log = self.scratch.path().join("chromedriver.log");
+        panic!(
+            "{what}: {error}\nthe end of chromedriver's log:\n{}",
+            last_lines(&log, 40)
+        )
     }
 
     /// Opens `url` in `count` windows (the first is the session's own), each a page of its own
     /// that is drawn as a visible one; returns their handles.
     pub async fn open_windows(&self, url: &str, count: usize) -> Vec<WindowHandle> {
-        let mut windows = vec![self.client.window().await.expect("the first window")];
+        let first = self.client.window().await;
+        let mut windows =
+            vec![first.unwrap_or_else(|error| self.failed("the first window", error))];
         for _ in 1..count {
-            let window = self.client.new_window(false).await.expect("a new window");
-            windows.push(window.handle);
+            let window = self.client.new_window(false).await;
+            windows.push(
+                window
+                    .unwrap_or_else(|error| self.failed("a new window", error))
+                    .handle,
+            );
         }
         for window in &windows {
             self.switch_to(window).await;
-            self.client.goto(url).await.expect("open the page");
+            let opened = self.client.goto(url).await;
+            opened.unwrap_or_else(|error| self.failed("open the page", error));
         }
         windows
+    }
+
+    /// Opens `url` in `count` more tabs of the current window and makes the current tab current
+    /// (and shown) again; returns the tabs' handles. A tab that is not shown keeps its page
+    /// running, receiving and handling messages, but draws no animation frames.
+    pub async fn open_tabs(&self, url: &str, count: usize) -> Vec<WindowHandle> {
+        let current = self.client.window().await;
+        let current = current.unwrap_or_else(|error| self.failed("the current tab", error));
+        let mut tabs = Vec::new();
+        for _ in 0..count {
+            let tab = self.client.new_window(true).await;
+            let tab = tab
+                .unwrap_or_else(|error| self.failed("a new tab", error))
+                .handle;
+            self.switch_to(&tab).await;
+            let opened = self.client.goto(url).await;
+            opened.unwrap_or_else(|error| self.failed("open the page", error));
+            tabs.push(tab);
+        }
+        self.switch_to(&current).await;
+        tabs
     }
 
     /// Makes `window` the current one, whose page [`Browser::eval`] and the others look at.
@@ -153,7 +190,7 @@ impl Browser {
         self.client
             .switch_to_window(window.clone())
             .await
-            .expect("switch windows");
+            .unwrap_or_else(|error| self.failed("switch windows", error));
     }
 
     /// Evaluates `expression` in the current page and returns its value.
@@ -162,7 +199,7 @@ impl Browser {
             .client
             .execute(&format!("return {expression};"), Vec::new())
             .await
-            .unwrap_or_else(|error| panic!("evaluating {expression}: {error}"));
+            .unwrap_or_else(|error| self.failed(&format!("evaluating {expression}"), error));
         serde_json::from_value(value.clone())
             .unwrap_or_else(|error| panic!("{expression} gave {value}: {error}"))
     }

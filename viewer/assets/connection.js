@@ -30,7 +30,7 @@ export class Connection {
         this.handlers.scene(data.scene, data.meshes);
         break;
       case 'frame':
-        // Taken: the worker may post the next (newest) one as soon as it has it.
+        // Taken: the worker counts the frames the page has not taken yet.
         this.worker.postMessage({ kind: 'took' });
         this.handlers.frame(data.frame, data.arrivedMs, data.transport, data.superseded);
         break;

@@ -1,7 +1,10 @@
 // The page's link to vas-viewer, run in a Web Worker so that drawing never delays it: it owns the
 // WebSocket, acknowledges each frame the moment it arrives (the viewer sends a page at most two
-// unacknowledged frames, so nothing queues in the socket), keeps only the newest frame until the
-// page takes it, decodes meshes, and reconnects when the viewer goes away.
+// unacknowledged frames, so nothing queues in the socket), passes frames on to the page, decodes
+// meshes, and reconnects when the viewer goes away. Frames are passed on as they arrive, so the
+// page draws the newest at its next animation frame even while it is busy drawing; only when the
+// page has not taken `PAGE_WINDOW` of them (it is stalled) does the worker keep just the newest
+// until the page catches up.
 //
 // A scene arrives as one JSON message (`type: "scene"`, with `meshes`: how many follow) and then
 // that many binary messages, one mesh each (little-endian, 4-byte aligned so typed arrays view it
@@ -14,16 +17,18 @@
 //   { kind: 'message', message, arrivedMs } a status, event, reply or warning, in order
 //   { kind: 'scene', scene, meshes }        a scene and its meshes (their buffers transferred)
 //   { kind: 'frame', frame, arrivedMs, transport, superseded }
-//       the newest frame; `transport` lists, per frame that arrived since the last one posted,
-//       the milliseconds from the server's publish to its arrival here; `superseded` counts those
-//       this one replaced
+//       a frame; `transport` lists, per frame that arrived since the last one posted, the
+//       milliseconds from the server's publish to its arrival here; `superseded` counts those
+//       this one replaced while the page was stalled
 // From the page:
 //   { kind: 'command', command }  sent to the viewer
-//   { kind: 'took' }              the page took the last frame posted; the next may be posted
+//   { kind: 'took' }              the page took a frame posted
 //
 // Times are wall clock in milliseconds since the Unix epoch.
 
 const RECONNECT_MS = 1000;
+// Frames posted to the page and not yet taken, at most: a quarter of a second at 1 kHz.
+const PAGE_WINDOW = 256;
 const ACK = JSON.stringify({ type: 'ack' });
 
 let socket = null;
@@ -32,8 +37,8 @@ let pendingScene = null;
 let newest = null;
 let transport = [];
 let superseded = 0;
-// Whether the page has taken the last frame posted.
-let pageReady = true;
+// Frames posted and not yet taken by the page.
+let untaken = 0;
 
 const wallClockMs = () => performance.timeOrigin + performance.now();
 
@@ -84,12 +89,12 @@ function publishedMs(frame) {
 }
 
 function postFrame() {
-  if (!newest || !pageReady) return;
+  if (!newest || untaken >= PAGE_WINDOW) return;
   postMessage({ kind: 'frame', ...newest, transport, superseded });
   newest = null;
   transport = [];
   superseded = 0;
-  pageReady = false;
+  untaken += 1;
 }
 
 function receiveMesh(buffer) {
@@ -119,7 +124,7 @@ function finishScene() {
 
 self.onmessage = ({ data }) => {
   if (data.kind === 'took') {
-    pageReady = true;
+    untaken -= 1;
     postFrame();
   } else if (data.kind === 'command') {
     if (socket?.readyState === WebSocket.OPEN) {

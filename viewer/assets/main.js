@@ -35,8 +35,9 @@ const state = {
   fps: 0,
   // Per frame, in milliseconds: from the server's publish to its arrival at the page's link
   // (transport), and from that arrival to the end of the animation frame that drew it (draw); and
-  // the frames a newer one replaced before they were drawn.
-  timing: { transport: [], draw: [], superseded: 0 },
+  // the frames a newer one replaced before they were drawn, and the drawn frames that were late:
+  // an animation frame began after they arrived and did not draw them.
+  timing: { transport: [], draw: [], superseded: 0, late: 0 },
 };
 
 const connection = new Connection({
@@ -95,7 +96,10 @@ setupXr(view, panel);
 const wallClockMs = () => performance.timeOrigin + performance.now();
 
 let fpsWindow = { start: performance.now(), frames: 0 };
+// When the last animation frame began, wall clock.
+let lastStartMs = 0;
 view.renderer.setAnimationLoop((now) => {
+  const startMs = wallClockMs();
   const frame = state.waiting;
   state.waiting = null;
   if (frame) view.applyFrame(frame);
@@ -104,7 +108,9 @@ view.renderer.setAnimationLoop((now) => {
   if (frame) {
     noteDrawn(frame);
     keep(state.timing.draw, wallClockMs() - frame.arrivedMs, TIMING_WINDOW);
+    if (lastStartMs > frame.arrivedMs) state.timing.late += 1;
   }
+  lastStartMs = startMs;
   fpsWindow.frames += 1;
   if (now - fpsWindow.start >= 1000) {
     state.fps = (fpsWindow.frames * 1000) / (now - fpsWindow.start);
@@ -155,10 +161,10 @@ window.vasViewer = {
   get latencies() { return [...state.latencies]; },
   get xrFrames() { return state.xrFrames; },
   get timing() {
-    const { transport, draw, superseded } = state.timing;
-    return { transport: [...transport], draw: [...draw], superseded };
+    const { transport, draw, superseded, late } = state.timing;
+    return { transport: [...transport], draw: [...draw], superseded, late };
   },
-  resetTiming() { state.timing = { transport: [], draw: [], superseded: 0 }; },
+  resetTiming() { state.timing = { transport: [], draw: [], superseded: 0, late: 0 }; },
   get fps() { return state.fps; },
   get markers() { return view.markers.map((marker) => marker.position.toArray()); },
   // Every part as drawn: pose in the vas world, state and colour.
