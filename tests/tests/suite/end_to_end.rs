@@ -639,3 +639,51 @@ fn the_geometry_follows_every_reset_and_load() {
     let expected: Vec<&str> = peg.parts.iter().map(|part| part.name.as_str()).collect();
     assert_eq!(names, expected);
 }
+
+/// A part of two million triangles goes through the geometry service whole: every vertex and
+/// triangle the server's shape generator makes for it.
+#[test]
+fn a_two_million_triangle_part_reaches_a_client_whole() {
+    let folder = tempfile::tempdir().expect("a scratch folder");
+    let scene = folder.path().join("panel.toml");
+    std::fs::write(
+        &scene,
+        "name = \"panel\"\n\n[[parts]]\nname = \"panel\"\n\
+         shape = { kind = \"box\", size = [1.0, 0.6, 0.01], triangles = 2000000 }\n",
+    )
+    .expect("write the scene");
+    let mut server = Server::start_with(
+        "big_geometry",
+        &["--scene", scene.to_str().expect("a UTF-8 path")],
+    );
+    let mut client = server.connect();
+    let geometry = next_geometry(&mut client, 0);
+
+    let own =
+        vas_server::geometry::shapes::cuboid(nalgebra::Vector3::new(1.0, 0.6, 0.01), 2_000_000);
+    assert!(
+        own.triangles().len() >= 2_000_000,
+        "{}",
+        own.triangles().len()
+    );
+    let [panel] = geometry.parts.as_slice() else {
+        panic!("one part, not {}", geometry.parts.len());
+    };
+    assert_eq!(panel.triangles.len(), own.triangles().len());
+    assert!(
+        panel.triangles.as_slice() == own.triangles(),
+        "the triangles differ"
+    );
+    assert_eq!(panel.positions.len(), own.vertices().len());
+    let worst = panel
+        .positions
+        .iter()
+        .zip(own.vertices())
+        .map(|(wire, own)| {
+            (0..3)
+                .map(|i| (f64::from(wire[i]) - own[i]).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-6, "a vertex is {worst} m off");
+}
