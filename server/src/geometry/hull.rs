@@ -299,7 +299,7 @@ fn parry_hull(points: &[Point], centre: Point) -> Option<(Vec<Point>, Vec<[u32; 
     let mut exact_of: HashMap<_, Point> = HashMap::with_capacity(points.len());
     let mut distinct = Vec::with_capacity(points.len());
     for p in points {
-        let rounded: Point3<f32> = nalgebra::convert(Point::from(p - centre));
+        let rounded = local_point(p, centre);
         exact_of.entry(key(&rounded)).or_insert_with(|| {
             distinct.push(rounded);
             *p
@@ -327,26 +327,21 @@ fn parry_hull(points: &[Point], centre: Point) -> Option<(Vec<Point>, Vec<[u32; 
 /// Each point is tested against the one plane its ray from the hull's centroid leaves through,
 /// found by hill-climbing over the planes ([`FaceClimb`]), so the cost grows with the points times
 /// a short climb (mesh points come in spatially coherent order, and each climb starts where the
-/// last ended). A point on or outside that plane gets an upper bound of its distance to the hull. A hull whose centroid is not well inside every face (flat or
-/// degenerate) falls back to testing every point against every face.
+/// last ended). A point on or outside that plane gets an upper bound of its distance to the hull.
+/// A hull whose centroid is not well inside every face (flat or degenerate) falls back to testing
+/// every point against every face.
 fn containment_tolerance(
     mesh_points: &[Point],
     vertices: &[Point],
     faces: &[[u32; 3]],
     centre: Point,
 ) -> f64 {
-    let centroid = Point::from(
-        vertices.iter().map(|v| v.coords).sum::<Vector3<f64>>() / vertices.len() as f64,
-    );
+    let centroid = centroid_of(vertices);
     let planes = face_planes(vertices, faces, centroid);
     let Some(climb) = FaceClimb::new(&planes, faces, centroid, vertices) else {
         return exhaustive_tolerance(mesh_points, vertices, faces, centre);
     };
     let triangles = local_triangles(vertices, faces, centre);
-    let distance = |p: &Point, triangle: &Triangle| {
-        let local: Point3<f32> = nalgebra::convert(Point::from(p - centre));
-        triangle.distance_to_local_point(&local, true) as f64
-    };
     let hull_vertices = is_hull_vertex(vertices);
     let mut start = 0;
     let mut tolerance = 0.0f64;
@@ -361,7 +356,9 @@ fn containment_tolerance(
             // Two bounds of the distance to the hull, each valid alone: to the point where the
             // ray leaves the hull (`centroid + q / ratio`), and to a face on the exit plane.
             let radial = q.norm() * (1.0 - 1.0 / ratio);
-            let face = distance(p, &triangles[climb.faces[plane as usize] as usize]);
+            let face = triangles[climb.faces[plane as usize] as usize]
+                .distance_to_local_point(&local_point(p, centre), true)
+                as f64;
             tolerance = tolerance.max(radial.min(face));
         }
     }
@@ -376,10 +373,7 @@ fn exhaustive_tolerance(
     faces: &[[u32; 3]],
     centre: Point,
 ) -> f64 {
-    let centroid = Point::from(
-        vertices.iter().map(|v| v.coords).sum::<Vector3<f64>>() / vertices.len() as f64,
-    );
-    let planes: Vec<(Vector3<f64>, f64)> = face_planes(vertices, faces, centroid)
+    let planes: Vec<(Vector3<f64>, f64)> = face_planes(vertices, faces, centroid_of(vertices))
         .into_iter()
         .flatten()
         .collect();
@@ -390,7 +384,7 @@ fn exhaustive_tolerance(
         .filter(|p| !hull_vertices.contains(&bits(p)))
         .filter(|p| planes.iter().any(|(n, d)| n.dot(&p.coords) >= *d))
         .map(|p| {
-            let local: Point3<f32> = nalgebra::convert(Point::from(p - centre));
+            let local = local_point(p, centre);
             triangles
                 .iter()
                 .map(|t| t.distance_to_local_point(&local, true))
@@ -419,13 +413,22 @@ fn face_planes(
         .collect()
 }
 
+/// The mean of the hull's vertices: a point well inside a hull that is not flat.
+fn centroid_of(vertices: &[Point]) -> Point {
+    Point::from(vertices.iter().map(|v| v.coords).sum::<Vector3<f64>>() / vertices.len() as f64)
+}
+
+/// `p` around `centre` in `f32`, as the faces of [`local_triangles`] are.
+fn local_point(p: &Point, centre: Point) -> Point3<f32> {
+    nalgebra::convert(Point::from(p - centre))
+}
+
 /// The faces as `f32` triangles around `centre`, for parry's point-triangle distance.
 fn local_triangles(vertices: &[Point], faces: &[[u32; 3]], centre: Point) -> Vec<Triangle> {
     faces
         .iter()
         .map(|face| {
-            let [a, b, c] =
-                face.map(|i| nalgebra::convert(Point::from(vertices[i as usize] - centre)));
+            let [a, b, c] = face.map(|i| local_point(&vertices[i as usize], centre));
             Triangle::new(a, b, c)
         })
         .collect()
@@ -780,9 +783,7 @@ mod tests {
             let (lo, hi) = bounds(&points);
             let centre = nalgebra::center(&lo, &hi);
             let (vertices, faces) = parry_hull(&points, centre).unwrap();
-            let centroid = Point::from(
-                vertices.iter().map(|v| v.coords).sum::<Vector3<f64>>() / vertices.len() as f64,
-            );
+            let centroid = centroid_of(&vertices);
             let planes = face_planes(&vertices, &faces, centroid);
             climbed_some |= FaceClimb::new(&planes, &faces, centroid, &vertices).is_some();
             let climbed = containment_tolerance(&points, &vertices, &faces, centre);
