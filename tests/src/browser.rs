@@ -157,9 +157,7 @@ impl Browser {
             );
         }
         for window in &windows {
-            self.switch_to(window).await;
-            let opened = self.client.goto(url).await;
-            opened.unwrap_or_else(|error| self.failed("open the page", error));
+            self.load(window, url).await;
         }
         windows
     }
@@ -176,13 +174,18 @@ impl Browser {
             let tab = tab
                 .unwrap_or_else(|error| self.failed("a new tab", error))
                 .handle;
-            self.switch_to(&tab).await;
-            let opened = self.client.goto(url).await;
-            opened.unwrap_or_else(|error| self.failed("open the page", error));
+            self.load(&tab, url).await;
             tabs.push(tab);
         }
         self.switch_to(&current).await;
         tabs
+    }
+
+    /// Makes `window` current and loads `url` in it.
+    async fn load(&self, window: &WindowHandle, url: &str) {
+        self.switch_to(window).await;
+        let opened = self.client.goto(url).await;
+        opened.unwrap_or_else(|error| self.failed("open the page", error));
     }
 
     /// Makes `window` the current one, whose page [`Browser::eval`] and the others look at.
