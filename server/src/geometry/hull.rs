@@ -70,20 +70,25 @@ impl ConvexHull {
     /// The convex hull of `mesh` (its referenced vertices), or its bounding box if parry cannot
     /// compute a usable hull. Never fails: a valid [`TriMesh`] always has an enclosing polytope.
     ///
-    /// Cost: the hull computation plus, for mesh vertices that are not hull vertices and lie on or
-    /// outside a face plane, a scan of the faces to measure the tolerance.
+    /// A mesh of many vertices gets the hull of a bounded sample of them ([`hull_candidates`]):
+    /// the pre-check needs a hull that is tight, not exact, and parry's hull grows faster than
+    /// linearly in its input. The vertices the sample misses are covered by the tolerance.
+    ///
+    /// Cost: linear in the mesh's vertices (the sample, the tolerance's face climb per vertex)
+    /// plus the hull of at most [`SAMPLE_CELLS`] points.
     pub fn of(mesh: &TriMesh) -> ConvexHull {
         let used = referenced_vertices(mesh);
         let (lo, hi) = bounds(&used);
         let centre = nalgebra::center(&lo, &hi);
-        parry_hull(&used, centre)
+        let cube = CubeFrame::new(lo, hi);
+        parry_hull(&hull_candidates(&used, &cube), &cube)
             .and_then(|(vertices, faces)| Self::from_faces(&used, vertices, &faces, centre))
             .unwrap_or_else(|| Self::bounding_box(lo, hi))
     }
 
     /// Builds the hull from parry's faces over `vertices` (exact mesh points), measures how far the
     /// `mesh_points` stick out, and checks hill-climbing along the hint directions; `None` if the
-    /// result is unusable.
+    /// result is unusable or its tolerance would take more than linear time to measure.
     fn from_faces(
         mesh_points: &[Point],
         vertices: Vec<Point>,
@@ -97,7 +102,7 @@ impl ConvexHull {
             .flat_map(|[a, b]| [[a, b], [b, a]])
             .collect();
         let hull = Self::with_edges(vertices, &mut edges, centre, HullSource::ConvexHull);
-        let tolerance = containment_tolerance(mesh_points, &hull.vertices, faces, centre);
+        let tolerance = containment_tolerance(mesh_points, &hull.vertices, faces, centre)?;
         let hull = ConvexHull {
             tolerance: tolerance + ROUNDING_SLACK * hull.radius,
             ..hull
@@ -291,15 +296,95 @@ fn bounds(points: &[Point]) -> (Point, Point) {
         .fold((points[0], points[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)))
 }
 
-/// Runs parry's hull on the distinct points (shifted to `centre` and rounded to `f32`) and maps
+/// The number of direction cells [`hull_candidates`] keeps a point of: a cube map of
+/// `SAMPLE_CELLS_PER_EDGE²` cells on each of its six faces.
+const SAMPLE_CELLS: usize = 6 * SAMPLE_CELLS_PER_EDGE * SAMPLE_CELLS_PER_EDGE;
+
+/// Cells along an edge of a cube-map face: the sample's angular resolution is about 90° / this.
+const SAMPLE_CELLS_PER_EDGE: usize = 32;
+
+/// The frame in which the mesh's bounding box is the cube `[-1, 1]³` (an axis of no extent is
+/// scaled as the longest): hulls are computed there, so that parry's `f32` arithmetic and
+/// epsilons see a long or flat part as well-conditioned as a round one, and the sample is as
+/// fine along a part's short axes as along its long one. An affine map keeps the hull's
+/// vertices and faces, so the hull found there is the hull here.
+struct CubeFrame {
+    centre: Point,
+    scale: Vector3<f64>,
+}
+
+impl CubeFrame {
+    fn new(lo: Point, hi: Point) -> CubeFrame {
+        let half = (hi - lo) / 2.0;
+        let longest = half.max();
+        CubeFrame {
+            centre: nalgebra::center(&lo, &hi),
+            scale: half.map(|h| if h > 0.0 { 1.0 / h } else { 1.0 / longest }),
+        }
+    }
+
+    fn map(&self, p: &Point) -> Vector3<f64> {
+        (p - self.centre).component_mul(&self.scale)
+    }
+}
+
+/// The points whose hull is computed: all of them when there are at most [`SAMPLE_CELLS`],
+/// else, for each cell of a cube map of directions in the [`CubeFrame`], the point of that cell
+/// farthest along the cell's central direction. Every hull vertex is then near a sampled one, so
+/// the sampled hull is tight; what it misses, the tolerance covers.
+fn hull_candidates(points: &[Point], cube: &CubeFrame) -> Vec<Point> {
+    if points.len() <= SAMPLE_CELLS {
+        return points.to_vec();
+    }
+    let mut best: Vec<Option<(f64, Point)>> = vec![None; SAMPLE_CELLS];
+    for p in points {
+        let d = cube.map(p);
+        let Some((cell, axis)) = direction_cell(&d) else {
+            continue;
+        };
+        let along = d.dot(&axis);
+        if best[cell].is_none_or(|(value, _)| along > value) {
+            best[cell] = Some((along, *p));
+        }
+    }
+    best.into_iter().flatten().map(|(_, p)| p).collect()
+}
+
+/// The cube-map cell of direction `d` (its largest coordinate picks the face, the other two
+/// divided by it the cell) and the cell's central direction (not normalised: the same scale for
+/// every point of the cell), or `None` for the zero vector.
+fn direction_cell(d: &Vector3<f64>) -> Option<(usize, Vector3<f64>)> {
+    let axis = d.iamax();
+    let major = d[axis];
+    if major == 0.0 {
+        return None;
+    }
+    let face = 2 * axis + usize::from(major < 0.0);
+    let cells = SAMPLE_CELLS_PER_EDGE as f64;
+    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+    let cell_of =
+        |c: f64| (((c / major.abs() + 1.0) * 0.5 * cells) as usize).min(SAMPLE_CELLS_PER_EDGE - 1);
+    let (i, j) = (cell_of(d[u]), cell_of(d[v]));
+    let middle = |k: usize| (k as f64 + 0.5) / cells * 2.0 - 1.0;
+    let mut central = Vector3::zeros();
+    central[axis] = major.signum();
+    central[u] = middle(i);
+    central[v] = middle(j);
+    Some((
+        (face * SAMPLE_CELLS_PER_EDGE + i) * SAMPLE_CELLS_PER_EDGE + j,
+        central,
+    ))
+}
+
+/// Runs parry's hull on the distinct points (in the [`CubeFrame`], rounded to `f32`) and maps
 /// the hull's vertices back to the exact `f64` points; `None` if parry fails.
-fn parry_hull(points: &[Point], centre: Point) -> Option<(Vec<Point>, Vec<[u32; 3]>)> {
+fn parry_hull(points: &[Point], cube: &CubeFrame) -> Option<(Vec<Point>, Vec<[u32; 3]>)> {
     // Adding 0.0 turns -0.0 into 0.0 so that equal points have equal bits.
     let key = |p: &Point3<f32>| p.coords.map(|c| (c + 0.0).to_bits());
     let mut exact_of: HashMap<_, Point> = HashMap::with_capacity(points.len());
     let mut distinct = Vec::with_capacity(points.len());
     for p in points {
-        let rounded = local_point(p, centre);
+        let rounded: Point3<f32> = nalgebra::convert(Point::from(cube.map(p)));
         exact_of.entry(key(&rounded)).or_insert_with(|| {
             distinct.push(rounded);
             *p
@@ -329,17 +414,19 @@ fn parry_hull(points: &[Point], centre: Point) -> Option<(Vec<Point>, Vec<[u32; 
 /// a short climb (mesh points come in spatially coherent order, and each climb starts where the
 /// last ended). A point on or outside that plane gets an upper bound of its distance to the hull.
 /// A hull whose centroid is not well inside every face (flat or degenerate) falls back to testing
-/// every point against every face.
+/// every point against every face, if that takes at most [`EXHAUSTIVE_BUDGET`] tests; else the
+/// answer is `None` and the caller uses the bounding box.
 fn containment_tolerance(
     mesh_points: &[Point],
     vertices: &[Point],
     faces: &[[u32; 3]],
     centre: Point,
-) -> f64 {
+) -> Option<f64> {
     let centroid = centroid_of(vertices);
     let planes = face_planes(vertices, faces, centroid);
     let Some(climb) = FaceClimb::new(&planes, faces, centroid, vertices) else {
-        return exhaustive_tolerance(mesh_points, vertices, faces, centre);
+        return (mesh_points.len().saturating_mul(faces.len()) <= EXHAUSTIVE_BUDGET)
+            .then(|| exhaustive_tolerance(mesh_points, vertices, faces, centre));
     };
     let triangles = local_triangles(vertices, faces, centre);
     let hull_vertices = is_hull_vertex(vertices);
@@ -362,8 +449,12 @@ fn containment_tolerance(
             tolerance = tolerance.max(radial.min(face));
         }
     }
-    tolerance
+    Some(tolerance)
 }
+
+/// The most point-face tests [`exhaustive_tolerance`] may take (a few tenths of a second): a flat
+/// hull of a large mesh gets the bounding box instead.
+const EXHAUSTIVE_BUDGET: usize = 50_000_000;
 
 /// The exact distance version of [`containment_tolerance`]: every point on or outside some face
 /// plane, against every face. Quadratic; for hulls the face climb cannot serve.
@@ -782,11 +873,11 @@ mod tests {
             let points = referenced_vertices(mesh);
             let (lo, hi) = bounds(&points);
             let centre = nalgebra::center(&lo, &hi);
-            let (vertices, faces) = parry_hull(&points, centre).unwrap();
+            let (vertices, faces) = parry_hull(&points, &CubeFrame::new(lo, hi)).unwrap();
             let centroid = centroid_of(&vertices);
             let planes = face_planes(&vertices, &faces, centroid);
             climbed_some |= FaceClimb::new(&planes, &faces, centroid, &vertices).is_some();
-            let climbed = containment_tolerance(&points, &vertices, &faces, centre);
+            let climbed = containment_tolerance(&points, &vertices, &faces, centre).unwrap();
             let exhaustive = exhaustive_tolerance(&points, &vertices, &faces, centre);
             let radius = (hi - lo).norm() / 2.0;
             // A point's distance to the hull is at least how far it is beyond any face plane
@@ -806,6 +897,48 @@ mod tests {
             );
         }
         assert!(climbed_some, "every hull fell back to the exhaustive scan");
+    }
+
+    /// Meshes of more vertices than the sample keeps get the hull of the sample: bounded in size,
+    /// enclosing every vertex with its tolerance, and tight (the tolerance a small fraction of the
+    /// radius) on a sphere, an elongated cylinder, a thin plate and a random cloud.
+    #[test]
+    fn sampled_hulls_of_large_meshes_are_bounded_enclosing_and_tight() {
+        use crate::geometry::shapes::ShapeSpec;
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        let specs = [
+            ShapeSpec::Sphere {
+                radius: 1.0,
+                triangles: 200_000,
+            },
+            ShapeSpec::Cylinder {
+                radius: 0.01,
+                height: 1.0,
+                triangles: 100_000,
+            },
+            ShapeSpec::Box {
+                size: [1.0, 0.6, 0.01],
+                triangles: 100_000,
+            },
+        ];
+        let mut meshes: Vec<(String, TriMesh)> = specs
+            .into_iter()
+            .map(|spec| (format!("{spec:?}"), spec.build().unwrap()))
+            .collect();
+        meshes.push(("cloud".into(), random_cloud(&mut rng, 50_000, false)));
+        for (name, mesh) in &meshes {
+            assert!(mesh.vertices().len() > SAMPLE_CELLS, "{name}");
+            let hull = ConvexHull::of(mesh);
+            assert_eq!(hull.source(), HullSource::ConvexHull, "{name}");
+            assert!(hull.vertices().len() <= SAMPLE_CELLS, "{name}");
+            assert!(
+                hull.tolerance() < 1e-2 * hull.radius(),
+                "{name}: tolerance {} of radius {}",
+                hull.tolerance(),
+                hull.radius()
+            );
+            assert_encloses(&hull, mesh, &mut rng);
+        }
     }
 
     #[test]
