@@ -1,5 +1,12 @@
 //! Top-down construction of a [`DopTree`], with a binned surface heuristic
-//! ([`TreeBuilder::partition`]).
+//! ([`TreeBuilder::partition`]), on all of rayon's threads.
+//!
+//! Two passes. The first ([`TreeBuilder::plan`]) splits the triangles recursively and records
+//! the tree's shape; the second ([`TreeBuilder::fill`]) lays the nodes out (children adjacent,
+//! depth first) and computes each node's bounds bottom-up: a node's DOP is the merge of its
+//! children's, so each level costs O(k) per node rather than a pass over its triangles. Both
+//! passes run the two halves of a large node in parallel; the result does not depend on the
+//! number of threads.
 //!
 //! Every node's offsets are the extremes of its triangles, so every plane touches the geometry (no
 //! completely redundant half-space, the condition of the affine re-alignment).
@@ -7,8 +14,10 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use nalgebra::Point3;
+use rayon::prelude::*;
 
 use super::node_bounds::{NodeBox, NodeSphere};
+use super::separation::BOX_TEST_MAX_TRIANGLES;
 use super::tree::{DopTree, Node};
 use crate::collision::orientation::OrientationSet;
 use crate::collision::triangle::Triangle;
@@ -17,7 +26,14 @@ use crate::geometry::{TriMesh, bounding_sphere_of};
 /// Source of tree ids (0 is never given out: it marks an empty memory slot).
 static NEXT_TREE_ID: AtomicU64 = AtomicU64::new(1);
 
-/// Top-down construction state.
+/// Nodes of at least this many triangles build their two halves in parallel: below it, the
+/// work of a half is too small to pay for handing it to another thread.
+const PARALLEL_MIN_TRIANGLES: usize = 4096;
+
+/// Number of bins per axis of the split heuristic.
+const SPLIT_BINS: usize = 16;
+
+/// What the builder reads: the mesh's triangles with their DOPs and centroids.
 pub(super) struct TreeBuilder<'a> {
     set: &'a OrientationSet,
     leaf_size: usize,
@@ -27,235 +43,437 @@ pub(super) struct TreeBuilder<'a> {
     triangle_dops: Vec<f32>,
     /// Centroid of each triangle, in mesh order.
     centroids: Vec<Point3<f64>>,
-    order: Vec<u32>,
-    nodes: Vec<Node>,
-    parents: Vec<u32>,
-    triangle_ranges: Vec<[u32; 2]>,
-    offsets: Vec<f32>,
+}
+
+/// The shape of a subtree in depth-first order (node, then its left subtree, then its right):
+/// per node, for an inner node the triangles and the nodes of its left subtree, for a leaf
+/// `[0, 0]`.
+type Plan = Vec<[u32; 2]>;
+
+/// The arrays of the tree, per node, for a run of consecutive node indices: the second pass
+/// writes disjoint runs from different threads.
+struct Slots<'s> {
+    /// Index of the run's first node.
+    first: usize,
+    k: usize,
+    nodes: &'s mut [Node],
+    parents: &'s mut [u32],
+    triangle_ranges: &'s mut [[u32; 2]],
+    offsets: &'s mut [f32],
+    boxes: &'s mut [NodeBox],
+}
+
+impl<'s> Slots<'s> {
+    /// The first `count` nodes of the run and the rest.
+    fn split_at(self, count: usize) -> (Slots<'s>, Slots<'s>) {
+        let (nodes, nodes_rest) = self.nodes.split_at_mut(count);
+        let (parents, parents_rest) = self.parents.split_at_mut(count);
+        let (ranges, ranges_rest) = self.triangle_ranges.split_at_mut(count);
+        let (offsets, offsets_rest) = self.offsets.split_at_mut(count * self.k);
+        let (boxes, boxes_rest) = self.boxes.split_at_mut(count);
+        (
+            Slots {
+                first: self.first,
+                k: self.k,
+                nodes,
+                parents,
+                triangle_ranges: ranges,
+                offsets,
+                boxes,
+            },
+            Slots {
+                first: self.first + count,
+                k: self.k,
+                nodes: nodes_rest,
+                parents: parents_rest,
+                triangle_ranges: ranges_rest,
+                offsets: offsets_rest,
+                boxes: boxes_rest,
+            },
+        )
+    }
 }
 
 impl<'a> TreeBuilder<'a> {
     pub(super) fn new(mesh: &TriMesh, set: &'a OrientationSet, leaf_size: usize) -> Self {
         let k = set.k();
         let triangles: Vec<Triangle> = (0..mesh.triangles().len())
+            .into_par_iter()
             .map(|i| mesh.triangle(i))
             .collect();
-        let mut triangle_dops = Vec::with_capacity(triangles.len() * k);
-        for t in &triangles {
-            triangle_dops.extend((0..k).map(|i| {
-                let n = set.normal(i);
-                round_up(t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max))
-            }));
-        }
+        let mut triangle_dops = vec![0.0; triangles.len() * k];
+        triangle_dops
+            .par_chunks_mut(k)
+            .zip(&triangles)
+            .for_each(|(dop, t)| {
+                for (i, d) in dop.iter_mut().enumerate() {
+                    let n = set.normal(i);
+                    *d = round_up(t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max));
+                }
+            });
         let centroids = triangles
-            .iter()
+            .par_iter()
             .map(|t| Point3::from((t[0].coords + t[1].coords + t[2].coords) / 3.0))
             .collect();
         TreeBuilder {
             set,
             leaf_size,
             k,
-            order: (0..triangles.len() as u32).collect(),
             triangles,
             triangle_dops,
             centroids,
-            nodes: Vec::new(),
-            parents: Vec::new(),
-            triangle_ranges: Vec::new(),
-            offsets: Vec::new(),
         }
     }
 
-    pub(super) fn build(mut self) -> DopTree {
-        self.push_nodes(1, 0);
-        self.build_node(0, 0, self.triangles.len());
-        let max_abs_offset = self.offsets[..self.k]
-            .iter()
-            .fold(0.0f32, |m, d| m.max(d.abs()));
+    pub(super) fn build(self) -> DopTree {
+        let k = self.k;
+        let mut order: Vec<u32> = (0..self.triangles.len() as u32).collect();
+        let plan = self.plan(&mut order);
+        let count = plan.len();
+        let mut nodes = vec![Node::default(); count];
+        let mut parents = vec![0u32; count];
+        let mut triangle_ranges = vec![[0u32; 2]; count];
+        let mut offsets = vec![0.0f32; count * k];
+        let mut boxes = vec![NodeBox::default(); count];
+        let (mut root, below) = Slots {
+            first: 0,
+            k,
+            nodes: &mut nodes,
+            parents: &mut parents,
+            triangle_ranges: &mut triangle_ranges,
+            offsets: &mut offsets,
+            boxes: &mut boxes,
+        }
+        .split_at(1);
+        self.fill(&plan, &order, 0, 0, &mut root, below);
+        let max_abs_offset = offsets[..k].iter().fold(0.0f32, |m, d| m.max(d.abs()));
         let (bounding_centre, radius) = bounding_sphere_of(self.triangles.iter().flatten());
-        let boxes = self
-            .triangle_ranges
-            .iter()
-            .map(|&[start, end]| {
-                NodeBox::around(&self.triangles, &self.order[start as usize..end as usize])
-            })
-            .collect();
         DopTree {
             id: NEXT_TREE_ID.fetch_add(1, Ordering::Relaxed),
             bounding_centre,
             bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
             set: self.set.clone(),
-            k: self.k,
-            nodes: self.nodes.into(),
-            parents: self.parents.into(),
-            triangle_ranges: self.triangle_ranges.into(),
-            offsets: self.offsets.into(),
-            triangles: self
-                .order
-                .iter()
+            k,
+            nodes: nodes.into(),
+            parents: parents.into(),
+            triangle_ranges: triangle_ranges.into(),
+            offsets: offsets.into(),
+            triangles: order
+                .par_iter()
                 .map(|&i| self.triangles[i as usize])
                 .collect(),
-            triangle_ids: self.order.into(),
+            triangle_ids: order.into(),
             max_abs_offset,
-            boxes,
+            boxes: boxes.into(),
         }
     }
 
-    /// Appends `count` nodes, children of `parent`; returns the index of the first.
-    fn push_nodes(&mut self, count: usize, parent: usize) -> usize {
-        let first = self.nodes.len();
-        for _ in 0..count {
-            self.parents.push(parent as u32);
-            self.triangle_ranges.push([0, 0]);
-            self.nodes.push(Node {
-                first: 0,
-                count: 0,
-                size: 0.0,
-                sphere: NodeSphere::default(),
-            });
+    /// Splits `order` (triangle indices) recursively until at most `leaf_size` remain, leaving
+    /// it in leaf order, and returns the tree's shape.
+    fn plan(&self, order: &mut [u32]) -> Plan {
+        if order.len() <= self.leaf_size {
+            return vec![[0, 0]];
         }
-        self.offsets.resize(self.nodes.len() * self.k, 0.0);
-        first
-    }
-
-    fn build_node(&mut self, index: usize, start: usize, end: usize) {
-        let k = self.k;
-        let h = k / 2;
-        let mut dop = vec![f32::MIN; k];
-        for &t in &self.order[start..end] {
-            let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
-            merge_max(&mut dop, support);
-        }
-        self.offsets[index * k..(index + 1) * k].copy_from_slice(&dop);
-        self.triangle_ranges[index] = [start as u32, end as u32];
-        let sphere = NodeSphere::around(
-            self.order[start..end]
-                .iter()
-                .flat_map(|&t| &self.triangles[t as usize]),
-        );
-        let size = (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max);
-        let count = end - start;
-        if count <= self.leaf_size {
-            self.nodes[index] = Node {
-                first: start as u32,
-                count: count as u32,
-                size,
-                sphere,
-            };
-            return;
-        }
-        let mid = self.partition(start, end);
-        let children = self.push_nodes(2, index);
-        self.nodes[index] = Node {
-            first: children as u32,
-            count: 0,
-            size,
-            sphere,
+        let parallel = order.len() >= PARALLEL_MIN_TRIANGLES;
+        let mid = self.partition(order);
+        let (left, right) = order.split_at_mut(mid);
+        let (left_plan, right_plan) = if parallel {
+            rayon::join(|| self.plan(left), || self.plan(right))
+        } else {
+            (self.plan(left), self.plan(right))
         };
-        self.build_node(children, start, mid);
-        self.build_node(children + 1, mid, end);
+        let mut plan = Vec::with_capacity(1 + left_plan.len() + right_plan.len());
+        plan.push([mid as u32, left_plan.len() as u32]);
+        plan.extend(left_plan);
+        plan.extend(right_plan);
+        plan
     }
 
-    /// Splits `order[start..end]` in two non-empty halves and returns where the second begins.
+    /// Writes the node of `plan[0]` (triangles `order`, which start at `start` in leaf order;
+    /// parent `parent`) into `slot`, and its descendants into `below`, the run that follows
+    /// it: its two children first, then the left child's descendants, then the right's.
+    fn fill(
+        &self,
+        plan: &[[u32; 2]],
+        order: &[u32],
+        start: usize,
+        parent: usize,
+        slot: &mut Slots<'_>,
+        below: Slots<'_>,
+    ) {
+        let k = self.k;
+        let index = slot.first;
+        let [left_triangles, left_nodes] = plan[0];
+        let first = if left_nodes == 0 {
+            let dop = &mut slot.offsets[..k];
+            dop.fill(f32::MIN);
+            for &t in order {
+                merge_max(
+                    dop,
+                    &self.triangle_dops[t as usize * k..(t as usize + 1) * k],
+                );
+            }
+            start
+        } else {
+            let (left_triangles, left_nodes) = (left_triangles as usize, left_nodes as usize);
+            let children = below.first;
+            let (pair, descendants) = below.split_at(2);
+            let (mut left, mut right) = pair.split_at(1);
+            let (left_below, right_below) = descendants.split_at(left_nodes - 1);
+            let (left_plan, right_plan) = plan[1..].split_at(left_nodes);
+            let (left_order, right_order) = order.split_at(left_triangles);
+            let right_start = start + left_triangles;
+            let fill_left =
+                || self.fill(left_plan, left_order, start, index, &mut left, left_below);
+            let fill_right = || {
+                self.fill(
+                    right_plan,
+                    right_order,
+                    right_start,
+                    index,
+                    &mut right,
+                    right_below,
+                )
+            };
+            if order.len() >= PARALLEL_MIN_TRIANGLES {
+                rayon::join(fill_left, fill_right);
+            } else {
+                fill_left();
+                fill_right();
+            }
+            let dop = &mut slot.offsets[..k];
+            dop.copy_from_slice(&left.offsets[..k]);
+            merge_max(dop, &right.offsets[..k]);
+            children
+        };
+        let dop = &slot.offsets[..k];
+        let h = k / 2;
+        slot.nodes[0] = Node {
+            first: first as u32,
+            count: if left_nodes == 0 {
+                order.len() as u32
+            } else {
+                0
+            },
+            size: (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max),
+            sphere: NodeSphere::around(order.iter().flat_map(|&t| &self.triangles[t as usize])),
+        };
+        slot.parents[0] = parent as u32;
+        slot.triangle_ranges[0] = [start as u32, (start + order.len()) as u32];
+        if order.len() <= BOX_TEST_MAX_TRIANGLES {
+            slot.boxes[0] = NodeBox::around(&self.triangles, order);
+        }
+    }
+
+    /// Splits `order` in two non-empty halves and returns where the second begins.
     ///
     /// Binned surface heuristic: along each orientation axis the centroids are put in
     /// [`SPLIT_BINS`] bins, and the split between bins minimising
     /// `size(left) * count(left) + size(right) * count(right)` is taken, where `size` is the sum of
     /// the child DOP's slab widths (proportional to its mean width, hence to how often a node of
-    /// the other tree overlaps it). Falls back to the median when all centroids share a bin.
-    fn partition(&mut self, start: usize, end: usize) -> usize {
-        let k = self.k;
-        let h = k / 2;
-        // (cost, axis, lowest projection, bins per unit length, first bin of the right side)
-        let mut best: Option<(f64, usize, f64, f64, usize)> = None;
-        let mut bin_dops = vec![f32::MIN; SPLIT_BINS * k];
-        let mut bin_counts = [0usize; SPLIT_BINS];
-        let mut left_dops = vec![f32::MIN; SPLIT_BINS * k];
-        // Centroid extent along every axis.
-        let spreads: Vec<(usize, f64, f64)> = self
-            .set
-            .axes()
-            .iter()
-            .enumerate()
-            .map(|(i, axis)| {
-                let (lo, hi) = self.order[start..end]
-                    .iter()
-                    .map(|&t| axis.dot(&self.centroids[t as usize].coords))
-                    .fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
-                (i, lo, hi)
-            })
-            .collect();
+    /// the other tree overlaps it); ties go to the first axis. Falls back to the median when all
+    /// centroids share a bin.
+    fn partition(&self, order: &mut [u32]) -> usize {
         // Few triangles: as many bins as triangles keeps the cost linear in their number.
-        let bins = SPLIT_BINS.min(end - start);
-        for &(axis_index, lo, hi) in &spreads {
-            let axis = self.set.axes()[axis_index];
-            if hi - lo <= 1e-12 * (hi.abs() + lo.abs() + 1.0) {
-                continue;
-            }
-            let scale = bins as f64 / (hi - lo);
-            bin_dops[..bins * k].fill(f32::MIN);
-            bin_counts.fill(0);
-            for &t in &self.order[start..end] {
-                let bin = bin_of(
-                    axis.dot(&self.centroids[t as usize].coords),
-                    lo,
-                    scale,
-                    bins,
-                );
-                bin_counts[bin] += 1;
-                let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
-                merge_max(&mut bin_dops[bin * k..(bin + 1) * k], support);
-            }
-            // Prefix DOPs from the left, then sweep from the right.
-            let mut running = vec![f32::MIN; k];
-            for bin in 0..bins {
-                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
-                left_dops[bin * k..(bin + 1) * k].copy_from_slice(&running);
-            }
-            let size = |dop: &[f32]| (0..h).map(|i| (dop[i] + dop[i + h]) as f64).sum::<f64>();
-            running.fill(f32::MIN);
-            let mut right_count = 0;
-            for bin in (1..bins).rev() {
-                merge_max(&mut running, &bin_dops[bin * k..(bin + 1) * k]);
-                right_count += bin_counts[bin];
-                let left_count = (end - start) - right_count;
-                if left_count == 0 || right_count == 0 {
-                    continue;
-                }
-                let cost = size(&left_dops[(bin - 1) * k..bin * k]) * left_count as f64
-                    + size(&running) * right_count as f64;
-                if best.is_none_or(|b| cost < b.0) {
-                    best = Some((cost, axis_index, lo, scale, bin));
-                }
-            }
-        }
-        let Some((_, axis_index, lo, scale, split_bin)) = best else {
-            let mid = start + (end - start) / 2;
+        let bins = SPLIT_BINS.min(order.len());
+        let Some(split) = self.best_split(order, bins) else {
+            let mid = order.len() / 2;
             let axis = self.set.axes()[0];
             let centroids = &self.centroids;
-            self.order[start..end].select_nth_unstable_by(mid - start, |a, b| {
+            order.select_nth_unstable_by(mid, |a, b| {
                 axis.dot(&centroids[*a as usize].coords)
                     .total_cmp(&axis.dot(&centroids[*b as usize].coords))
             });
             return mid;
         };
-        let axis = self.set.axes()[axis_index];
-        let mut boundary = start;
-        for i in start..end {
-            let t = self.order[i];
-            if bin_of(
-                axis.dot(&self.centroids[t as usize].coords),
-                lo,
-                scale,
-                bins,
-            ) < split_bin
-            {
-                self.order.swap(i, boundary);
+        let axis = self.set.axes()[split.axis];
+        let mut boundary = 0;
+        for i in 0..order.len() {
+            let t = order[i];
+            let x = axis.dot(&self.centroids[t as usize].coords);
+            if bin_of(x, split.ranges[split.axis], bins) < split.bin {
+                order.swap(i, boundary);
                 boundary += 1;
             }
         }
         boundary
     }
+
+    /// The cheapest split of `order` over all axes, or `None` when the centroids spread along
+    /// none. Two passes over the triangles, each serving every axis at once (the triangles'
+    /// data is read once a pass, not once an axis); a large node's passes run in parallel over
+    /// chunks of its triangles.
+    fn best_split(&self, order: &[u32], bins: usize) -> Option<Split> {
+        let h = self.set.axes().len();
+        let parallel = order.len() >= PARALLEL_MIN_TRIANGLES;
+        let spread = |chunk: &[u32]| {
+            let mut range = vec![(f64::MAX, f64::MIN); h];
+            for &t in chunk {
+                let c = &self.centroids[t as usize].coords;
+                for (axis, (lo, hi)) in self.set.axes().iter().zip(&mut range) {
+                    let x = axis.dot(c);
+                    *lo = lo.min(x);
+                    *hi = hi.max(x);
+                }
+            }
+            range
+        };
+        let widen = |mut a: Vec<(f64, f64)>, b: Vec<(f64, f64)>| {
+            for ((lo, hi), (l, h)) in a.iter_mut().zip(b) {
+                *lo = lo.min(l);
+                *hi = hi.max(h);
+            }
+            a
+        };
+        let spreads = if parallel {
+            order
+                .par_chunks(PARALLEL_MIN_TRIANGLES)
+                .map(spread)
+                .reduce_with(widen)?
+        } else {
+            spread(order)
+        };
+        let ranges: Vec<Option<AxisRange>> = spreads
+            .iter()
+            .map(|&(lo, hi)| {
+                (hi - lo > 1e-12 * (hi.abs() + lo.abs() + 1.0)).then(|| AxisRange {
+                    lo,
+                    scale: bins as f64 / (hi - lo),
+                })
+            })
+            .collect();
+        let binned = if parallel {
+            order
+                .par_chunks(PARALLEL_MIN_TRIANGLES)
+                .map(|chunk| self.bin(chunk, &ranges, bins))
+                .reduce_with(Bins::merge)?
+        } else {
+            self.bin(order, &ranges, bins)
+        };
+        let mut best: Option<Split> = None;
+        for (axis, range) in ranges.iter().enumerate() {
+            if range.is_none() {
+                continue;
+            }
+            if let Some((cost, bin)) = binned.cheapest_split(axis, order.len())
+                && best.as_ref().is_none_or(|b| cost < b.cost)
+            {
+                best = Some(Split {
+                    cost,
+                    axis,
+                    ranges: ranges.iter().map(|r| r.unwrap_or_default()).collect(),
+                    bin,
+                });
+            }
+        }
+        best
+    }
+
+    /// The triangles of `chunk` counted and merged into their bins along every axis that has
+    /// a range.
+    fn bin(&self, chunk: &[u32], ranges: &[Option<AxisRange>], bins: usize) -> Bins {
+        let k = self.k;
+        let mut binned = Bins::new(ranges.len(), bins, k);
+        for &t in chunk {
+            let c = &self.centroids[t as usize].coords;
+            let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
+            for (axis, range) in ranges.iter().enumerate() {
+                let Some(range) = range else { continue };
+                let bin = bin_of(self.set.axes()[axis].dot(c), *range, bins);
+                binned.add(axis, bin, support);
+            }
+        }
+        binned
+    }
+}
+
+/// Where the centroids of a node lie along one axis, for binning.
+#[derive(Debug, Clone, Copy, Default)]
+struct AxisRange {
+    /// The lowest centroid projection.
+    lo: f64,
+    /// Bins per unit length.
+    scale: f64,
+}
+
+/// Per axis and bin, how many triangles fell in it and the merge of their DOPs.
+struct Bins {
+    bins: usize,
+    k: usize,
+    counts: Vec<usize>,
+    dops: Vec<f32>,
+}
+
+impl Bins {
+    fn new(axes: usize, bins: usize, k: usize) -> Bins {
+        Bins {
+            bins,
+            k,
+            counts: vec![0; axes * bins],
+            dops: vec![f32::MIN; axes * bins * k],
+        }
+    }
+
+    fn add(&mut self, axis: usize, bin: usize, support: &[f32]) {
+        let slot = axis * self.bins + bin;
+        self.counts[slot] += 1;
+        merge_max(&mut self.dops[slot * self.k..(slot + 1) * self.k], support);
+    }
+
+    fn merge(mut self, other: Bins) -> Bins {
+        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
+            *a += b;
+        }
+        merge_max(&mut self.dops, &other.dops);
+        self
+    }
+
+    /// The cheapest split between bins along `axis` of a node of `total` triangles: its cost
+    /// and the first bin of the right side, or `None` if every split leaves a side empty.
+    fn cheapest_split(&self, axis: usize, total: usize) -> Option<(f64, usize)> {
+        let (bins, k) = (self.bins, self.k);
+        let h = k / 2;
+        let dop = |bin: usize| {
+            let slot = axis * bins + bin;
+            &self.dops[slot * k..(slot + 1) * k]
+        };
+        // Prefix DOPs from the left, then sweep from the right.
+        let mut left_dops = vec![f32::MIN; bins * k];
+        let mut running = vec![f32::MIN; k];
+        for bin in 0..bins {
+            merge_max(&mut running, dop(bin));
+            left_dops[bin * k..(bin + 1) * k].copy_from_slice(&running);
+        }
+        let size = |dop: &[f32]| (0..h).map(|i| (dop[i] + dop[i + h]) as f64).sum::<f64>();
+        running.fill(f32::MIN);
+        let mut right_count = 0;
+        let mut best: Option<(f64, usize)> = None;
+        for bin in (1..bins).rev() {
+            merge_max(&mut running, dop(bin));
+            right_count += self.counts[axis * bins + bin];
+            let left_count = total - right_count;
+            if left_count == 0 || right_count == 0 {
+                continue;
+            }
+            let cost = size(&left_dops[(bin - 1) * k..bin * k]) * left_count as f64
+                + size(&running) * right_count as f64;
+            if best.is_none_or(|b| cost < b.0) {
+                best = Some((cost, bin));
+            }
+        }
+        best
+    }
+}
+
+/// A candidate split of a node: centroids in bins `< bin` along orientation axis `axis` go
+/// left.
+#[derive(Debug, Clone)]
+struct Split {
+    cost: f64,
+    axis: usize,
+    /// The binning of every axis (default where the centroids do not spread).
+    ranges: Vec<AxisRange>,
+    bin: usize,
 }
 
 /// `into[i] = max(into[i], from[i])`, written so that it compiles to vector max instructions.
@@ -265,12 +483,9 @@ fn merge_max(into: &mut [f32], from: &[f32]) {
     }
 }
 
-/// Number of bins per axis of the split heuristic.
-const SPLIT_BINS: usize = 16;
-
-/// The bin of a centroid projection `x` on an axis whose projections start at `lo`.
-fn bin_of(x: f64, lo: f64, scale: f64, bins: usize) -> usize {
-    (((x - lo) * scale) as usize).min(bins - 1)
+/// The bin of a centroid projection `x` on an axis binned as `range`.
+fn bin_of(x: f64, range: AxisRange, bins: usize) -> usize {
+    (((x - range.lo) * range.scale) as usize).min(bins - 1)
 }
 
 /// The smallest `f32` not below `x`.

@@ -23,7 +23,7 @@ pub const DEFAULT_LEAF_SIZE: usize = 1;
 
 /// One tree node: a leaf (`count > 0`) owns triangles `first..first + count`; an inner node
 /// (`count == 0`) has children `first` and `first + 1`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Node {
     pub(super) first: u32,
     pub(super) count: u32,
@@ -63,7 +63,9 @@ pub struct DopTree {
     pub(super) triangle_ids: Arc<[u32]>,
     /// Largest absolute offset in the tree (bounds rounding errors of re-alignment).
     pub(super) max_abs_offset: f32,
-    /// An oriented box around each node's triangles (see [`NodeBox`]).
+    /// An oriented box around the triangles of each node of at most
+    /// [`BOX_TEST_MAX_TRIANGLES`](super::separation::BOX_TEST_MAX_TRIANGLES) triangles (see
+    /// [`NodeBox`]); larger nodes, whose boxes the traversal never reads, have none.
     pub(super) boxes: Arc<[NodeBox]>,
     /// Centre and radius of a sphere enclosing the mesh (for the cheap first test of a query).
     pub(super) bounding_centre: Point3<f64>,
