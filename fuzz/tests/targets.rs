@@ -71,7 +71,11 @@ fn gltf_mesh() {
         };
         for part in file.parts() {
             assert!(is_finite(&part.pose), "{}: {}", part.name, part.pose);
-            assert!((part.pose.rotation.norm() - 1.0).abs() < 1e-9, "{}", part.name);
+            assert!(
+                (part.pose.rotation.norm() - 1.0).abs() < 1e-9,
+                "{}",
+                part.name
+            );
             if let Ok(mesh) = file.mesh(part.mesh, &part.shape) {
                 check_mesh(&mesh);
             }

@@ -152,10 +152,11 @@ pub struct Part {
     pub name: String,
     /// The geometry in the part's own frame (shared between parts that use the same source).
     pub mesh: Arc<TriMesh>,
-    /// Where the mesh came from: the resolved file path, or `shape:KIND:...` for a procedural
-    /// shape.
+    /// Where the mesh came from: the resolved file path, `<file>#/nodes/<index>` for a node of
+    /// an assembly, or `shape:KIND:...` for a procedural shape.
     pub mesh_source: String,
-    /// The uniform scale the config applies to a mesh file (1 for shapes), already applied to
+    /// The uniform scale the config applies to a mesh file (1 for shapes, and for an
+    /// assembly's parts, whose scales from the file are baked in), already applied to
     /// [`Part::mesh`].
     pub scale: f64,
     /// Initial pose of the part's frame in the world.

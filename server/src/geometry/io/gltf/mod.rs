@@ -95,7 +95,8 @@ impl<'a> GltfFile<'a> {
     /// The mesh nodes of the scene as parts, in the order of the scene graph's walk (depth
     /// first, roots and children in order), named by [`parts::unique_names`] (`<file
     /// stem>/node<index>` for a node without a name). Nodes whose mesh has no triangle
-    /// primitive, and nodes scaled to nothing (a zero scale), are left out with a warning.
+    /// primitive, and nodes scaled to nothing (a zero scale) or beyond any size, are left out
+    /// with a warning.
     pub fn parts(&self) -> Vec<GltfPart> {
         let stem = self
             .path
@@ -113,7 +114,7 @@ impl<'a> GltfFile<'a> {
                 continue;
             }
             let Some((pose, shape)) = parts::split_world(&node.world) else {
-                tracing::warn!(file = %self.path.display(), node = name, "a node scaled to nothing is not a part");
+                tracing::warn!(file = %self.path.display(), node = name, "a node scaled to nothing (or beyond any size) is not a part");
                 continue;
             };
             parts.push(GltfPart {

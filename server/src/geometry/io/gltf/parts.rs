@@ -3,7 +3,7 @@
 
 use std::collections::HashSet;
 
-use nalgebra::{Isometry3, Matrix3, Matrix4, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 /// A mesh node of a glTF file as a part: where it is and what its mesh becomes.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,7 +33,8 @@ impl GltfPart {
 }
 
 /// Splits an affine world transform into a rotation and translation, and the linear map left
-/// (`world = pose × shape`); `None` when the transform collapses a direction (a zero scale).
+/// (`world = pose × shape`); `None` when the transform collapses a direction (a zero scale) or
+/// is too large to decompose.
 ///
 /// The rotation is that of the polar decomposition of the linear part. A mirroring transform
 /// (negative determinant) has no rotation of its own: it is taken as the mirror in the part's
@@ -42,14 +43,21 @@ pub(super) fn split_world(world: &Matrix4<f64>) -> Option<(Isometry3<f64>, Matri
     let linear: Matrix3<f64> = world.fixed_view::<3, 3>(0, 0).into();
     let svd = linear.svd(true, true);
     let (largest, smallest) = (svd.singular_values.max(), svd.singular_values.min());
-    if smallest <= largest * 1e-12 {
+    // Not finite: a transform so large that its squares overflow (no mesh fits under it).
+    if !largest.is_finite() || smallest <= largest * 1e-12 {
         return None;
     }
     let mut orthogonal = svd.u? * svd.v_t?;
     if orthogonal.determinant() < 0.0 {
         orthogonal.set_column(0, &-orthogonal.column(0));
     }
-    let rotation = UnitQuaternion::from_matrix(&orthogonal);
+    // Orthogonal to rounding: the direct conversion, renormalised (no iteration).
+    let rotation =
+        UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(orthogonal));
+    let rotation = UnitQuaternion::new_normalize(rotation.into_inner());
+    if !rotation.coords.iter().all(|c| c.is_finite()) {
+        return None;
+    }
     let shape = rounded(&(rotation.to_rotation_matrix().matrix().transpose() * linear));
     let translation = Translation3::from(Vector3::new(world[(0, 3)], world[(1, 3)], world[(2, 3)]));
     Some((Isometry3::from_parts(translation, rotation), shape))
