@@ -13,10 +13,10 @@ const TRIANGLE: usize = 50;
 /// Parses binary or ASCII STL with stl_io (which merges bit-identical vertices); a binary file
 /// whose header counts more than `max_triangles` is refused before it is read.
 pub(super) fn parse_stl(bytes: &[u8], max_triangles: u64) -> Result<RawMesh, ContentError> {
-    if let Some(count) = binary_stl_count(bytes)? {
-        if count > max_triangles {
-            return Err(ContentError::TooManyTriangles(count));
-        }
+    if let Some(count) = binary_stl_count(bytes)?
+        && count > max_triangles
+    {
+        return Err(ContentError::TooManyTriangles(count));
     }
     let stl = stl_io::read_stl(&mut Cursor::new(bytes))
         .map_err(|e| format!("not a valid STL file: {e}"))?;

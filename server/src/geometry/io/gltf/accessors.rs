@@ -27,7 +27,7 @@ impl<'a> Elements<'a> {
 }
 
 /// Accessor `index` of `document`, as a reader names it in errors.
-pub(super) fn accessor<'d>(document: &'d Document, index: usize) -> Result<&'d Accessor, String> {
+pub(super) fn accessor(document: &Document, index: usize) -> Result<&Accessor, String> {
     document.accessors.get(index).ok_or_else(|| {
         format!(
             "accessor {index} does not exist (the file has {})",

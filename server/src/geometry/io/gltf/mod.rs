@@ -16,6 +16,7 @@ mod primitives;
 
 use std::borrow::Cow;
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix3, Matrix4, Point3};
@@ -149,11 +150,13 @@ impl<'a> GltfFile<'a> {
         let mut counts = HashMap::new();
         let mut total = 0u64;
         for node in &self.nodes {
-            if !counts.contains_key(&node.mesh) {
-                let count = primitives::triangle_count(&self.document, node.mesh)?;
-                counts.insert(node.mesh, count);
-            }
-            total = total.saturating_add(counts[&node.mesh]);
+            let count = match counts.entry(node.mesh) {
+                Entry::Occupied(known) => *known.get(),
+                Entry::Vacant(slot) => {
+                    *slot.insert(primitives::triangle_count(&self.document, node.mesh)?)
+                }
+            };
+            total = total.saturating_add(count);
         }
         if total > max_triangles {
             return Err(ContentError::TooManyTriangles(total));
@@ -161,11 +164,14 @@ impl<'a> GltfFile<'a> {
         let mut meshes: HashMap<usize, RawMesh> = HashMap::new();
         let mut whole = (Vec::new(), Vec::new());
         for node in &self.nodes {
-            if !meshes.contains_key(&node.mesh) {
-                let mesh = primitives::mesh_triangles(&self.document, &self.buffers, node.mesh)?;
-                meshes.insert(node.mesh, mesh);
-            }
-            let (vertices, triangles) = &meshes[&node.mesh];
+            let (vertices, triangles) = match meshes.entry(node.mesh) {
+                Entry::Occupied(known) => known.into_mut(),
+                Entry::Vacant(slot) => slot.insert(primitives::mesh_triangles(
+                    &self.document,
+                    &self.buffers,
+                    node.mesh,
+                )?),
+            };
             append_placed(&mut whole, vertices, triangles, &node.world);
         }
         Ok(whole)
