@@ -412,3 +412,57 @@ fn every_prefix_of_the_fixtures_loads_or_fails_cleanly() {
         }
     }
 }
+
+/// `bytes` with each `(position, value)` applied: a digit is replaced by another digit (so that
+/// JSON stays JSON and its indices, counts and offsets change), any other byte by `value`.
+fn mutated(bytes: &[u8], edits: &[(usize, u8)]) -> Vec<u8> {
+    let mut bytes = bytes.to_vec();
+    for &(position, value) in edits {
+        let at = position % bytes.len();
+        bytes[at] = if bytes[at].is_ascii_digit() {
+            b'0' + value % 10
+        } else {
+            value
+        };
+    }
+    bytes
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
+
+    /// Edited fixtures load or fail cleanly, as one mesh and as an assembly's parts, and what
+    /// loads keeps its promises: finite poses, meshes within their bounds.
+    #[test]
+    fn edited_files_never_panic(
+        edits in proptest::collection::vec((0usize..1 << 20, proptest::prelude::any::<u8>()), 1..6),
+    ) {
+        use vas_server::geometry::{GltfFile, mesh_from_bytes};
+        let (document, bin) = gltf_document(&SQUARE, &[0, 1, 2, 0, 2, 3], 4, json!({ "scale": [1.0, 2.0, 3.0] }));
+        let mut document = document;
+        use base64::Engine as _;
+        let uri = format!("data:;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+        document["buffers"][0]["uri"] = json!(uri);
+        let json_file = serde_json::to_vec(&document).unwrap();
+        let sources = [
+            ("edited.gltf", json_file),
+            ("edited.glb", std::fs::read(fixture("assembly.glb")).unwrap()),
+            ("edited.ply", std::fs::read(fixture("part_binary.ply")).unwrap()),
+            ("edited.ply", std::fs::read(fixture("part_ascii.ply")).unwrap()),
+        ];
+        for (name, bytes) in sources {
+            let path = fixture(name);
+            let bytes = mutated(&bytes, &edits);
+            if let Ok(mesh) = mesh_from_bytes(&path, &bytes) {
+                proptest::prop_assert!(mesh.vertices().iter().all(|v| v.iter().all(|c| c.is_finite())));
+            }
+            if !name.ends_with(".ply") && let Ok(file) = GltfFile::parse(&path, &bytes, &FileLimits::default()) {
+                for part in file.parts() {
+                    proptest::prop_assert!(part.pose.translation.vector.iter().all(|c| c.is_finite()));
+                    proptest::prop_assert!((part.pose.rotation.norm() - 1.0).abs() < 1e-9);
+                    let _ = file.mesh(part.mesh, &part.shape);
+                }
+            }
+        }
+    }
+}
