@@ -1,4 +1,5 @@
-//! Triangle meshes: the mesh type, loading (OBJ, STL, PLY, glTF), welding, adjacency, convex hulls and procedural shapes.
+//! Triangle meshes: the mesh type, loading (OBJ, STL, PLY, glTF), welding, adjacency, convex
+//! hulls and procedural shapes.
 
 pub mod adjacency;
 pub mod hull;

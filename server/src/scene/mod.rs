@@ -799,8 +799,8 @@ impl Loader<'_> {
         self.invalid(
             key,
             format!(
-                "part {name:?} needs at least {count} triangles, but the scene's limit of {} triangles \
-                 (--max-scene-triangles) leaves {} after the parts before it",
+                "part {name:?} needs at least {count} triangles, but the scene's limit of {} \
+                 triangles (--max-scene-triangles) leaves {} after the parts before it",
                 self.limits.scene_triangles,
                 self.triangles_left()
             ),

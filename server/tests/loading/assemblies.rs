@@ -310,7 +310,9 @@ fn bad_assemblies_are_refused_with_the_key_and_the_reason() {
     );
     let clash = load_beside_the_fixtures(
         "clash",
-        "name = \"s\"\n[[parts]]\nname = \"sphere_0_2\"\nshape = { kind = \"sphere\", radius = 0.1, triangles = 100 }\nposition = [5.0, 0.0, 0.0]\n[[assemblies]]\nfile = \"assembly.glb\"\n",
+        "name = \"s\"\n[[parts]]\nname = \"sphere_0_2\"\n\
+         shape = { kind = \"sphere\", radius = 0.1, triangles = 100 }\n\
+         position = [5.0, 0.0, 0.0]\n[[assemblies]]\nfile = \"assembly.glb\"\n",
         &limits,
     )
     .unwrap_err();

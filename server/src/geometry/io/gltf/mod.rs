@@ -109,13 +109,21 @@ impl<'a> GltfFile<'a> {
         let names = parts::unique_names(&stem, &named);
         let mut parts = Vec::with_capacity(self.nodes.len());
         for (node, name) in self.nodes.iter().zip(names) {
-            let surfaces = self.document.meshes[node.mesh].primitives.iter();
-            if !surfaces.clone().any(primitives::has_triangles) {
-                tracing::warn!(file = %self.path.display(), node = name, "a node whose mesh has no triangles is not a part");
+            let mesh_primitives = &self.document.meshes[node.mesh].primitives;
+            if !mesh_primitives.iter().any(primitives::has_triangles) {
+                tracing::warn!(
+                    file = %self.path.display(),
+                    node = name,
+                    "a node whose mesh has no triangles is not a part"
+                );
                 continue;
             }
             let Some((pose, shape)) = parts::split_world(&node.world) else {
-                tracing::warn!(file = %self.path.display(), node = name, "a node scaled to nothing (or beyond any size) is not a part");
+                tracing::warn!(
+                    file = %self.path.display(),
+                    node = name,
+                    "a node scaled to nothing (or beyond any size) is not a part"
+                );
                 continue;
             };
             parts.push(GltfPart {
