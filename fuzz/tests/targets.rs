@@ -20,7 +20,7 @@ use vas_protocol::{
 };
 use vas_server::collision::orientation::SUPPORTED_K;
 use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
-use vas_server::geometry::{FileLimits, TriMesh, load_mesh, mesh_from_bytes};
+use vas_server::geometry::{FileLimits, GltfFile, TriMesh, load_mesh, mesh_from_bytes};
 use vas_server::grasping::HandModel;
 use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
 use vas_server::runtime::inputs::Inputs;
@@ -50,6 +50,37 @@ fn stl_ascii_mesh() {
 #[test]
 fn stl_binary_mesh() {
     bolero::check!().for_each(|bytes: &[u8]| mesh_file("fuzz.stl", bytes));
+}
+
+/// The PLY reader, seeded with ASCII, little-endian and big-endian files.
+#[test]
+fn ply_mesh() {
+    bolero::check!().for_each(|bytes: &[u8]| mesh_file("fuzz.ply", bytes));
+}
+
+/// The glTF reader (JSON or binary, told apart by the GLB magic), seeded with GLB files and a
+/// JSON file with a `data:` buffer: as one mesh, and as an assembly's parts, whose poses must be
+/// finite with unit rotations and whose baked meshes must keep `TriMesh`'s promise.
+#[test]
+fn gltf_mesh() {
+    let path = configs_dir().join("fuzz.gltf");
+    bolero::check!().for_each(|bytes: &[u8]| {
+        mesh_file("fuzz.gltf", bytes);
+        let Ok(file) = GltfFile::parse(&path, bytes, &FileLimits::default()) else {
+            return;
+        };
+        for part in file.parts() {
+            assert!(is_finite(&part.pose), "{}: {}", part.name, part.pose);
+            assert!(
+                (part.pose.rotation.norm() - 1.0).abs() < 1e-9,
+                "{}",
+                part.name
+            );
+            if let Ok(mesh) = file.mesh(part.mesh, &part.shape) {
+                check_mesh(&mesh);
+            }
+        }
+    });
 }
 
 /// The most triangles the procedural shapes of one fuzzed scene may ask for. Up to

@@ -63,7 +63,8 @@ enum Command {
     },
 }
 
-/// The largest files a scene load reads; larger ones are refused with their size.
+/// The largest files a scene load reads (larger ones are refused with their size) and the most
+/// triangles it takes.
 #[derive(Debug, Args)]
 struct LimitArgs {
     /// The largest mesh file, in bytes or with a unit (KiB, MiB, GiB).
@@ -72,6 +73,9 @@ struct LimitArgs {
     /// The largest scene or hand config file, in bytes or with a unit (KiB, MiB, GiB).
     #[arg(long, value_name = "SIZE", default_value = "16MiB", value_parser = parse_size)]
     max_config_file: u64,
+    /// The most triangles of a scene's parts together (shapes and files alike).
+    #[arg(long, value_name = "N", default_value_t = FileLimits::default().scene_triangles)]
+    max_scene_triangles: u64,
 }
 
 impl LimitArgs {
@@ -79,6 +83,7 @@ impl LimitArgs {
         FileLimits {
             mesh_bytes: self.max_mesh_file,
             config_bytes: self.max_config_file,
+            scene_triangles: self.max_scene_triangles,
         }
     }
 }

@@ -1,4 +1,5 @@
-//! Triangle meshes: the mesh type, loading, welding, adjacency, convex hulls and procedural shapes.
+//! Triangle meshes: the mesh type, loading (OBJ, STL, PLY, glTF), welding, adjacency, convex
+//! hulls and procedural shapes.
 
 pub mod adjacency;
 pub mod hull;
@@ -10,8 +11,9 @@ pub mod weld;
 pub use adjacency::EdgeAdjacency;
 pub use hull::{ConvexHull, HullSource};
 pub use io::{
-    FileLimits, GeometryError, describe_toml_error, load_mesh, load_mesh_within, mesh_from_bytes,
-    parse_mesh_spec, read_regular_text, write_obj,
+    FileLimits, GeometryError, GltfFile, GltfPart, describe_toml_error, load_mesh,
+    load_mesh_within, mesh_from_bytes, parse_mesh_spec, read_mesh_file, read_regular_text,
+    write_obj,
 };
 pub use mesh::{CleanupReport, MeshError, Point, TriMesh, bounding_box_of, bounding_sphere_of};
 pub use weld::weld;

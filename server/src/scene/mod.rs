@@ -29,11 +29,22 @@
 //!
 //! [[parts]]
 //! name = "bunny"
-//! mesh = "meshes/low_poly_bunny.obj"   # OBJ or STL, relative to this file
+//! mesh = "meshes/low_poly_bunny.obj"   # OBJ, STL, PLY, glTF or GLB, relative to this file
 //! scale = 0.05                         # optional uniform scale of a mesh file
 //! movable = true
+//!
+//! [[assemblies]]                       # every mesh node of a glTF file as a part (assembly.rs)
+//! file = "cad/gearbox.glb"             # .gltf or .glb, relative to this file
+//! up = "y"                             # the file's up axis, turned to z; default "z"
+//! position = [0.0, 0.0, 0.75]          # of the whole assembly; default the origin
+//! rotation = [0.0, 0.0, 0.0, 1.0]      # of the whole assembly; default identity
+//! movable = ["shaft", "gear#2"]        # parts by name, or true / false for all; default false
+//! group = "gearbox"                    # default "default"
 //! ```
+//!
+//! Parts are numbered in the order of `[[parts]]`, then of each assembly's parts.
 
+mod assembly;
 mod params;
 pub mod script;
 
@@ -141,10 +152,11 @@ pub struct Part {
     pub name: String,
     /// The geometry in the part's own frame (shared between parts that use the same source).
     pub mesh: Arc<TriMesh>,
-    /// Where the mesh came from: the resolved file path, or `shape:KIND:...` for a procedural
-    /// shape.
+    /// Where the mesh came from: the resolved file path, `<file>#/nodes/<index>` for a node of
+    /// an assembly, or `shape:KIND:...` for a procedural shape.
     pub mesh_source: String,
-    /// The uniform scale the config applies to a mesh file (1 for shapes), already applied to
+    /// The uniform scale the config applies to a mesh file (1 for shapes, and for an
+    /// assembly's parts, whose scales from the file are baked in), already applied to
     /// [`Part::mesh`].
     pub scale: f64,
     /// Initial pose of the part's frame in the world.
@@ -275,6 +287,8 @@ struct SceneFile {
     groups: GroupsFile,
     #[serde(default)]
     parts: Vec<PartFile>,
+    #[serde(default)]
+    assemblies: Vec<assembly::AssemblyFile>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -337,6 +351,7 @@ impl Scene {
             limits,
             meshes: HashMap::new(),
             orientations: file.params.dop_orientations,
+            triangles: 0,
         }
         .scene(file)
     }
@@ -480,6 +495,8 @@ struct Loader<'a> {
     meshes: HashMap<String, (Arc<TriMesh>, PartTree)>,
     /// The scene's DOP orientation count, for the parts' trees.
     orientations: usize,
+    /// The triangles of the parts so far, against [`FileLimits::scene_triangles`].
+    triangles: u64,
 }
 
 impl Loader<'_> {
@@ -512,6 +529,17 @@ impl Loader<'_> {
                 ));
             }
             parts.push(part);
+        }
+        for (index, assembly) in file.assemblies.into_iter().enumerate() {
+            for part in self.assembly(index, assembly)? {
+                if let Some(first) = parts.iter().position(|p| p.name == part.name) {
+                    return Err(self.invalid(
+                        format!("assemblies[{index}]"),
+                        format!("its part {:?} has the name of part {first}", part.name),
+                    ));
+                }
+                parts.push(part);
+            }
         }
 
         let names: Vec<String> = parts
@@ -597,26 +625,15 @@ impl Loader<'_> {
         if part.group.trim().is_empty() {
             return Err(self.invalid(key("group"), "must not be empty"));
         }
-        // The bound of tracker input: every pose derived from a part's stays finite.
-        let limit = vas_protocol::MAX_POSITION_M;
-        if let Some(c) = part
-            .position
-            .iter()
-            .find(|c| !c.is_finite() || c.abs() > limit)
-        {
-            return Err(self.invalid(
-                key("position"),
-                format!("coordinates must be finite and within {limit} m, not {c}"),
-            ));
-        }
+        let position = self.position(&key("position"), part.position)?;
         let rotation = match part.rotation {
             None => UnitQuaternion::identity(),
             Some(q) => self.rotation(&key("rotation"), q)?,
         };
-        let pose = Isometry3::from_parts(Translation3::from(part.position), rotation);
+        let pose = Isometry3::from_parts(position, rotation);
         let (mesh, mesh_source, tree) = match (part.mesh, part.shape) {
-            (Some(mesh), None) => self.mesh_file(index, &mesh, part.scale)?,
-            (None, Some(shape)) if part.scale.is_none() => self.shape(index, shape)?,
+            (Some(mesh), None) => self.mesh_file(index, &part.name, &mesh, part.scale)?,
+            (None, Some(shape)) if part.scale.is_none() => self.shape(index, &part.name, shape)?,
             (None, Some(_)) => {
                 return Err(self.invalid(
                     key("scale"),
@@ -643,6 +660,20 @@ impl Loader<'_> {
             group: part.group,
             tree,
         })
+    }
+
+    /// A position from a config, refused unless finite and within the bound of tracker input
+    /// ([`vas_protocol::MAX_POSITION_M`]), so that every pose derived from a part's stays
+    /// finite.
+    fn position(&self, key: &str, position: [f64; 3]) -> Result<Translation3<f64>, SceneError> {
+        let limit = vas_protocol::MAX_POSITION_M;
+        if let Some(c) = position.iter().find(|c| !c.is_finite() || c.abs() > limit) {
+            return Err(self.invalid(
+                key,
+                format!("coordinates must be finite and within {limit} m, not {c}"),
+            ));
+        }
+        Ok(Translation3::from(position))
     }
 
     /// A unit quaternion from (x, y, z, w), refused unless its norm is 1 within
@@ -672,6 +703,7 @@ impl Loader<'_> {
     fn mesh_file(
         &mut self,
         index: usize,
+        name: &str,
         relative: &Path,
         scale: Option<f64>,
     ) -> Result<(Arc<TriMesh>, String, PartTree), SceneError> {
@@ -685,15 +717,26 @@ impl Loader<'_> {
         let path = self.folder.join(relative);
         let source = path.display().to_string();
         let cache_key = format!("{source} x {scale}");
+        let key = format!("parts[{index}].mesh");
         if let Some((mesh, tree)) = self.cached(&cache_key) {
+            self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
             return Ok((mesh, source, tree));
         }
         let mesh_error = |source| SceneError::Mesh {
             file: self.path.to_owned(),
-            key: format!("parts[{index}].mesh"),
+            key: key.clone(),
             source,
         };
-        let mut mesh = load_mesh_within(&path, self.limits).map_err(mesh_error)?;
+        let within = FileLimits {
+            scene_triangles: self.triangles_left(),
+            ..*self.limits
+        };
+        let mut mesh = match load_mesh_within(&path, &within) {
+            Err(GeometryError::TooManyTriangles { count, .. }) => {
+                return Err(self.too_many_triangles(&key, name, count));
+            }
+            loaded => loaded.map_err(mesh_error)?,
+        };
         if scale != 1.0 {
             // Uniform scaling keeps the triangles' shapes; only extreme scales can make some
             // degenerate, and a mesh with none left is refused.
@@ -706,6 +749,7 @@ impl Loader<'_> {
                     })
                 })?;
         }
+        self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
         let (mesh, tree) = self.remember(cache_key, mesh);
         Ok((mesh, source, tree))
     }
@@ -713,17 +757,54 @@ impl Loader<'_> {
     fn shape(
         &mut self,
         index: usize,
+        name: &str,
         shape: ShapeSpec,
     ) -> Result<(Arc<TriMesh>, String, PartTree), SceneError> {
+        let key = format!("parts[{index}].shape");
         let source = shape.to_string();
         if let Some((mesh, tree)) = self.cached(&source) {
+            self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
             return Ok((mesh, source, tree));
+        }
+        // The requested count, before the shape is built (which meets it within a few percent).
+        let requested = shape.triangles() as u64;
+        if requested > self.triangles_left() {
+            return Err(self.too_many_triangles(&key, name, requested));
         }
         let mesh = shape
             .build()
-            .map_err(|e| self.invalid(format!("parts[{index}].shape.{}", e.field), e.reason))?;
+            .map_err(|e| self.invalid(format!("{key}.{}", e.field), e.reason))?;
+        self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
         let (mesh, tree) = self.remember(source.clone(), mesh);
         Ok((mesh, source, tree))
+    }
+
+    /// How many triangles the next part may have within the scene's limit.
+    fn triangles_left(&self) -> u64 {
+        self.limits.scene_triangles.saturating_sub(self.triangles)
+    }
+
+    /// Adds part `name`'s `count` triangles to the scene's, refusing the part (at `key`) if the
+    /// scene would have more than its limit.
+    fn count_triangles(&mut self, key: &str, name: &str, count: u64) -> Result<(), SceneError> {
+        if count > self.triangles_left() {
+            return Err(self.too_many_triangles(key, name, count));
+        }
+        self.triangles += count;
+        Ok(())
+    }
+
+    /// The refusal of part `name`, whose `count` triangles the scene's limit has no room for.
+    fn too_many_triangles(&self, key: &str, name: &str, count: u64) -> SceneError {
+        self.invalid(
+            key,
+            format!(
+                "part {name:?} needs at least {count} triangles, but the scene's limit of {} \
+                 triangles (--max-scene-triangles) leaves {} after the parts before it",
+                self.limits.scene_triangles,
+                self.triangles_left()
+            ),
+        )
     }
 
     /// The mesh loaded or built for `key` before, with its tree.

@@ -1,5 +1,7 @@
-//! Loading real files: meshes (OBJ, STL, soups, broken ones) and scene configs, in one test
-//! binary.
+//! Loading real files: meshes (OBJ, STL, PLY, glTF, soups, broken ones), scene configs and
+//! glTF assemblies, in one test binary.
 
+mod assemblies;
+mod formats;
 mod mesh_files;
 mod scenes;

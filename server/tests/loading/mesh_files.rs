@@ -234,7 +234,11 @@ fn bad_files_are_refused_with_the_file_and_the_reason() {
         "not a valid OBJ file",
     );
     assert_refused("not_a_number.obj", b"v 0 zero 0\n", "not a valid OBJ file");
-    assert_refused("mesh.ply", b"ply\n", "unsupported format");
+    assert_refused(
+        "mesh.3ds",
+        b"MM",
+        "unsupported format (expected a .obj, .stl, .ply, .gltf or .glb file)",
+    );
     let mut truncated = Vec::from([0u8; 80]);
     truncated.extend(5u32.to_le_bytes());
     truncated.extend([0u8; 70]);

@@ -687,3 +687,37 @@ fn a_two_million_triangle_part_reaches_a_client_whole() {
         .fold(0.0, f64::max);
     assert!(worst < 1e-6, "a vertex is {worst} m off");
 }
+
+/// A scene of a glTF assembly is served as any other: scene info gives every mesh node's part
+/// with its node as the mesh source, and the geometry carries each part's baked mesh.
+#[test]
+fn an_assembly_is_served_part_by_part() {
+    let path = fixtures_dir().join("assembly/assembly.toml");
+    let scene = Scene::load(&path).expect("the assembly scene loads");
+    assert!(scene.parts.len() > 50);
+    let mut server = Server::start_with(
+        "assembly",
+        &["--scene", path.to_str().expect("a UTF-8 path")],
+    );
+    let mut client = server.connect();
+    let info = client.scene_info(PATIENCE).expect("scene info");
+    assert_eq!(info.parts.len(), scene.parts.len());
+    for (described, part) in info.parts.iter().zip(&scene.parts) {
+        assert_eq!(described.name, part.name);
+        assert_eq!(described.mesh_source, part.mesh_source);
+        assert_eq!(described.movable, part.movable);
+    }
+    let geometry = next_geometry(&mut client, 0);
+    assert_eq!(geometry.parts.len(), scene.parts.len());
+    for (mesh, part) in geometry.parts.iter().zip(&scene.parts) {
+        assert_eq!(mesh.name, part.name);
+        assert_eq!(mesh.triangles, part.mesh.triangles());
+        for (wire, own) in mesh.positions.iter().zip(part.mesh.vertices()) {
+            assert!(
+                (0..3).all(|i| (f64::from(wire[i]) - own[i]).abs() < 1e-6),
+                "{}",
+                part.name
+            );
+        }
+    }
+}

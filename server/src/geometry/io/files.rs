@@ -1,0 +1,67 @@
+//! What the loaders accept, and reading a file within it.
+
+use std::io;
+use std::path::Path;
+
+/// What the loaders accept: the largest files by kind and the most triangles of a scene. A
+/// setting of the deployment (`vas-server --max-mesh-file`, `--max-config-file`,
+/// `--max-scene-triangles`), so that input larger than any the site uses is refused before it
+/// fills the memory.
+///
+/// Passed down to every read rather than kept in a global, so that each load (and each test)
+/// says which limits it reads under.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FileLimits {
+    /// The largest mesh file, in bytes; a `.gltf` file and the buffer files it names count
+    /// together.
+    pub mesh_bytes: u64,
+    /// The largest config file (scene, hand model), in bytes.
+    pub config_bytes: u64,
+    /// The most triangles of a scene's parts together (a part that shares another's mesh counts
+    /// too); a mesh file loaded on its own may have as many. Checked against the counts a file
+    /// or a shape announces, before their triangles are read or built.
+    pub scene_triangles: u64,
+}
+
+impl Default for FileLimits {
+    /// 4 GiB for a mesh (more than a 20-million-triangle binary STL), 16 MiB for a config and
+    /// 50 million triangles for a scene (some 5 GB of meshes and trees).
+    fn default() -> Self {
+        Self {
+            mesh_bytes: 4 << 30,
+            config_bytes: 16 << 20,
+            scene_triangles: 50_000_000,
+        }
+    }
+}
+
+/// Reads a whole file of at most `limit` bytes, refusing anything but a regular file: a FIFO
+/// would block the reader until a writer comes (forever, for a server's I/O thread), and a
+/// device such as `/dev/zero` never ends. Symbolic links are followed to what they name.
+pub fn read_regular_file(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+    use std::io::Read;
+    let kind = std::fs::metadata(path)?.file_type();
+    if !kind.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "not a regular file (a directory, FIFO, socket or device)",
+        ));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(limit + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(io::Error::new(
+            io::ErrorKind::FileTooLarge,
+            format!("larger than the {limit} bytes a file may have"),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// [`read_regular_file`] for UTF-8 text.
+pub fn read_regular_text(path: &Path, limit: u64) -> io::Result<String> {
+    String::from_utf8(read_regular_file(path, limit)?)
+        .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
