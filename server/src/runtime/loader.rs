@@ -66,7 +66,7 @@ impl SceneLoader {
             .spawn(move || {
                 let loaded = Scene::load_within(&path, &limits).map_err(|error| error.to_string());
                 if let Ok(scene) = &loaded {
-                    scene.build_trees();
+                    scene.prepare();
                 }
                 // The receiver is gone only when the server is shutting down.
                 let _ = sender.send(loaded);

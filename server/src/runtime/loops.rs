@@ -158,8 +158,19 @@ impl Loops {
         self.threads.iter().any(JoinHandle::is_finished)
     }
 
-    /// Waits for every loop to end (close the inputs first).
-    pub fn join(self) {
+    /// Waits for every loop to end (close the inputs first), for at most `patience`: a loop
+    /// busy building a large part's tree or hull on its first frame is left behind (the process
+    /// is ending; the next server on the prefix cleans up its waker's node), so that a
+    /// termination request is honoured within a second whatever the loops are doing.
+    pub fn join(self, patience: Duration) {
+        let deadline = Instant::now() + patience;
+        while self.threads.iter().any(|thread| !thread.is_finished()) {
+            if Instant::now() >= deadline {
+                tracing::warn!("a loop is still preparing the scene; leaving it");
+                return;
+            }
+            std::thread::sleep(JOIN_POLL);
+        }
         for thread in self.threads {
             let name = thread.thread().name().unwrap_or("loop").to_owned();
             if thread.join().is_err() {
@@ -168,6 +179,9 @@ impl Loops {
         }
     }
 }
+
+/// How often [`Loops::join`] looks whether the loops have ended.
+const JOIN_POLL: Duration = Duration::from_millis(10);
 
 /// How often a loop logs its rate.
 const RATE_LOG_PERIOD: Duration = Duration::from_secs(10);
@@ -486,14 +500,23 @@ struct CollisionLoop {
 
 impl CollisionLoop {
     fn run(mut self) {
-        let make_waker = std::mem::replace(&mut self.wake, Box::new(|| Box::new(|| {})));
-        let mut wake = make_waker();
+        // The waker (an iceoryx2 node and notifier) is made when the first verified frame needs
+        // it: a loop still building its first scene's trees when termination comes holds no
+        // shared memory, so leaving it behind leaves nothing behind.
+        let mut make_waker = Some(std::mem::replace(
+            &mut self.wake,
+            Box::new(|| Box::new(|| {})),
+        ));
+        let mut waker: Option<Box<dyn FnMut()>> = None;
         let mut meter = LoopMeter::new("collision");
         loop {
             match self.inbox.receive(None) {
                 Received::Work(Work::Frame(candidate)) => {
                     let started = Instant::now();
                     if self.verify(candidate) && self.io_watch.must_wake() {
+                        let wake = waker.get_or_insert_with(|| {
+                            make_waker.take().expect("made once, kept after")()
+                        });
                         wake();
                     }
                     meter.frame_done(started);
@@ -643,7 +666,7 @@ mod tests {
                 .count();
         }
         links.inputs.close();
-        loops.join();
+        loops.join(Duration::from_secs(30));
         assert_eq!(grasps, 1, "the handle is grasped once");
         let start = scene.parts[0].pose;
         let end = expected.last().expect("frames").1;

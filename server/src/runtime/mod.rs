@@ -25,7 +25,9 @@ pub mod rendezvous;
 pub mod verify;
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::RecvTimeoutError;
 
 use iceoryx2::prelude::*;
 use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
@@ -66,6 +68,10 @@ pub enum RuntimeError {
     /// A loop thread could not be started.
     #[error("cannot start the loop threads: {0}")]
     Thread(#[from] std::io::Error),
+    /// The thread loading the scene to serve ended without a scene (it panicked; the log says
+    /// where).
+    #[error("the scene loader failed; the log says where")]
+    LoaderFailed,
     /// A loop thread ended unexpectedly (it panicked; the log says where).
     #[error("a simulation loop ended unexpectedly")]
     LoopEnded,
@@ -144,14 +150,9 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         "node created"
     );
 
-    let scene = Scene::load_within(&options.scene, &options.limits)?;
-    tracing::info!(
-        scene = scene.name,
-        source = %scene.source.display(),
-        parts = scene.parts.len(),
-        publish_hz = scene.rates.publish_hz,
-        "scene loaded"
-    );
+    let Some(scene) = load_to_serve(&node, options)? else {
+        return Ok(());
+    };
     let folder = (options.scenes.clone())
         .or_else(|| options.scene.parent().map(Path::to_path_buf))
         .unwrap_or_default();
@@ -181,11 +182,80 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     )?;
     let served = manager.serve(start.into_change(), &loops);
     links.inputs.close();
-    loops.join();
+    loops.join(LOOPS_PATIENCE);
     served
 }
 
 /// The interval between parts frames at `hz`, or an error for a rate no loop can run at.
+/// How often the main thread looks for a termination request while the scene loads.
+const TERMINATION_POLL: Duration = Duration::from_millis(50);
+
+/// How long the loops may take to end once termination is requested.
+const LOOPS_PATIENCE: Duration = Duration::from_millis(500);
+
+/// Loads the scene to serve on a thread of its own, while this thread watches for a termination
+/// request: reading or generating large meshes takes seconds, and SIGINT or SIGTERM meanwhile
+/// stops the server at once (the loading thread, which holds nothing but memory, is
+/// abandoned). `None` when termination was requested.
+///
+/// The loaded scene's trees and hulls are then built in the background, the parts in parallel
+/// ([`Scene::prepare`]): the server serves the scene's description and geometry meanwhile, and
+/// the loops, which need them for their first frame, wait for the builds under way rather than
+/// repeat them.
+fn load_to_serve(
+    node: &Node<ipc::Service>,
+    options: &RunOptions,
+) -> Result<Option<Scene>, RuntimeError> {
+    let (sender, loaded) = crossbeam_channel::bounded(1);
+    let (path, limits) = (options.scene.clone(), options.limits);
+    std::thread::Builder::new()
+        .name("scene-loader".into())
+        .spawn(move || {
+            let started = Instant::now();
+            let scene = Scene::load_within(&path, &limits);
+            if let Ok(scene) = &scene {
+                tracing::info!(
+                    scene = scene.name,
+                    source = %scene.source.display(),
+                    parts = scene.parts.len(),
+                    triangles = scene.triangle_count(),
+                    publish_hz = scene.rates.publish_hz,
+                    seconds = started.elapsed().as_secs_f64(),
+                    "scene loaded"
+                );
+                // Parts are cheap to clone: their meshes and trees are shared.
+                let parts = scene.parts.clone();
+                let name = scene.name.clone();
+                let spawned = std::thread::Builder::new()
+                    .name("scene-preparer".into())
+                    .spawn(move || {
+                        Scene::prepare_parts(&name, &parts);
+                        tracing::info!(
+                            scene = name,
+                            seconds = started.elapsed().as_secs_f64(),
+                            "scene ready"
+                        );
+                    });
+                if let Err(error) = spawned {
+                    tracing::warn!(%error, "cannot prepare the scene in the background; the loops will");
+                }
+            }
+            // The receiver is gone only when termination was requested.
+            let _ = sender.send(scene);
+        })?;
+    loop {
+        match loaded.recv_timeout(TERMINATION_POLL) {
+            Ok(scene) => return Ok(Some(scene?)),
+            Err(RecvTimeoutError::Timeout) => {
+                if termination_requested(node) {
+                    return Ok(None);
+                }
+            }
+            Err(RecvTimeoutError::Disconnected) => return Err(RuntimeError::LoaderFailed),
+        }
+    }
+}
+
 fn publish_period(hz: f64) -> Result<Duration, RuntimeError> {
     Duration::try_from_secs_f64(1.0 / hz)
         .ok()

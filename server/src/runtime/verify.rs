@@ -88,10 +88,10 @@ impl Verifier {
     /// flat hand at the identity root.
     pub fn new(scene: &Scene, hand: Option<HandBodies>) -> Verifier {
         let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
-        // The trees are the ones the other loops use too (a clone shares a built tree).
-        let model = |mesh: &TriMesh, tree: &DopTree| {
-            Arc::new(CollisionModel::new(tree.clone(), ConvexHull::of(mesh)))
-        };
+        // The parts' trees and hulls are the scene's, which the other loops use too (a clone of
+        // a tree shares it; a hull is small, its vertices bounded).
+        let model =
+            |tree: &DopTree, hull: ConvexHull| Arc::new(CollisionModel::new(tree.clone(), hull));
         let parts: Vec<ObjectId> = scene
             .parts
             .iter()
@@ -99,7 +99,7 @@ impl Verifier {
             .map(|(id, part)| {
                 pipeline
                     .add(ObjectDesc {
-                        model: model(&part.mesh, part.tree()),
+                        model: model(part.tree(), part.hull().clone()),
                         pose: part.pose,
                         group: scene.group_id(id),
                         is_static: !part.movable,
@@ -123,7 +123,7 @@ impl Verifier {
                 .map(|((mesh, tree), pose)| {
                     pipeline
                         .add(ObjectDesc {
-                            model: model(mesh, tree),
+                            model: model(tree, ConvexHull::of(mesh)),
                             pose,
                             group: hand_group,
                             is_static: false,

@@ -63,7 +63,7 @@ use crate::collision::pipeline::ObjectId;
 use crate::collision::{DopTree, OrientationSet};
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{
-    FileLimits, GeometryError, Point, TriMesh, describe_toml_error, load_mesh_within,
+    ConvexHull, FileLimits, GeometryError, Point, TriMesh, describe_toml_error, load_mesh_within,
     read_regular_text,
 };
 use crate::grasping::{HandModel, PartGeometry};
@@ -165,7 +165,8 @@ pub struct Part {
     pub movable: bool,
     /// The part's group in the collision interest matrix.
     pub group: String,
-    /// The DOP-tree over [`Part::mesh`], built on first use ([`Part::tree`]).
+    /// The DOP-tree and convex hull over [`Part::mesh`], built on first use ([`Part::tree`],
+    /// [`Part::hull`]).
     pub tree: PartTree,
 }
 
@@ -177,22 +178,33 @@ impl Part {
         self.tree.get(&self.mesh)
     }
 
+    /// The convex hull of the part's mesh, for the collision pipeline's separating-plane
+    /// pre-check: built by the first caller, then shared like [`Part::tree`].
+    pub fn hull(&self) -> &ConvexHull {
+        self.tree.hull.get_or_init(|| ConvexHull::of(&self.mesh))
+    }
+
     /// The part as the grasping stage tests it: its shared mesh and tree, not copies.
     pub fn grasp_geometry(&self) -> PartGeometry {
         PartGeometry::with_tree(Arc::clone(&self.mesh), self.tree().clone())
     }
 }
 
-/// A part's DOP-tree, built on first use and shared.
+/// Parts of at least this many triangles have their preparation logged at info level: they take
+/// a noticeable time.
+const LARGE_PART_TRIANGLES: usize = 100_000;
+
+/// A part's DOP-tree and convex hull, built on first use and shared.
 ///
 /// A large part's tree takes a noticeable time and memory to build, and the collision, grasping
 /// and sliding loops all test the part: they clone this one (a clone shares the built arrays),
-/// parts that share a mesh share its tree, a reset builds nothing, and checking a config builds
-/// none.
+/// parts that share a mesh share its tree and hull, a reset builds nothing, and checking a config
+/// builds none.
 #[derive(Debug, Clone)]
 pub struct PartTree {
     orientations: usize,
     tree: Arc<OnceLock<DopTree>>,
+    hull: Arc<OnceLock<ConvexHull>>,
 }
 
 impl PartTree {
@@ -201,6 +213,7 @@ impl PartTree {
         PartTree {
             orientations,
             tree: Arc::default(),
+            hull: Arc::default(),
         }
     }
 
@@ -389,19 +402,55 @@ impl Scene {
         matrix
     }
 
-    /// Builds every part's DOP-tree now, in parallel, rather than on the loops' first use: a
-    /// scene loaded while another is served is made ready before it replaces it.
-    pub fn build_trees(&self) {
+    /// Builds every part's DOP-tree and convex hull now ([`Scene::prepare_parts`]): a scene
+    /// loaded while another is served is made ready before it replaces it.
+    pub fn prepare(&self) {
+        Scene::prepare_parts(&self.name, &self.parts);
+    }
+
+    /// Builds the DOP-tree and convex hull of each of `parts` (of scene `scene`), the parts in
+    /// parallel, rather than on the loops' first use. Each large part's readiness is logged
+    /// with its time (each part's at debug level), so a long start-up says where it is.
+    pub fn prepare_parts(scene: &str, parts: &[Part]) {
         use rayon::prelude::*;
-        self.parts.par_iter().for_each(|part| {
+        let ready = std::sync::atomic::AtomicUsize::new(0);
+        parts.par_iter().for_each(|part| {
+            let started = std::time::Instant::now();
             part.tree();
+            part.hull();
+            let done = ready.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            let triangles = part.mesh.triangles().len();
+            let seconds = started.elapsed().as_secs_f64();
+            let total = parts.len();
+            if triangles >= LARGE_PART_TRIANGLES {
+                tracing::info!(
+                    scene,
+                    part = part.name,
+                    triangles,
+                    seconds,
+                    "part ready ({done} of {total})"
+                );
+            } else {
+                tracing::debug!(
+                    scene,
+                    part = part.name,
+                    triangles,
+                    seconds,
+                    "part ready ({done} of {total})"
+                );
+            }
         });
+    }
+
+    /// The triangles of all parts (a mesh shared by several parts counts for each).
+    pub fn triangle_count(&self) -> usize {
+        self.parts.iter().map(|p| p.mesh.triangles().len()).sum()
     }
 
     /// A human-readable summary: parts, triangles, groups, parameters and rates.
     pub fn summary(&self) -> String {
         let mut s = String::new();
-        let triangles: usize = self.parts.iter().map(|p| p.mesh.triangles().len()).sum();
+        let triangles = self.triangle_count();
         let _ = writeln!(s, "scene {:?} ({})", self.name, self.source.display());
         let _ = writeln!(
             s,

@@ -433,3 +433,46 @@ fn the_old_scene_is_served_while_a_requested_one_loads() {
     assert_eq!(after.name, loaded, "the loaded scene is served once ready");
     assert!(after.generation > during.generation);
 }
+
+/// SIGTERM while a large part's tree is still being built stops the server at once (the build,
+/// minutes long in this profile, is abandoned), cleanly, and leaves no shared memory behind but
+/// the prefix's management segment that every server leaves.
+#[test]
+fn a_termination_request_while_a_large_part_is_prepared_stops_the_server_cleanly() {
+    let folder = tempfile::tempdir().expect("a scratch folder");
+    let scene = folder.path().join("big.toml");
+    std::fs::write(
+        &scene,
+        "name = \"big\"\n\n[[parts]]\nname = \"ball\"\nmovable = true\n\
+         shape = { kind = \"sphere\", radius = 0.1, triangles = 2000000 }\n",
+    )
+    .expect("write the scene");
+    let mut server = Server::start_with(
+        "terminate_preparing",
+        &["--scene", scene.to_str().expect("a UTF-8 path")],
+    );
+    assert!(
+        server.process.wait_for_log("serving", PATIENCE),
+        "the server serves while it prepares: {}",
+        server.process.log()
+    );
+    server.process.signal(libc::SIGTERM);
+    let status = server
+        .process
+        .wait_exit(PATIENCE)
+        .expect("the server stops");
+    let log = server.process.log();
+    assert!(status.success(), "{status:?}: {log}");
+    assert!(log.contains("termination requested"), "{log}");
+    assert!(
+        !log.contains("scene ready"),
+        "the scene was ready before the request, so nothing was tested: {log}"
+    );
+    let prefix = server.prefix().to_owned();
+    let left: Vec<String> = std::fs::read_dir("/dev/shm")
+        .expect("list /dev/shm")
+        .filter_map(|entry| entry.ok()?.file_name().into_string().ok())
+        .filter(|name| name.starts_with(&prefix) && !name.ends_with("global_mgmt"))
+        .collect();
+    assert!(left.is_empty(), "shared memory left behind: {left:?}");
+}
