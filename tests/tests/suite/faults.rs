@@ -60,13 +60,17 @@ fn a_server_killed_mid_stream_is_replaced_by_one_on_the_same_prefix() {
         "the second server serves: {}",
         second.log()
     );
-    // The first server's two nodes: its own and the collision loop's waker.
+    // The first server's nodes: its own, and the collision loop's waker if a verified frame
+    // had to wake the I/O thread.
+    let log = second.log();
+    let cleaned = log
+        .split("dead_nodes_cleaned=")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|count| count.parse::<u32>().ok());
     assert!(
-        second
-            .log()
-            .contains("dead_nodes_cleaned=2 dead_nodes_left=0"),
-        "the log counts the dead nodes it cleaned: {}",
-        second.log()
+        matches!(cleaned, Some(1 | 2)) && log.contains("dead_nodes_left=0"),
+        "the log counts the dead nodes it cleaned: {log}"
     );
     let mut client = Client::connect(Some(&prefix)).expect("connect again");
     client
