@@ -58,6 +58,10 @@ enum Command {
     CheckScene {
         /// The scene file.
         file: PathBuf,
+        /// Also build every part's DOP-tree and convex hull, as a server does before it
+        /// answers input, with a progress bar, and say how long that took.
+        #[arg(long)]
+        prepare: bool,
         #[command(flatten)]
         limits: LimitArgs,
     },
@@ -114,15 +118,11 @@ fn main() -> ExitCode {
             triangles,
             out,
         } => write_shape(kind, triangles, &out),
-        Command::CheckScene { file, limits } => Scene::load_within(&file, &limits.limits())
-            .map_err(anyhow::Error::from)
-            .and_then(|scene| {
-                match writeln!(std::io::stdout().lock(), "{}", scene.summary()) {
-                    // The reader went away (`check-scene ... | head`): nothing is wrong.
-                    Err(error) if error.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-                    written => written.map_err(Into::into),
-                }
-            }),
+        Command::CheckScene {
+            file,
+            prepare,
+            limits,
+        } => check_scene(&file, prepare, &limits.limits()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -131,6 +131,34 @@ fn main() -> ExitCode {
             eprintln!("error: {error}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `vas-server check-scene`: loads the scene, prints its summary and, with `prepare`, builds
+/// its parts' trees and hulls with a progress bar (on a terminal) and prints the time.
+fn check_scene(file: &Path, prepare: bool, limits: &FileLimits) -> anyhow::Result<()> {
+    let scene = Scene::load_within(file, limits)?;
+    let mut report = scene.summary();
+    if prepare {
+        let started = std::time::Instant::now();
+        let bar = indicatif::ProgressBar::new(scene.parts.len() as u64).with_style(
+            indicatif::ProgressStyle::with_template("preparing {bar:40} {pos}/{len} parts {msg}")?,
+        );
+        Scene::prepare_parts(&scene.parts, &|part, _| {
+            bar.set_message(part.name.clone());
+            bar.inc(1);
+        });
+        bar.finish_and_clear();
+        report.push_str(&format!(
+            "prepared (DOP-trees and convex hulls of {} parts) in {:.2} s\n",
+            scene.parts.len(),
+            started.elapsed().as_secs_f64()
+        ));
+    }
+    match writeln!(std::io::stdout().lock(), "{report}") {
+        // The reader went away (`check-scene ... | head`): nothing is wrong.
+        Err(error) if error.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        written => written.map_err(Into::into),
     }
 }
 

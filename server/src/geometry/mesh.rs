@@ -147,6 +147,19 @@ impl TriMesh {
         ))
     }
 
+    /// A hash of the mesh's exact content (every coordinate's bits and every index): equal
+    /// meshes hash alike, so a scene recognises one mesh whatever file or shape it came from.
+    pub fn content_hash(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut hasher = rustc_hash::FxHasher::default();
+        self.vertices.len().hash(&mut hasher);
+        for v in &self.vertices {
+            v.coords.map(f64::to_bits).as_slice().hash(&mut hasher);
+        }
+        self.triangles.hash(&mut hasher);
+        hasher.finish()
+    }
+
     /// The vertices, in the mesh's own frame.
     pub fn vertices(&self) -> &[Point] {
         &self.vertices

@@ -33,7 +33,7 @@ use iceoryx2::prelude::*;
 use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
 
 use crate::geometry::FileLimits;
-use crate::scene::{Scene, SceneError};
+use crate::scene::{Scene, SceneError, log_prepared};
 use control::Session;
 use frames::HandSetupError;
 use loops::{Links, Loops};
@@ -229,7 +229,7 @@ fn load_to_serve(
                 let spawned = std::thread::Builder::new()
                     .name("scene-preparer".into())
                     .spawn(move || {
-                        Scene::prepare_parts(&name, &parts);
+                        Scene::prepare_parts(&parts, &log_prepared(&name, parts.len()));
                         tracing::info!(
                             scene = name,
                             seconds = started.elapsed().as_secs_f64(),

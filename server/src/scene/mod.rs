@@ -194,6 +194,34 @@ impl Part {
 /// a noticeable time.
 const LARGE_PART_TRIANGLES: usize = 100_000;
 
+/// What [`Scene::prepare_parts`] calls to log the parts of scene `scene` (of `total` parts) as
+/// they become ready, with how many are: large parts at info level, so that a long start-up says
+/// where it is, the others at debug level.
+pub fn log_prepared(scene: &str, total: usize) -> impl Fn(&Part, f64) + Sync + use<'_> {
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    move |part, seconds| {
+        let done = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        let triangles = part.mesh.triangles().len();
+        if triangles >= LARGE_PART_TRIANGLES {
+            tracing::info!(
+                scene,
+                part = part.name,
+                triangles,
+                seconds,
+                "part ready ({done} of {total})"
+            );
+        } else {
+            tracing::debug!(
+                scene,
+                part = part.name,
+                triangles,
+                seconds,
+                "part ready ({done} of {total})"
+            );
+        }
+    }
+}
+
 /// A part's DOP-tree and convex hull, built on first use and shared.
 ///
 /// A large part's tree takes a noticeable time and memory to build, and the collision, grasping
@@ -363,6 +391,7 @@ impl Scene {
             folder: path.parent().unwrap_or(Path::new("")),
             limits,
             meshes: HashMap::new(),
+            by_content: HashMap::new(),
             orientations: file.params.dop_orientations,
             triangles: 0,
         }
@@ -405,40 +434,19 @@ impl Scene {
     /// Builds every part's DOP-tree and convex hull now ([`Scene::prepare_parts`]): a scene
     /// loaded while another is served is made ready before it replaces it.
     pub fn prepare(&self) {
-        Scene::prepare_parts(&self.name, &self.parts);
+        Scene::prepare_parts(&self.parts, &log_prepared(&self.name, self.parts.len()));
     }
 
-    /// Builds the DOP-tree and convex hull of each of `parts` (of scene `scene`), the parts in
-    /// parallel, rather than on the loops' first use. Each large part's readiness is logged
-    /// with its time (each part's at debug level), so a long start-up says where it is.
-    pub fn prepare_parts(scene: &str, parts: &[Part]) {
+    /// Builds the DOP-tree and convex hull of each of `parts`, the parts in parallel, rather
+    /// than on the loops' first use, and calls `ready` with each part and the seconds it took
+    /// as it is done (in no particular order).
+    pub fn prepare_parts(parts: &[Part], ready: &(dyn Fn(&Part, f64) + Sync)) {
         use rayon::prelude::*;
-        let ready = std::sync::atomic::AtomicUsize::new(0);
         parts.par_iter().for_each(|part| {
             let started = std::time::Instant::now();
             part.tree();
             part.hull();
-            let done = ready.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            let triangles = part.mesh.triangles().len();
-            let seconds = started.elapsed().as_secs_f64();
-            let total = parts.len();
-            if triangles >= LARGE_PART_TRIANGLES {
-                tracing::info!(
-                    scene,
-                    part = part.name,
-                    triangles,
-                    seconds,
-                    "part ready ({done} of {total})"
-                );
-            } else {
-                tracing::debug!(
-                    scene,
-                    part = part.name,
-                    triangles,
-                    seconds,
-                    "part ready ({done} of {total})"
-                );
-            }
+            ready(part, started.elapsed().as_secs_f64());
         });
     }
 
@@ -542,6 +550,8 @@ struct Loader<'a> {
     /// Meshes already loaded or built, with their trees, by source, so that parts sharing one
     /// are loaded once and share its tree.
     meshes: HashMap<String, (Arc<TriMesh>, PartTree)>,
+    /// The same meshes by [content hash](TriMesh::content_hash) (several for a collision).
+    by_content: HashMap<u64, Vec<(Arc<TriMesh>, PartTree)>>,
     /// The scene's DOP orientation count, for the parts' trees.
     orientations: usize,
     /// The triangles of the parts so far, against [`FileLimits::scene_triangles`].
@@ -861,9 +871,19 @@ impl Loader<'_> {
         self.meshes.get(key).cloned()
     }
 
-    /// Keeps `mesh` for `key`, with a tree for it that every part using it shares.
+    /// Keeps `mesh` for `key`, with a tree for it that every part using it shares. A mesh
+    /// equal to one kept before (from another file, shape or node) is that one: its tree is
+    /// built once.
     fn remember(&mut self, key: String, mesh: TriMesh) -> (Arc<TriMesh>, PartTree) {
-        let entry = (Arc::new(mesh), PartTree::new(self.orientations));
+        let same_content = self.by_content.entry(mesh.content_hash()).or_default();
+        let entry = match same_content.iter().find(|(kept, _)| **kept == mesh) {
+            Some(kept) => kept.clone(),
+            None => {
+                let entry = (Arc::new(mesh), PartTree::new(self.orientations));
+                same_content.push(entry.clone());
+                entry
+            }
+        };
         self.meshes.insert(key, entry.clone());
         entry
     }

@@ -159,6 +159,48 @@ fn the_pipe_passes_through_the_sheets_hole() {
     assert_eq!((lo.z, hi.z), (0.0, 0.0), "the sheet has no thickness");
 }
 
+/// Parts whose meshes are equal share one mesh and one tree whatever their sources: two copies
+/// of a file under other names, and an OBJ written from a shape beside that shape.
+#[test]
+fn meshes_of_equal_content_share_one_mesh_and_tree() {
+    let dir = scratch_dir("content");
+    let bunny = configs().join("meshes/low_poly_bunny.obj");
+    std::fs::copy(&bunny, dir.join("first.obj")).unwrap();
+    std::fs::copy(&bunny, dir.join("second.obj")).unwrap();
+    let path = write(
+        &dir,
+        "scene.toml",
+        r#"
+name = "copies"
+
+[[parts]]
+name = "one"
+mesh = "first.obj"
+
+[[parts]]
+name = "two"
+mesh = "second.obj"
+position = [1.0, 0.0, 0.0]
+
+[[parts]]
+name = "three"
+mesh = "second.obj"
+scale = 2.0
+position = [2.0, 0.0, 0.0]
+"#,
+    );
+    let scene = Scene::load(&path).unwrap();
+    let [one, two, three] = [0, 1, 2].map(|i| &scene.parts[i]);
+    assert_ne!(one.mesh_source, two.mesh_source, "each part names its file");
+    assert!(Arc::ptr_eq(&one.mesh, &two.mesh), "equal content: one mesh");
+    assert!(std::ptr::eq(one.tree(), two.tree()), "and one tree");
+    assert!(
+        !Arc::ptr_eq(&one.mesh, &three.mesh),
+        "another scale: another mesh"
+    );
+    assert!(!std::ptr::eq(one.tree(), three.tree()));
+}
+
 #[test]
 fn meshes_are_resolved_scaled_and_shared() {
     let dir = scratch_dir("meshes");
@@ -469,6 +511,21 @@ fn check_scene_prints_a_summary_or_fails_with_the_error() {
     let stdout = String::from_utf8_lossy(&ok.stdout);
     assert!(
         stdout.contains("peg in hole") && stdout.contains("parts: 2 (1 movable)"),
+        "{stdout}"
+    );
+    assert!(
+        !stdout.contains("prepared"),
+        "nothing built unasked: {stdout}"
+    );
+    let prepared = Command::new(binary)
+        .args(["check-scene", "--prepare"])
+        .arg(configs().join("peg_in_hole.toml"))
+        .output()
+        .unwrap();
+    assert!(prepared.status.success());
+    let stdout = String::from_utf8_lossy(&prepared.stdout);
+    assert!(
+        stdout.contains("prepared (DOP-trees and convex hulls of 2 parts) in "),
         "{stdout}"
     );
 
