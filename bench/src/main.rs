@@ -15,6 +15,7 @@ mod report;
 mod slide;
 mod slope;
 mod soak;
+mod startup;
 mod synthetic;
 mod tumble;
 
@@ -34,6 +35,15 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Benchmark {
+    /// B0: start-up of one movable part of 1k to 2M triangles, stage by stage.
+    #[command(
+        after_long_help = "Columns: triangles (of the part); shape_s (generating and welding it); adjacency_s (its edge
+adjacency, for sliding); hull_s (its convex hull, for the separating-plane pre-check); tree_s
+(its DOP-tree); ready_s (from starting vas-server in lockstep on a scene of a floor and the
+part to its answer to one tracker sample). Then the log-log slope of each column over the
+rows of at least 100k triangles (1 is linear)."
+    )]
+    Startup(startup::StartupArgs),
     /// B1: the tumbling pair (the paper's Figure 3 with --figure).
     #[command(
         after_long_help = "Columns: algo (algorithm); d (distance of B from A); mean_us, median_us, max_us (time per
@@ -133,6 +143,7 @@ fn main() -> ExitCode {
     let matches = comma_separated_lists(Cli::command()).get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|error| error.exit());
     let result = match cli.benchmark {
+        Benchmark::Startup(args) => startup::run(&args),
         Benchmark::Tumble(args) => tumble::run_cli(&args),
         Benchmark::Random(args) => random::run_cli(&args),
         Benchmark::Orbit(args) => orbit::run_cli(&args),
