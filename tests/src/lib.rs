@@ -260,6 +260,16 @@ impl Server {
         Self { process, prefix }
     }
 
+    /// A server on a scene config of `toml`, written into a scratch folder that lives as long
+    /// as the folder returned beside the server.
+    pub fn start_on_scene(test: &str, toml: &str) -> (Self, tempfile::TempDir) {
+        let folder = tempfile::tempdir().expect("a scratch folder");
+        let scene = folder.path().join("scene.toml");
+        std::fs::write(&scene, toml).expect("write the scene");
+        let server = Server::start_with(test, &["--scene", scene.to_str().expect("a UTF-8 path")]);
+        (server, folder)
+    }
+
     /// The server's iceoryx2 prefix.
     pub fn prefix(&self) -> &str {
         &self.prefix

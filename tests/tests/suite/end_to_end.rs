@@ -644,17 +644,10 @@ fn the_geometry_follows_every_reset_and_load() {
 /// triangle the server's shape generator makes for it.
 #[test]
 fn a_two_million_triangle_part_reaches_a_client_whole() {
-    let folder = tempfile::tempdir().expect("a scratch folder");
-    let scene = folder.path().join("panel.toml");
-    std::fs::write(
-        &scene,
+    let (mut server, _folder) = Server::start_on_scene(
+        "big_geometry",
         "name = \"panel\"\n\n[[parts]]\nname = \"panel\"\n\
          shape = { kind = \"box\", size = [1.0, 0.6, 0.01], triangles = 2000000 }\n",
-    )
-    .expect("write the scene");
-    let mut server = Server::start_with(
-        "big_geometry",
-        &["--scene", scene.to_str().expect("a UTF-8 path")],
     );
     let mut client = server.connect();
     let geometry = next_geometry(&mut client, 0);

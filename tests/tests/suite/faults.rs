@@ -443,17 +443,10 @@ fn the_old_scene_is_served_while_a_requested_one_loads() {
 /// the prefix's management segment that every server leaves.
 #[test]
 fn a_termination_request_while_a_large_part_is_prepared_stops_the_server_cleanly() {
-    let folder = tempfile::tempdir().expect("a scratch folder");
-    let scene = folder.path().join("big.toml");
-    std::fs::write(
-        &scene,
+    let (mut server, _folder) = Server::start_on_scene(
+        "terminate_preparing",
         "name = \"big\"\n\n[[parts]]\nname = \"ball\"\nmovable = true\n\
          shape = { kind = \"sphere\", radius = 0.1, triangles = 2000000 }\n",
-    )
-    .expect("write the scene");
-    let mut server = Server::start_with(
-        "terminate_preparing",
-        &["--scene", scene.to_str().expect("a UTF-8 path")],
     );
     assert!(
         server.process.wait_for_log("serving", PATIENCE),
