@@ -28,6 +28,7 @@ use super::loader::{Loaded, PendingRequest, SceneLoader};
 use super::loops::{Links, Loops};
 use super::ports::{Ports, Wakeups};
 use super::rendezvous::{ANNOUNCED_WAIT, AwakeWatch, Handoff, Work};
+use super::wakeup::{Waker, WakeupReceiver};
 use super::{RunOptions, RuntimeError, publish_period};
 
 /// How often the input counters are logged, when they changed.
@@ -36,6 +37,8 @@ const STATS_LOG_PERIOD: Duration = Duration::from_secs(5);
 /// Owns the ports and the session; validates input, publishes frames, answers control.
 pub(super) struct InteractionManager {
     wakeups: Wakeups,
+    /// Woken by the collision loop and the scene loader.
+    internal: WakeupReceiver,
     io: Io,
 }
 
@@ -101,15 +104,16 @@ struct Lockstep {
 
 impl InteractionManager {
     /// Opens the ports for the session's scene, which `start` starts the loops on; hands work to
-    /// the loops through `links` and takes their frames from `verified`.
+    /// the loops through `links`, takes their frames from `verified`, and wakes for them and for
+    /// loaded scenes on `internal` (`waker` is its sending end).
     pub(super) fn new(
         node: &Node<ipc::Service>,
         session: Session,
         start: &Restart,
         links: &Links,
         verified: Receiver<VerifiedFrame>,
+        (waker, internal): (Waker, WakeupReceiver),
         options: &RunOptions,
-        config: iceoryx2::config::Config,
     ) -> Result<Self, RuntimeError> {
         let geometry = ServedGeometry::of(start);
         let hand_side = hand_side(&session.scene);
@@ -123,7 +127,7 @@ impl InteractionManager {
             verified,
             watch: Arc::clone(&links.io_watch),
             answer: Answer::default(),
-            loader: SceneLoader::new(config, options.limits),
+            loader: SceneLoader::new(waker, options.limits),
             geometry,
             hand_side,
             lockstep: Lockstep {
@@ -137,7 +141,11 @@ impl InteractionManager {
             stats_logged_at: Instant::now(),
         };
         io.reset_parts();
-        Ok(Self { wakeups, io })
+        Ok(Self {
+            wakeups,
+            internal,
+            io,
+        })
     }
 
     /// Serves until a termination signal (or a loop's failure): wakes on input, control and
@@ -156,6 +164,9 @@ impl InteractionManager {
             .into_iter()
             .collect::<Result<Vec<_>, _>>()
             .map_err(attach)?;
+        let internal = waitset
+            .attach_notification(&self.internal)
+            .map_err(attach)?;
         let io = &mut self.io;
         let mut publish_hz = io.session.scene.rates.publish_hz;
         let mut publish_tick = waitset
@@ -169,9 +180,11 @@ impl InteractionManager {
         loop {
             let mut publish_due = false;
             let mut fired = [false; Wakeups::COUNT];
+            let mut woken = false;
             let outcome = waitset
                 .wait_and_process_once(|attachment| {
                     publish_due |= attachment.has_event_from(&publish_tick);
+                    woken |= attachment.has_event_from(&internal);
                     for (fired, guard) in fired.iter_mut().zip(&attached) {
                         *fired |= attachment.has_event_from(guard);
                     }
@@ -189,6 +202,9 @@ impl InteractionManager {
                 io.inputs.announce();
             }
             io.log_failure(self.wakeups.drain(fired));
+            if woken && let Err(error) = self.internal.drain() {
+                tracing::error!(%error, "cannot take the internal wake-ups");
+            }
             io.process_tracker_samples();
             io.process_glove_samples();
             io.answer_control_requests();

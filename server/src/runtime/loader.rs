@@ -10,7 +10,7 @@ use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::prelude::*;
 use vas_protocol::{ControlRequest, ControlResponse};
 
-use super::ports;
+use super::wakeup::Waker;
 use crate::geometry::FileLimits;
 use crate::scene::Scene;
 
@@ -20,8 +20,8 @@ pub(super) type PendingRequest =
 
 /// At most one scene load at a time, on its own thread.
 pub(super) struct SceneLoader {
-    /// For the loader thread's waker of the I/O thread.
-    config: iceoryx2::config::Config,
+    /// Wakes the I/O thread when a load finishes.
+    waker: Waker,
     /// The largest files a load reads.
     limits: FileLimits,
     loading: Option<Loading>,
@@ -40,11 +40,11 @@ pub(super) struct Loaded {
 }
 
 impl SceneLoader {
-    /// A loader whose threads read files within `limits` and wake the I/O thread on `config`'s
-    /// prefix when they finish.
-    pub(super) fn new(config: iceoryx2::config::Config, limits: FileLimits) -> Self {
+    /// A loader whose threads read files within `limits` and wake the I/O thread with `waker`
+    /// when they finish.
+    pub(super) fn new(waker: Waker, limits: FileLimits) -> Self {
         Self {
-            config,
+            waker,
             limits,
             loading: None,
         }
@@ -59,7 +59,7 @@ impl SceneLoader {
     /// back as loaded with the reason.
     pub(super) fn start(&mut self, path: PathBuf, request: PendingRequest) -> Option<Loaded> {
         let (sender, outcome) = crossbeam_channel::bounded(1);
-        let config = self.config.clone();
+        let waker = self.waker.clone();
         let limits = self.limits;
         let spawned = std::thread::Builder::new()
             .name("scene-loader".into())
@@ -70,7 +70,7 @@ impl SceneLoader {
                 }
                 // The receiver is gone only when the server is shutting down.
                 let _ = sender.send(loaded);
-                ports::verified_waker(&config)();
+                waker.wake();
             });
         match spawned {
             Ok(_detached) => {

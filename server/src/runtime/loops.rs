@@ -27,6 +27,7 @@ use super::frames::{
 use super::interaction::{GraspStage, HeldPart, SlideStage};
 use super::rendezvous::{AwakeWatch, Handoff, Received, Work};
 use super::verify::Verifier;
+use super::wakeup::Waker;
 use crate::grasping::{HandInput, PartId};
 use crate::scene::Scene;
 
@@ -88,14 +89,14 @@ pub struct Loops {
 }
 
 impl Loops {
-    /// Starts the loops; verified frames go to `verified`, and the collision loop's thread makes
-    /// its waker with `wake` (iceoryx2 ports stay on the thread that made them) and calls it after
-    /// each frame the I/O thread is not waiting for awake, so that it notices.
+    /// Starts the loops; verified frames go to `verified`, and the collision loop wakes the I/O
+    /// thread with `waker` after each frame the I/O thread is not waiting for awake, so that it
+    /// notices.
     pub fn spawn(
         links: &Links,
         lockstep: bool,
         verified: Sender<VerifiedFrame>,
-        wake: MakeWaker,
+        waker: Waker,
     ) -> std::io::Result<Loops> {
         let grasping = GraspingLoop {
             inbox: Arc::clone(&links.inputs),
@@ -123,7 +124,7 @@ impl Loops {
             inbox: Arc::clone(&links.candidates),
             verified,
             io_watch: Arc::clone(&links.io_watch),
-            wake,
+            waker,
             feedback: Arc::clone(&links.feedback),
             refusals: links.refusals.0.clone(),
             verifier: None,
@@ -160,7 +161,7 @@ impl Loops {
 
     /// Waits for every loop to end (close the inputs first), for at most `patience`: a loop
     /// busy building a large part's tree or hull on its first frame is left behind (the process
-    /// is ending; the next server on the prefix cleans up its waker's node), so that a
+    /// is ending, and loops hold no shared memory), so that a
     /// termination request is honoured within a second whatever the loops are doing.
     pub fn join(self, patience: Duration) {
         let deadline = Instant::now() + patience;
@@ -484,14 +485,12 @@ impl SlidingLoop {
     }
 }
 
-/// Makes, on the collision loop's thread, what wakes the I/O thread.
-pub type MakeWaker = Box<dyn FnOnce() -> Box<dyn FnMut()> + Send>;
-
 struct CollisionLoop {
     inbox: Arc<Handoff<CandidateFrame, Change>>,
     verified: Sender<VerifiedFrame>,
     io_watch: Arc<AwakeWatch>,
-    wake: MakeWaker,
+    /// Wakes the I/O thread when it sleeps and a frame is verified.
+    waker: Waker,
     feedback: Arc<PoseFeedback>,
     refusals: Sender<Refusal>,
     verifier: Option<Verifier>,
@@ -500,24 +499,13 @@ struct CollisionLoop {
 
 impl CollisionLoop {
     fn run(mut self) {
-        // The waker (an iceoryx2 node and notifier) is made when the first verified frame needs
-        // it: a loop still building its first scene's trees when termination comes holds no
-        // shared memory, so leaving it behind leaves nothing behind.
-        let mut make_waker = Some(std::mem::replace(
-            &mut self.wake,
-            Box::new(|| Box::new(|| {})),
-        ));
-        let mut waker: Option<Box<dyn FnMut()>> = None;
         let mut meter = LoopMeter::new("collision");
         loop {
             match self.inbox.receive(None) {
                 Received::Work(Work::Frame(candidate)) => {
                     let started = Instant::now();
                     if self.verify(candidate) && self.io_watch.must_wake() {
-                        let wake = waker.get_or_insert_with(|| {
-                            make_waker.take().expect("made once, kept after")()
-                        });
-                        wake();
+                        self.waker.wake();
                     }
                     meter.frame_done(started);
                 }
@@ -573,6 +561,7 @@ mod tests {
     use super::*;
     use crate::runtime::frames::Restart;
     use crate::runtime::interaction::Interaction;
+    use crate::runtime::wakeup;
     use crate::scene::script::{ScriptedGrasp, sample};
 
     /// Input samples per second.
@@ -636,8 +625,8 @@ mod tests {
 
         let links = Links::default();
         let (verified_in, verified_out) = crossbeam_channel::unbounded();
-        let loops = Loops::spawn(&links, true, verified_in, Box::new(|| Box::new(|| {})))
-            .expect("the loop threads start");
+        let (waker, _wakeups) = wakeup::channel().expect("socket pair");
+        let loops = Loops::spawn(&links, true, verified_in, waker).expect("the loop threads start");
         let restart = Restart::new(Arc::clone(&scene), 1).expect("the hand builds");
         links.inputs.send(Work::Control(restart.into_change()));
         let mut grasps = 0;

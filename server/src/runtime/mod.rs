@@ -23,6 +23,7 @@ pub mod loops;
 mod ports;
 pub mod rendezvous;
 pub mod verify;
+pub mod wakeup;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -164,22 +165,18 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     }
     let links = Links::default();
     let (verified_in, verified_out) = crossbeam_channel::unbounded();
+    let (waker, wakeups) =
+        wakeup::channel().map_err(|error| RuntimeError::ipc("make the wake-up socket", error))?;
     let manager = io::InteractionManager::new(
         &node,
         session,
         &start,
         &links,
         verified_out,
+        (waker.clone(), wakeups),
         options,
-        config.clone(),
     )?;
-    let waker_config = config.clone();
-    let loops = Loops::spawn(
-        &links,
-        options.lockstep,
-        verified_in,
-        Box::new(move || ports::verified_waker(&waker_config)),
-    )?;
+    let loops = Loops::spawn(&links, options.lockstep, verified_in, waker)?;
     let served = manager.serve(start.into_change(), &loops);
     links.inputs.close();
     loops.join(LOOPS_PATIENCE);

@@ -1,5 +1,4 @@
-//! The server's iceoryx2 ports, all owned by the I/O thread (iceoryx2 ports are not `Send`), and
-//! the collision loop's waker of the I/O thread, made on its own thread and node.
+//! The server's iceoryx2 ports, all owned by the I/O thread (iceoryx2 ports are not `Send`).
 
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
@@ -25,17 +24,11 @@ pub(super) struct Wakeups {
     pub(super) glove: Listener<ipc::Service>,
     /// Control requests were sent.
     pub(super) control: Listener<ipc::Service>,
-    /// The collision loop verified frames.
-    pub(super) verified: Listener<ipc::Service>,
 }
-
-/// The server-internal event service through which the collision loop wakes the I/O thread
-/// (under the server's prefix, so no other server meets it).
-pub(super) const VERIFIED: &str = "vas/internal/verified";
 
 impl Wakeups {
     /// How many listeners there are.
-    pub(super) const COUNT: usize = 4;
+    pub(super) const COUNT: usize = 3;
     /// The tracker listener's place in [`Wakeups::listeners`].
     pub(super) const TRACKER: usize = 0;
     /// The glove listener's place in [`Wakeups::listeners`].
@@ -43,7 +36,7 @@ impl Wakeups {
 
     /// Every listener, in a fixed order.
     pub(super) fn listeners(&self) -> [&Listener<ipc::Service>; Self::COUNT] {
-        [&self.tracker, &self.glove, &self.control, &self.verified]
+        [&self.tracker, &self.glove, &self.control]
     }
 
     /// Clears the pending notifications of the listeners that `fired` (in the order of
@@ -112,7 +105,6 @@ impl Ports {
             tracker: listener(TRACKER)?,
             glove: listener(GLOVE)?,
             control: listener(CONTROL)?,
-            verified: listener(VERIFIED)?,
         };
         // The parts service allows one publisher: the first to fail when another server serves
         // this prefix, so its refusal says so in words.
@@ -276,39 +268,5 @@ impl Ports {
         self.parts
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new parts readers", error))
-    }
-}
-
-/// Makes, on the calling thread, a waker of the I/O thread on a node of its own with `config`:
-/// the collision loop calls it after handing over a verified frame. A waker that cannot be made
-/// is logged and does nothing; the I/O thread then still publishes at its publish rate.
-pub(super) fn verified_waker(config: &iceoryx2::config::Config) -> Box<dyn FnMut()> {
-    let notifier = NodeBuilder::new()
-        .config(config)
-        .create::<ipc::Service>()
-        .map_err(|error| format!("{error:?}"))
-        .and_then(|node| {
-            let notifier = services::open_wakeup(&node, VERIFIED)
-                .map_err(|error| error.to_string())?
-                .notifier_builder()
-                .create()
-                .map_err(|error| format!("{error:?}"))?;
-            Ok((node, notifier))
-        });
-    match notifier {
-        Ok((node, notifier)) => Box::new(move || {
-            // The node lives as long as its port.
-            let _node = &node;
-            if let Err(error) = notifier.notify() {
-                tracing::error!(?error, "cannot wake the I/O thread");
-            }
-        }),
-        Err(reason) => {
-            tracing::error!(
-                reason,
-                "cannot make the collision loop's waker; frames are published at the publish rate"
-            );
-            Box::new(|| {})
-        }
     }
 }
