@@ -9,6 +9,7 @@
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
+use nalgebra::{Isometry3, Vector3};
 use vas_client::recording::Recording;
 use vas_fuzz::{
     CollisionCase, check_hand, check_mesh, check_tree, configs_dir, is_finite, orientations,
@@ -18,8 +19,10 @@ use vas_protocol::{
     ControlRequest, ControlRequestKind, ControlStatus, FLEX_LIMITS_RAD, GloveSample,
     PartDescription, TrackerSample,
 };
-use vas_server::collision::orientation::SUPPORTED_K;
+use vas_server::collision::dop_tree::{DEFAULT_LEAF_SIZE, TreeCache};
+use vas_server::collision::orientation::{DEFAULT_K, SUPPORTED_K};
 use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
+use vas_server::geometry::shapes;
 use vas_server::geometry::{FileLimits, GltfFile, TriMesh, load_mesh, mesh_from_bytes};
 use vas_server::grasping::HandModel;
 use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
@@ -120,7 +123,7 @@ fn scene_toml() {
         {
             return;
         }
-        let Ok(scene) = Scene::from_toml(&path, text, &FileLimits::default()) else {
+        let Ok(scene) = Scene::from_toml(&path, text, &Default::default()) else {
             return;
         };
         assert!(!scene.name.trim().is_empty());
@@ -327,6 +330,37 @@ fn dop_tree_against_brute_force() {
                 }
             }
         });
+}
+
+/// A file of the tree cache (`--tree-cache`), seeded with a valid one: whatever the file holds,
+/// the cache serves a tree of the mesh (the file's if it is valid, else a fresh build) whose
+/// answers are the brute force's.
+#[test]
+fn tree_cache_file() {
+    let mesh = shapes::sphere(0.05, 200);
+    let other = shapes::cuboid(Vector3::new(0.04, 0.04, 0.04), 12);
+    let set = orientations(DEFAULT_K);
+    let folder = std::env::temp_dir().join(format!("vas-fuzz-tree-cache-{}", std::process::id()));
+    let cache = TreeCache::open(&folder).expect("a scratch folder");
+    let file = cache.file_of(&mesh, set, DEFAULT_LEAF_SIZE);
+    let other_tree = DopTree::with_options(&other, set, DEFAULT_LEAF_SIZE);
+    let poses: Vec<_> = [0.0, 0.03, 0.06, 0.1]
+        .map(|x| Isometry3::new(Vector3::new(x, 0.01, 0.0), Vector3::new(0.3, 0.2, 0.1)))
+        .into();
+    let expected: Vec<_> = (poses.iter())
+        .map(|pose| brute_force_pairs(&mesh, &other, pose))
+        .collect();
+    bolero::check!().for_each(|bytes: &[u8]| {
+        std::fs::write(&file, bytes).expect("write the file");
+        let (tree, _) = cache.tree(&mesh, set, DEFAULT_LEAF_SIZE);
+        let mut stats = Default::default();
+        for (pose, expected) in poses.iter().zip(&expected) {
+            let mut pairs = Vec::new();
+            tree.intersecting_pairs(&other_tree, pose, &mut pairs, &mut stats);
+            pairs.sort_unstable();
+            assert_eq!(&pairs, expected, "pairs at {pose}");
+        }
+    });
 }
 
 /// A message from a viewer page, as the viewer judges it: the first byte picks a text message

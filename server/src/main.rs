@@ -4,14 +4,16 @@ use std::io::IsTerminal;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
+use vas_server::collision::dop_tree::{Provenance, TreeCache};
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{FileLimits, write_obj};
 use vas_server::runtime;
-use vas_server::scene::{Scene, default_scene_path};
+use vas_server::scene::{LoadOptions, Scene, default_scene_path};
 
 /// vas: headless virtual-assembly simulation server.
 #[derive(Debug, Parser)]
@@ -40,7 +42,7 @@ enum Command {
         #[arg(long)]
         lockstep: bool,
         #[command(flatten)]
-        limits: LimitArgs,
+        load: LoadArgs,
     },
     /// Write a procedural test object (unit size, centred at the origin) as an OBJ file.
     Shape {
@@ -63,14 +65,14 @@ enum Command {
         #[arg(long)]
         prepare: bool,
         #[command(flatten)]
-        limits: LimitArgs,
+        load: LoadArgs,
     },
 }
 
-/// The largest files a scene load reads (larger ones are refused with their size) and the most
-/// triangles it takes.
+/// How scenes are loaded: the largest files read (larger ones are refused with their size), the
+/// most triangles taken, and where built trees are kept.
 #[derive(Debug, Args)]
-struct LimitArgs {
+struct LoadArgs {
     /// The largest mesh file, in bytes or with a unit (KiB, MiB, GiB).
     #[arg(long, value_name = "SIZE", default_value = "4GiB", value_parser = parse_size)]
     max_mesh_file: u64,
@@ -80,15 +82,29 @@ struct LimitArgs {
     /// The most triangles of a scene's parts together (shapes and files alike).
     #[arg(long, value_name = "N", default_value_t = FileLimits::default().scene_triangles)]
     max_scene_triangles: u64,
+    /// A folder (made if missing) where the parts' DOP-trees are kept once built, so that the
+    /// next start reads them; a file that is stale, corrupt or not a valid tree of its mesh is
+    /// built again.
+    #[arg(long, value_name = "DIR")]
+    tree_cache: Option<PathBuf>,
 }
 
-impl LimitArgs {
-    fn limits(&self) -> FileLimits {
-        FileLimits {
-            mesh_bytes: self.max_mesh_file,
-            config_bytes: self.max_config_file,
-            scene_triangles: self.max_scene_triangles,
-        }
+impl LoadArgs {
+    fn options(&self) -> anyhow::Result<LoadOptions> {
+        let tree_cache = match &self.tree_cache {
+            Some(folder) => Some(Arc::new(TreeCache::open(folder).map_err(|error| {
+                anyhow::anyhow!("cannot use {} as the tree cache: {error}", folder.display())
+            })?)),
+            None => None,
+        };
+        Ok(LoadOptions {
+            limits: FileLimits {
+                mesh_bytes: self.max_mesh_file,
+                config_bytes: self.max_config_file,
+                scene_triangles: self.max_scene_triangles,
+            },
+            tree_cache,
+        })
     }
 }
 
@@ -104,15 +120,17 @@ fn main() -> ExitCode {
             scenes,
             prefix,
             lockstep,
-            limits,
-        } => runtime::run(&runtime::RunOptions {
-            scene: scene.unwrap_or_else(default_scene_path),
-            scenes,
-            prefix,
-            lockstep,
-            limits: limits.limits(),
-        })
-        .map_err(Into::into),
+            load,
+        } => load.options().and_then(|load| {
+            runtime::run(&runtime::RunOptions {
+                scene: scene.unwrap_or_else(default_scene_path),
+                scenes,
+                prefix,
+                lockstep,
+                load,
+            })
+            .map_err(Into::into)
+        }),
         Command::Shape {
             kind,
             triangles,
@@ -121,8 +139,10 @@ fn main() -> ExitCode {
         Command::CheckScene {
             file,
             prepare,
-            limits,
-        } => check_scene(&file, prepare, &limits.limits()),
+            load,
+        } => load
+            .options()
+            .and_then(|load| check_scene(&file, prepare, &load)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -136,8 +156,8 @@ fn main() -> ExitCode {
 
 /// `vas-server check-scene`: loads the scene, prints its summary and, with `prepare`, builds
 /// its parts' trees and hulls with a progress bar (on a terminal) and prints the time.
-fn check_scene(file: &Path, prepare: bool, limits: &FileLimits) -> anyhow::Result<()> {
-    let scene = Scene::load_within(file, limits)?;
+fn check_scene(file: &Path, prepare: bool, load: &LoadOptions) -> anyhow::Result<()> {
+    let scene = Scene::load_with(file, load)?;
     let mut report = scene.summary();
     if prepare {
         let started = std::time::Instant::now();
@@ -150,10 +170,20 @@ fn check_scene(file: &Path, prepare: bool, limits: &FileLimits) -> anyhow::Resul
         });
         bar.finish_and_clear();
         report.push_str(&format!(
-            "prepared (DOP-trees and convex hulls of {} parts) in {:.2} s\n",
+            "\nprepared (DOP-trees and convex hulls of {} parts) in {:.2} s",
             scene.parts.len(),
             started.elapsed().as_secs_f64()
         ));
+        if let Some(cache) = &load.tree_cache {
+            let read = (scene.parts.iter())
+                .filter(|part| part.tree.provenance() == Some(Provenance::Read))
+                .count();
+            report.push_str(&format!(
+                "\ntrees of {read} of {} parts read from the tree cache {}",
+                scene.parts.len(),
+                cache.folder().display()
+            ));
+        }
     }
     match writeln!(std::io::stdout().lock(), "{report}") {
         // The reader went away (`check-scene ... | head`): nothing is wrong.

@@ -419,7 +419,7 @@ mod tests {
             pose,
             movable,
             group: "default".into(),
-            tree: PartTree::new(DEFAULT_K),
+            tree: PartTree::new(DEFAULT_K, None),
         }
     }
 

@@ -127,7 +127,7 @@ impl InteractionManager {
             verified,
             watch: Arc::clone(&links.io_watch),
             answer: Answer::default(),
-            loader: SceneLoader::new(waker, options.limits),
+            loader: SceneLoader::new(waker, options.load.clone()),
             geometry,
             hand_side,
             lockstep: Lockstep {

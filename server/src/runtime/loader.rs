@@ -11,8 +11,7 @@ use iceoryx2::prelude::*;
 use vas_protocol::{ControlRequest, ControlResponse};
 
 use super::wakeup::Waker;
-use crate::geometry::FileLimits;
-use crate::scene::Scene;
+use crate::scene::{LoadOptions, Scene};
 
 /// A control request being answered, held until its answer is ready.
 pub(super) type PendingRequest =
@@ -22,8 +21,8 @@ pub(super) type PendingRequest =
 pub(super) struct SceneLoader {
     /// Wakes the I/O thread when a load finishes.
     waker: Waker,
-    /// The largest files a load reads.
-    limits: FileLimits,
+    /// How scenes are loaded.
+    options: LoadOptions,
     loading: Option<Loading>,
 }
 
@@ -40,12 +39,12 @@ pub(super) struct Loaded {
 }
 
 impl SceneLoader {
-    /// A loader whose threads read files within `limits` and wake the I/O thread with `waker`
+    /// A loader whose threads load scenes with `options` and wake the I/O thread with `waker`
     /// when they finish.
-    pub(super) fn new(waker: Waker, limits: FileLimits) -> Self {
+    pub(super) fn new(waker: Waker, options: LoadOptions) -> Self {
         Self {
             waker,
-            limits,
+            options,
             loading: None,
         }
     }
@@ -60,11 +59,11 @@ impl SceneLoader {
     pub(super) fn start(&mut self, path: PathBuf, request: PendingRequest) -> Option<Loaded> {
         let (sender, outcome) = crossbeam_channel::bounded(1);
         let waker = self.waker.clone();
-        let limits = self.limits;
+        let options = self.options.clone();
         let spawned = std::thread::Builder::new()
             .name("scene-loader".into())
             .spawn(move || {
-                let loaded = Scene::load_within(&path, &limits).map_err(|error| error.to_string());
+                let loaded = Scene::load_with(&path, &options).map_err(|error| error.to_string());
                 if let Ok(scene) = &loaded {
                     scene.prepare();
                 }

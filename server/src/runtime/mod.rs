@@ -33,14 +33,13 @@ use crossbeam_channel::RecvTimeoutError;
 use iceoryx2::prelude::*;
 use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
 
-use crate::geometry::FileLimits;
-use crate::scene::{Scene, SceneError, log_prepared};
+use crate::scene::{LoadOptions, Scene, SceneError, log_prepared};
 use control::Session;
 use frames::HandSetupError;
 use loops::{Links, Loops};
 
 /// What `vas-server run` serves, and where.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct RunOptions {
     /// The scene file to load.
     pub scene: PathBuf,
@@ -53,8 +52,9 @@ pub struct RunOptions {
     /// One frame per input sample, each handed over when the previous one was verified, and no
     /// loop steps on its own: a replay gives the same output every time.
     pub lockstep: bool,
-    /// The largest files read, at start-up and for a load-scene request alike.
-    pub limits: FileLimits,
+    /// How scenes are loaded (the largest files read, the tree cache), at start-up and for a
+    /// load-scene request alike.
+    pub load: LoadOptions,
 }
 
 /// Why the server could not start or had to stop.
@@ -204,12 +204,12 @@ fn load_to_serve(
     options: &RunOptions,
 ) -> Result<Option<Scene>, RuntimeError> {
     let (sender, loaded) = crossbeam_channel::bounded(1);
-    let (path, limits) = (options.scene.clone(), options.limits);
+    let (path, load) = (options.scene.clone(), options.load.clone());
     std::thread::Builder::new()
         .name("scene-loader".into())
         .spawn(move || {
             let started = Instant::now();
-            let scene = Scene::load_within(&path, &limits);
+            let scene = Scene::load_with(&path, &load);
             if let Ok(scene) = &scene {
                 tracing::info!(
                     scene = scene.name,

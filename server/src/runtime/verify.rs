@@ -533,7 +533,7 @@ mod tests {
             let mut scene = peg_in_hole();
             scene.params.dop_orientations = k;
             for part in &mut scene.parts {
-                part.tree = PartTree::new(k);
+                part.tree = PartTree::new(k, None);
             }
             hand_refused_inside_a_part(&scene);
         }

@@ -58,6 +58,7 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::Deserialize;
 use thiserror::Error;
 
+use crate::collision::dop_tree::{DEFAULT_LEAF_SIZE, Provenance, TreeCache};
 use crate::collision::interest::{GroupId, InterestMatrix};
 use crate::collision::pipeline::ObjectId;
 use crate::collision::{DopTree, OrientationSet};
@@ -202,11 +203,13 @@ pub fn log_prepared(scene: &str, total: usize) -> impl Fn(&Part, f64) + Sync + u
     move |part, seconds| {
         let done = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         let triangles = part.mesh.triangles().len();
+        let tree = part.tree.provenance();
         if triangles >= LARGE_PART_TRIANGLES {
             tracing::info!(
                 scene,
                 part = part.name,
                 triangles,
+                ?tree,
                 seconds,
                 "part ready ({done} of {total})"
             );
@@ -215,6 +218,7 @@ pub fn log_prepared(scene: &str, total: usize) -> impl Fn(&Part, f64) + Sync + u
                 scene,
                 part = part.name,
                 triangles,
+                ?tree,
                 seconds,
                 "part ready ({done} of {total})"
             );
@@ -231,15 +235,19 @@ pub fn log_prepared(scene: &str, total: usize) -> impl Fn(&Part, f64) + Sync + u
 #[derive(Debug, Clone)]
 pub struct PartTree {
     orientations: usize,
-    tree: Arc<OnceLock<DopTree>>,
+    /// Where the tree is read from, and stored once built, if anywhere.
+    cache: Option<Arc<TreeCache>>,
+    tree: Arc<OnceLock<(DopTree, Provenance)>>,
     hull: Arc<OnceLock<ConvexHull>>,
 }
 
 impl PartTree {
-    /// A tree of `orientations` directions (one of [`DOP_ORIENTATION_COUNTS`]), not built yet.
-    pub fn new(orientations: usize) -> PartTree {
+    /// A tree of `orientations` directions (one of [`DOP_ORIENTATION_COUNTS`]), not built yet;
+    /// `cache` keeps it once built.
+    pub fn new(orientations: usize, cache: Option<Arc<TreeCache>>) -> PartTree {
         PartTree {
             orientations,
+            cache,
             tree: Arc::default(),
             hull: Arc::default(),
         }
@@ -247,11 +255,38 @@ impl PartTree {
 
     /// The tree over `mesh`, which must be the mesh of every part holding this tree.
     fn get(&self, mesh: &TriMesh) -> &DopTree {
-        self.tree.get_or_init(|| {
+        let (tree, _) = self.tree.get_or_init(|| {
             let set = OrientationSet::new(self.orientations)
                 .expect("the scene validated its orientation count");
-            DopTree::with_orientations(mesh, &set)
-        })
+            match &self.cache {
+                Some(cache) => cache.tree(mesh, &set, DEFAULT_LEAF_SIZE),
+                None => (DopTree::with_orientations(mesh, &set), Provenance::Built),
+            }
+        });
+        tree
+    }
+
+    /// Where the tree came from, once it is there.
+    pub fn provenance(&self) -> Option<Provenance> {
+        self.tree.get().map(|(_, provenance)| *provenance)
+    }
+}
+
+/// How a scene is loaded: the largest files it may read, and where its trees are cached.
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    /// The largest files read.
+    pub limits: FileLimits,
+    /// The folder of built trees (`--tree-cache`), if any.
+    pub tree_cache: Option<Arc<TreeCache>>,
+}
+
+impl From<FileLimits> for LoadOptions {
+    fn from(limits: FileLimits) -> Self {
+        LoadOptions {
+            limits,
+            tree_cache: None,
+        }
     }
 }
 
@@ -366,22 +401,24 @@ impl Scene {
     /// relative to the config's folder. Each file may have the [default](FileLimits::default)
     /// size at most.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        Scene::load_within(path, &FileLimits::default())
+        Scene::load_with(path, &LoadOptions::default())
     }
 
-    /// [`Scene::load`] of files (config, meshes, hand model) of at most `limits`.
-    pub fn load_within(path: &Path, limits: &FileLimits) -> Result<Scene, SceneError> {
-        let text =
-            read_regular_text(path, limits.config_bytes).map_err(|source| SceneError::Read {
+    /// [`Scene::load`] of files (config, meshes, hand model) within `options`' limits, with its
+    /// trees in `options`' cache.
+    pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
+        let text = read_regular_text(path, options.limits.config_bytes).map_err(|source| {
+            SceneError::Read {
                 file: path.to_owned(),
                 source,
-            })?;
-        Scene::from_toml(path, &text, limits)
+            }
+        })?;
+        Scene::from_toml(path, &text, options)
     }
 
-    /// [`Scene::load_within`] on a config's text already read from `path`: errors name `path`,
+    /// [`Scene::load_with`] on a config's text already read from `path`: errors name `path`,
     /// and mesh and hand paths are relative to its folder.
-    pub fn from_toml(path: &Path, text: &str, limits: &FileLimits) -> Result<Scene, SceneError> {
+    pub fn from_toml(path: &Path, text: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Syntax {
             file: path.to_owned(),
             message: describe_toml_error(text, &e),
@@ -389,7 +426,8 @@ impl Scene {
         Loader {
             path,
             folder: path.parent().unwrap_or(Path::new("")),
-            limits,
+            limits: &options.limits,
+            tree_cache: options.tree_cache.clone(),
             meshes: HashMap::new(),
             by_content: HashMap::new(),
             orientations: file.params.dop_orientations,
@@ -547,6 +585,8 @@ struct Loader<'a> {
     folder: &'a Path,
     /// The largest files read.
     limits: &'a FileLimits,
+    /// Where the parts' trees are cached.
+    tree_cache: Option<Arc<TreeCache>>,
     /// Meshes already loaded or built, with their trees, by source, so that parts sharing one
     /// are loaded once and share its tree.
     meshes: HashMap<String, (Arc<TriMesh>, PartTree)>,
@@ -879,7 +919,10 @@ impl Loader<'_> {
         let entry = match same_content.iter().find(|(kept, _)| **kept == mesh) {
             Some(kept) => kept.clone(),
             None => {
-                let entry = (Arc::new(mesh), PartTree::new(self.orientations));
+                let entry = (
+                    Arc::new(mesh),
+                    PartTree::new(self.orientations, self.tree_cache.clone()),
+                );
                 same_content.push(entry.clone());
                 entry
             }

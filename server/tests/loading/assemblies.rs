@@ -34,7 +34,7 @@ fn load_beside_the_fixtures(
     }
     let path = dir.join(format!("test_{test}.toml"));
     std::fs::write(&path, contents).unwrap();
-    Scene::load_within(&path, limits).map_err(|e| e.to_string())
+    Scene::load_with(&path, &(*limits).into()).map_err(|e| e.to_string())
 }
 
 fn expected_nodes() -> Vec<Value> {

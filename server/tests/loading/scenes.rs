@@ -751,10 +751,10 @@ fn files_beyond_the_configured_limits_are_refused() {
     use vas_server::geometry::FileLimits;
     let scene = configs().join("default.toml");
     let loose = FileLimits::default();
-    Scene::load_within(&scene, &loose).expect("the default limits take the demo scene");
+    Scene::load_with(&scene, &loose.into()).expect("the default limits take the demo scene");
 
     let refusal = |limits: FileLimits| {
-        Scene::load_within(&scene, &limits)
+        Scene::load_with(&scene, &limits.into())
             .expect_err("a limit below the file's size refuses it")
             .to_string()
     };
@@ -801,4 +801,76 @@ fn files_beyond_the_configured_limits_are_refused() {
     assert!(!nonsense.status.success());
     let stderr = String::from_utf8_lossy(&nonsense.stderr);
     assert!(stderr.contains("--max-mesh-file"), "{stderr}");
+}
+
+/// With `--tree-cache`, the trees built by one start are read by the next; a damaged file is
+/// refused, built again and replaced; a cache that cannot be a folder is an error.
+#[test]
+fn a_tree_cache_serves_the_next_start_and_refuses_a_damaged_file() {
+    let binary = env!("CARGO_BIN_EXE_vas-server");
+    let dir = scratch_dir("tree_cache");
+    let cache = dir.join("trees");
+    let _ = std::fs::remove_dir_all(&cache);
+    let scene = write(
+        &dir,
+        "scene.toml",
+        &format!(
+            "name = \"s\"\n[[parts]]\nname = \"ball\"\n\
+             shape = {{ kind = \"sphere\", radius = 0.1, triangles = 20000 }}\n\
+             position = [0.5, 0, 0]\n{PEG}"
+        ),
+    );
+    let check = || {
+        let output = Command::new(binary)
+            .args(["check-scene", "--prepare", "--tree-cache"])
+            .arg(&cache)
+            .arg(&scene)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(output.status.success(), "{stdout}{stderr}");
+        (stdout, stderr)
+    };
+    let read = |count: usize| format!("trees of {count} of 2 parts read from the tree cache");
+    let (stdout, _) = check();
+    assert!(stdout.contains(&read(0)), "{stdout}");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 2, "a file a tree: {files:?}");
+    let (stdout, _) = check();
+    assert!(stdout.contains(&read(2)), "{stdout}");
+
+    files.sort_by_key(|file| std::fs::metadata(file).unwrap().len());
+    let ball = &files[1];
+    let good = std::fs::read(ball).unwrap();
+    let mut damaged = good.clone();
+    let middle = damaged.len() / 2;
+    damaged[middle] ^= 1;
+    std::fs::write(ball, &damaged).unwrap();
+    let (stdout, stderr) = check();
+    assert!(stdout.contains(&read(1)), "{stdout}");
+    assert!(
+        stderr.contains("cached tree refused") && stderr.contains("checksum"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(ball).unwrap(), good, "replaced by a good one");
+    let (stdout, _) = check();
+    assert!(stdout.contains(&read(2)), "{stdout}");
+
+    let not_a_folder = write(&dir, "file", "");
+    let failed = Command::new(binary)
+        .args(["check-scene", "--tree-cache"])
+        .arg(&not_a_folder)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(!failed.status.success());
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert!(
+        stderr.contains("cannot use") && stderr.contains("tree cache"),
+        "{stderr}"
+    );
 }

@@ -18,13 +18,18 @@ use rayon::prelude::*;
 
 use super::node_bounds::{NodeBox, NodeSphere};
 use super::separation::BOX_TEST_MAX_TRIANGLES;
-use super::tree::{DopTree, Node};
+use super::tree::{Arrays, DopTree, Node};
 use crate::collision::orientation::OrientationSet;
 use crate::collision::triangle::Triangle;
-use crate::geometry::{TriMesh, bounding_sphere_of};
+use crate::geometry::TriMesh;
 
 /// Source of tree ids (0 is never given out: it marks an empty memory slot).
 static NEXT_TREE_ID: AtomicU64 = AtomicU64::new(1);
+
+/// A tree id never given out before.
+pub(super) fn next_tree_id() -> u64 {
+    NEXT_TREE_ID.fetch_add(1, Ordering::Relaxed)
+}
 
 /// Nodes of at least this many triangles build their two halves in parallel: below it, the
 /// work of a half is too small to pay for handing it to another thread.
@@ -146,26 +151,18 @@ impl<'a> TreeBuilder<'a> {
         }
         .split_at(1);
         self.fill(&plan, &order, 0, 0, &mut root, below);
-        let max_abs_offset = offsets[..k].iter().fold(0.0f32, |m, d| m.max(d.abs()));
-        let (bounding_centre, radius) = bounding_sphere_of(self.triangles.iter().flatten());
-        DopTree {
-            id: NEXT_TREE_ID.fetch_add(1, Ordering::Relaxed),
-            bounding_centre,
-            bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
-            set: self.set.clone(),
-            k,
-            nodes: nodes.into(),
-            parents: parents.into(),
-            triangle_ranges: triangle_ranges.into(),
-            offsets: offsets.into(),
-            triangles: order
-                .par_iter()
-                .map(|&i| self.triangles[i as usize])
-                .collect(),
-            triangle_ids: order.into(),
-            max_abs_offset,
-            boxes: boxes.into(),
-        }
+        DopTree::assemble(
+            Arrays {
+                set: self.set.clone(),
+                nodes,
+                parents,
+                triangle_ranges,
+                offsets,
+                boxes,
+                triangle_ids: order,
+            },
+            |i| self.triangles[i],
+        )
     }
 
     /// Splits `order` (triangle indices) recursively until at most `leaf_size` remain, leaving

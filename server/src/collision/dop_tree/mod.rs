@@ -10,14 +10,19 @@
 //! - `root_separation`: the cheap proof that the two roots are apart;
 //! - `realign`: B's nodes mapped into A's orientations in O(k), cached per query;
 //! - `traverse`: the depth-first walk over node pairs; `separation`: the tests beyond the DOPs
-//!   and the certificates they leave; `parallel`: the walk split across threads.
+//!   and the certificates they leave; `parallel`: the walk split across threads;
+//! - `cache`: built trees kept in a folder, as `persist` writes and reads them, and `check`
+//!   accepts them.
 
 mod build;
+mod cache;
 mod certificates;
+mod check;
 mod front;
 mod node_bounds;
 mod pair_memory;
 mod parallel;
+mod persist;
 mod query;
 mod realign;
 mod root_separation;
@@ -25,6 +30,7 @@ mod separation;
 mod traverse;
 mod tree;
 
+pub use cache::{Provenance, TreeCache};
 pub use tree::{DEFAULT_LEAF_SIZE, DopTree};
 
 // The traversal is generic over how B's nodes are re-aligned, so that another method (the

@@ -11,7 +11,8 @@ use crate::collision::triangle::Triangle;
 use crate::geometry::bounding_box_of;
 
 /// A sphere enclosing a node's triangles, in its tree's frame.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(super) struct NodeSphere {
     pub(super) centre: [f32; 3],
     pub(super) radius: f32,
@@ -41,7 +42,8 @@ impl NodeSphere {
 /// An oriented box around a node's triangles, in its tree's frame and in `f32` (the box tests of
 /// [`TreePair::box_separation`](super::traverse::TreePair::box_separation) read it beside the
 /// DOPs, so it is kept as small as they are).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(super) struct NodeBox {
     /// Axes as columns, unit and orthogonal to `f32` rounding.
     axes: [[f32; 3]; 3],

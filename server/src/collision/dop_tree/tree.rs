@@ -9,21 +9,23 @@
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3};
+use rayon::prelude::*;
 
-use super::build::TreeBuilder;
+use super::build::{TreeBuilder, next_tree_id};
 use super::node_bounds::{NodeBox, NodeSphere};
 use super::query::with_affine;
 use crate::collision::orientation::OrientationSet;
 use crate::collision::triangle::Triangle;
 use crate::collision::{MeshCollider, QueryStats};
-use crate::geometry::TriMesh;
+use crate::geometry::{TriMesh, bounding_sphere_of};
 
 /// Default number of triangles per leaf (the fastest in the tumbling benchmark, B1).
 pub const DEFAULT_LEAF_SIZE: usize = 1;
 
 /// One tree node: a leaf (`count > 0`) owns triangles `first..first + count`; an inner node
 /// (`count == 0`) has children `first` and `first + 1`.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(crate) struct Node {
     pub(super) first: u32,
     pub(super) count: u32,
@@ -72,7 +74,49 @@ pub struct DopTree {
     pub(super) bounding_radius: f64,
 }
 
+/// What a build computes, from which [`DopTree::assemble`] makes the tree; also what the tree
+/// cache reads back.
+pub(super) struct Arrays {
+    pub(super) set: OrientationSet,
+    pub(super) nodes: Vec<Node>,
+    pub(super) parents: Vec<u32>,
+    pub(super) triangle_ranges: Vec<[u32; 2]>,
+    pub(super) offsets: Vec<f32>,
+    pub(super) boxes: Vec<NodeBox>,
+    /// The mesh's triangle indices in leaf order.
+    pub(super) triangle_ids: Vec<u32>,
+}
+
 impl DopTree {
+    /// The tree of `arrays`, with a fresh id, over the mesh whose triangle `i` is `triangle(i)`.
+    pub(super) fn assemble(arrays: Arrays, triangle: impl Fn(usize) -> Triangle + Sync) -> Self {
+        let k = arrays.set.k();
+        let max_abs_offset = arrays.offsets[..k]
+            .iter()
+            .fold(0.0f32, |m, d| m.max(d.abs()));
+        let triangles: Arc<[Triangle]> = arrays
+            .triangle_ids
+            .par_iter()
+            .map(|&i| triangle(i as usize))
+            .collect();
+        let (bounding_centre, radius) = bounding_sphere_of(triangles.iter().flatten());
+        DopTree {
+            id: next_tree_id(),
+            bounding_centre,
+            bounding_radius: radius * (1.0 + 1e-9) + 1e-12,
+            set: arrays.set,
+            k,
+            nodes: arrays.nodes.into(),
+            parents: arrays.parents.into(),
+            triangle_ranges: arrays.triangle_ranges.into(),
+            offsets: arrays.offsets.into(),
+            triangles,
+            triangle_ids: arrays.triangle_ids.into(),
+            max_abs_offset,
+            boxes: arrays.boxes.into(),
+        }
+    }
+
     /// Builds the tree over `mesh` with orientation set `set` and at most `leaf_size` (>= 1)
     /// triangles per leaf.
     pub fn with_options(mesh: &TriMesh, set: &OrientationSet, leaf_size: usize) -> Self {

@@ -1,0 +1,288 @@
+//! A tree checked against its triangles: that its nodes form one tree laid out as the traversal
+//! reads it, and that every bound the traversal trusts (DOP offsets, spheres, boxes) holds every
+//! triangle under its node. A tree that passes answers no query wrongly, whoever built it: a tree
+//! read from a cache is checked so before it is used.
+
+use nalgebra::Matrix3;
+use rayon::prelude::*;
+
+use super::separation::BOX_TEST_MAX_TRIANGLES;
+use super::tree::{DopTree, Node};
+
+/// What is wrong with a tree, in words.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct Defect(String);
+
+fn defect(what: impl Into<String>) -> Defect {
+    Defect(what.into())
+}
+
+/// The parent of each node and the triangles under it (`start..end` in leaf order) of `nodes`
+/// over `triangle_count` triangles in leaf order, if they form one tree as the builder lays it
+/// out: the root first, the two children of an inner node adjacent and after it, every node
+/// reached once, leaves taking the triangles in order, each exactly once.
+pub(super) fn structure(
+    nodes: &[Node],
+    triangle_count: usize,
+) -> Result<(Vec<u32>, Vec<[u32; 2]>), Defect> {
+    const UNREACHED: u32 = u32::MAX;
+    if nodes.is_empty() || nodes.len() > 2 * triangle_count.max(1) {
+        return Err(defect(format!(
+            "{} nodes for {triangle_count} triangles",
+            nodes.len()
+        )));
+    }
+    let mut parents = vec![UNREACHED; nodes.len()];
+    parents[0] = 0;
+    let mut ranges = vec![[0u32; 2]; nodes.len()];
+    let mut next_triangle = 0usize;
+    let mut stack = vec![0usize];
+    while let Some(index) = stack.pop() {
+        let node = &nodes[index];
+        let first = node.first as usize;
+        if node.is_leaf() {
+            let end = first + node.count as usize;
+            if first != next_triangle || end > triangle_count {
+                return Err(defect(format!(
+                    "leaf {index} holds triangles {first}..{end}, not the next ones from \
+                     {next_triangle} of {triangle_count}"
+                )));
+            }
+            ranges[index] = [first as u32, end as u32];
+            next_triangle = end;
+            continue;
+        }
+        if first <= index || first + 1 >= nodes.len() {
+            return Err(defect(format!(
+                "node {index} has children {first} and {} of {} nodes",
+                first + 1,
+                nodes.len()
+            )));
+        }
+        for child in [first, first + 1] {
+            if parents[child] != UNREACHED {
+                return Err(defect(format!("node {child} is reached twice")));
+            }
+            parents[child] = index as u32;
+        }
+        // The left subtree's triangles come first.
+        stack.extend([first + 1, first]);
+    }
+    if let Some(index) = parents.iter().position(|&p| p == UNREACHED) {
+        return Err(defect(format!("node {index} is not in the tree")));
+    }
+    if next_triangle != triangle_count {
+        return Err(defect(format!(
+            "the leaves hold {next_triangle} of {triangle_count} triangles"
+        )));
+    }
+    // Children come after their parent: in reverse order, a node's children are done first.
+    for index in (0..nodes.len()).rev() {
+        let node = &nodes[index];
+        if !node.is_leaf() {
+            let first = node.first as usize;
+            ranges[index] = [ranges[first][0], ranges[first + 1][1]];
+        }
+    }
+    Ok((parents, ranges))
+}
+
+/// Whether the triangle ids of a tree over `triangle_count` triangles name each exactly once.
+pub(super) fn permutation(ids: &[u32], triangle_count: usize) -> Result<(), Defect> {
+    if ids.len() != triangle_count {
+        return Err(defect(format!(
+            "{} triangle ids for {triangle_count} triangles",
+            ids.len()
+        )));
+    }
+    let mut seen = vec![false; triangle_count];
+    for &id in ids {
+        match seen.get_mut(id as usize) {
+            Some(seen) if !*seen => *seen = true,
+            _ => {
+                return Err(defect(format!(
+                    "triangle id {id} is out of range or repeated"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether every bound of `tree` (laid out as [`structure`] accepts) holds its node's triangles:
+/// each leaf's offsets bound its triangles along every normal and each inner node's its
+/// children's; each sphere holds its node's corners; each box the traversal reads (nodes of at
+/// most [`BOX_TEST_MAX_TRIANGLES`] triangles) holds them. Also that node sizes are what the
+/// offsets give, for the traversal's choice of which node to descend.
+pub(super) fn bounds(tree: &DopTree) -> Result<(), Defect> {
+    let k = tree.k;
+    (0..tree.nodes.len()).into_par_iter().try_for_each(|index| {
+        let node = &tree.nodes[index];
+        let offsets = tree.node_offsets(index);
+        if offsets.iter().any(|d| !d.is_finite()) {
+            return Err(defect(format!(
+                "node {index} has an offset that is not finite"
+            )));
+        }
+        let triangles = tree.node_triangles(index as u32);
+        if node.is_leaf() {
+            for (i, &offset) in offsets.iter().enumerate() {
+                let normal = tree.set.normal(i);
+                let reach = (triangles.iter().flatten())
+                    .map(|p| normal.dot(&p.coords))
+                    .fold(f64::MIN, f64::max);
+                if f64::from(offset) < reach {
+                    return Err(defect(format!("leaf {index} does not bound its triangles")));
+                }
+            }
+        } else {
+            let first = node.first as usize;
+            let children = [tree.node_offsets(first), tree.node_offsets(first + 1)];
+            if (0..k).any(|i| offsets[i] < children[0][i].max(children[1][i])) {
+                return Err(defect(format!("node {index} does not bound its children")));
+            }
+        }
+        let sphere = &node.sphere;
+        let radius = f64::from(sphere.radius);
+        if !radius.is_finite()
+            || (triangles.iter().flatten()).any(|p| (p.coords - sphere.centre()).norm() > radius)
+        {
+            return Err(defect(format!(
+                "the sphere of node {index} misses a corner"
+            )));
+        }
+        if triangles.len() <= BOX_TEST_MAX_TRIANGLES {
+            let oriented = tree.boxes[index].oriented();
+            let to_box: Option<Matrix3<f64>> = oriented.axes.try_inverse();
+            let holds = to_box.is_some_and(|to_box| {
+                (triangles.iter().flatten()).all(|p| {
+                    let u = to_box * (p.coords - oriented.center);
+                    (0..3).all(|i| u[i].abs() <= oriented.extents[i])
+                })
+            });
+            if !holds {
+                return Err(defect(format!("the box of node {index} misses a corner")));
+            }
+        }
+        let h = k / 2;
+        let size = (0..h)
+            .map(|i| offsets[i] + offsets[i + h])
+            .fold(0.0, f32::max);
+        if node.size != size {
+            return Err(defect(format!(
+                "node {index} has size {} where its offsets give {size}",
+                node.size
+            )));
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+    use crate::collision::MeshCollider;
+    use crate::collision::oracle_tests::{random_soup, torus};
+
+    #[test]
+    fn built_trees_pass() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for mesh in [torus(0.3, 20, 10), random_soup(&mut rng, 500, 0.2)] {
+            for leaf_size in [1, 4] {
+                let set = crate::collision::orientation::OrientationSet::default();
+                let tree = DopTree::with_options(&mesh, &set, leaf_size);
+                let (parents, ranges) =
+                    structure(&tree.nodes, tree.triangle_count()).expect("a tree");
+                assert_eq!(&parents[..], &tree.parents[..]);
+                assert_eq!(&ranges[..], &tree.triangle_ranges[..]);
+                permutation(&tree.triangle_ids, mesh.triangles().len()).expect("ids");
+                bounds(&tree).expect("bounds");
+            }
+        }
+    }
+
+    #[test]
+    fn every_kind_of_damage_is_found() {
+        let tree = DopTree::build(&torus(0.3, 12, 6));
+        let n = tree.triangle_count();
+        let inner = (0..tree.node_count())
+            .find(|&i| !tree.nodes[i].is_leaf() && i > 0)
+            .unwrap();
+        let leaf = (0..tree.node_count())
+            .find(|&i| tree.nodes[i].is_leaf())
+            .unwrap();
+
+        let mut nodes = tree.nodes.to_vec();
+        nodes[inner].first = inner as u32;
+        assert!(structure(&nodes, n).is_err(), "a child before its parent");
+        let mut nodes = tree.nodes.to_vec();
+        nodes[leaf].count += 1;
+        assert!(
+            structure(&nodes, n).is_err(),
+            "a leaf taking another's triangle"
+        );
+        assert!(
+            structure(&tree.nodes, n + 1).is_err(),
+            "a triangle in no leaf"
+        );
+
+        let mut ids = tree.triangle_ids.to_vec();
+        ids[1] = ids[0];
+        assert!(permutation(&ids, n).is_err(), "a repeated id");
+
+        let damaged = |change: &dyn Fn(&mut DopTree)| {
+            let mut copy = tree.clone();
+            change(&mut copy);
+            bounds(&copy).map_err(|defect| defect.to_string())
+        };
+        let k = tree.k;
+        let shrink_offset = |node: usize| {
+            move |t: &mut DopTree| {
+                let mut offsets = t.offsets.to_vec();
+                offsets[node * k] -= 1e-3;
+                t.offsets = offsets.into();
+            }
+        };
+        assert!(
+            damaged(&shrink_offset(leaf))
+                .unwrap_err()
+                .contains("does not bound")
+        );
+        assert!(
+            damaged(&shrink_offset(inner))
+                .unwrap_err()
+                .contains("does not bound")
+        );
+        assert!(
+            damaged(&|t| {
+                let mut nodes = t.nodes.to_vec();
+                nodes[inner].sphere.radius *= 0.5;
+                t.nodes = nodes.into();
+            })
+            .unwrap_err()
+            .contains("sphere")
+        );
+        assert!(
+            damaged(&|t| {
+                let mut boxes = t.boxes.to_vec();
+                boxes[leaf].extents[0] *= 0.5;
+                t.boxes = boxes.into();
+            })
+            .unwrap_err()
+            .contains("box")
+        );
+        assert!(
+            damaged(&|t| {
+                let mut nodes = t.nodes.to_vec();
+                nodes[0].size *= 2.0;
+                t.nodes = nodes.into();
+            })
+            .unwrap_err()
+            .contains("size")
+        );
+    }
+}

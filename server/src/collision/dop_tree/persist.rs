@@ -1,0 +1,206 @@
+//! A built tree as a file: a header naming what the tree was built from (the mesh's content hash
+//! and triangle count, the orientations, the leaf size, the layout of the file) and a checksum,
+//! then the arrays the build computes, as their bytes. What the mesh gives again (its triangles
+//! in leaf order, their ranges, the parents, the bounding sphere) is not stored, and a tree read
+//! back is checked against its mesh ([`check`](super::check)) before it is used: a stale, corrupt
+//! or foreign file is refused, never trusted.
+
+use std::hash::{Hash, Hasher};
+use std::io::{self, Read, Write};
+
+use bytemuck::{Pod, Zeroable};
+
+use super::check::{self, Defect};
+use super::node_bounds::NodeBox;
+use super::tree::{Arrays, DopTree, Node};
+use crate::collision::orientation::OrientationSet;
+use crate::geometry::TriMesh;
+
+/// The first bytes of every tree file.
+const MAGIC: u64 = u64::from_le_bytes(*b"vas-dop\0");
+
+/// The version of the file's layout and of what its arrays mean: a file of another is stale.
+const LAYOUT: u64 = 1;
+
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+#[repr(C)]
+struct Header {
+    magic: u64,
+    layout: u64,
+    key: BuildKey,
+    nodes: u64,
+    /// Of the arrays' bytes, in the order they are stored.
+    checksum: u64,
+}
+
+/// What a stored tree must have been built from to serve a mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+#[repr(C)]
+pub(super) struct BuildKey {
+    mesh_hash: u64,
+    triangles: u64,
+    /// Of the orientation set's axes.
+    orientations_hash: u64,
+    k: u64,
+    leaf_size: u64,
+}
+
+impl BuildKey {
+    /// What a tree over `mesh` with orientations `set` and `leaf_size` is built from.
+    pub(super) fn of(mesh: &TriMesh, set: &OrientationSet, leaf_size: usize) -> Self {
+        let mut hasher = rustc_hash::FxHasher::default();
+        for axis in set.axes() {
+            axis.map(f64::to_bits).as_slice().hash(&mut hasher);
+        }
+        BuildKey {
+            mesh_hash: mesh.content_hash(),
+            triangles: mesh.triangles().len() as u64,
+            orientations_hash: hasher.finish(),
+            k: set.k() as u64,
+            leaf_size: leaf_size as u64,
+        }
+    }
+
+    /// The name of the key's file in a cache folder.
+    pub(super) fn file_name(&self) -> String {
+        format!(
+            "{:016x}-k{}-leaf{}-{:016x}-v{LAYOUT}.dop",
+            self.mesh_hash, self.k, self.leaf_size, self.orientations_hash
+        )
+    }
+
+    /// The bytes of a file of a tree of `nodes` nodes built from this key.
+    fn file_bytes(&self, nodes: u64) -> u64 {
+        let per_node = (size_of::<Node>() + size_of::<NodeBox>()) as u64 + 4 * self.k;
+        size_of::<Header>() as u64 + nodes * per_node + 4 * self.triangles
+    }
+}
+
+/// Why a stored tree was not used.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum Refused {
+    /// The file could not be read.
+    #[error("cannot read it: {0}")]
+    Io(#[from] io::Error),
+    /// Not a tree file, or one of another layout.
+    #[error("not a tree file of this version")]
+    Format,
+    /// A tree of another mesh or other build parameters.
+    #[error("built from another mesh or with other parameters")]
+    Stale,
+    /// The file is shorter or longer than its header says.
+    #[error("{actual} bytes where its header announces {expected}")]
+    Size {
+        /// What the header announces.
+        expected: u64,
+        /// What the file has.
+        actual: u64,
+    },
+    /// The arrays are not those the checksum was taken of.
+    #[error("its checksum does not match: the file is corrupt")]
+    Checksum,
+    /// The tree does not bound its mesh or is not laid out as a tree.
+    #[error("it is not a valid tree of its mesh: {0}")]
+    Defect(#[from] Defect),
+}
+
+/// The stored arrays as bytes, in the order they are stored.
+fn payload<'a>(
+    nodes: &'a [Node],
+    offsets: &'a [f32],
+    boxes: &'a [NodeBox],
+    triangle_ids: &'a [u32],
+) -> [&'a [u8]; 4] {
+    [
+        bytemuck::cast_slice(nodes),
+        bytemuck::cast_slice(offsets),
+        bytemuck::cast_slice(boxes),
+        bytemuck::cast_slice(triangle_ids),
+    ]
+}
+
+fn checksum(parts: [&[u8]; 4]) -> u64 {
+    let mut hasher = rustc_hash::FxHasher::default();
+    for part in parts {
+        hasher.write(part);
+    }
+    hasher.finish()
+}
+
+/// Writes `tree`, built from `key`, to `out`.
+pub(super) fn write(tree: &DopTree, key: &BuildKey, out: &mut impl Write) -> io::Result<()> {
+    let parts = payload(&tree.nodes, &tree.offsets, &tree.boxes, &tree.triangle_ids);
+    let header = Header {
+        magic: MAGIC,
+        layout: LAYOUT,
+        key: *key,
+        nodes: tree.nodes.len() as u64,
+        checksum: checksum(parts),
+    };
+    out.write_all(bytemuck::bytes_of(&header))?;
+    for part in parts {
+        out.write_all(part)?;
+    }
+    Ok(())
+}
+
+/// Reads the tree of `length` bytes from `input`, if it was built from `key` for `mesh` with
+/// `set` and bounds `mesh`'s triangles. Nothing is allocated before the header and the length
+/// agree with `key`.
+pub(super) fn read(
+    input: &mut impl Read,
+    length: u64,
+    key: &BuildKey,
+    mesh: &TriMesh,
+    set: &OrientationSet,
+) -> Result<DopTree, Refused> {
+    let mut header = Header::zeroed();
+    if length < size_of::<Header>() as u64 {
+        return Err(Refused::Format);
+    }
+    input.read_exact(bytemuck::bytes_of_mut(&mut header))?;
+    if header.magic != MAGIC || header.layout != LAYOUT {
+        return Err(Refused::Format);
+    }
+    if header.key != *key {
+        return Err(Refused::Stale);
+    }
+    // A tree has fewer nodes than twice its triangles.
+    let nodes = header.nodes.min(2 * key.triangles);
+    let expected = key.file_bytes(nodes);
+    if header.nodes != nodes || length != expected {
+        return Err(Refused::Size {
+            expected,
+            actual: length,
+        });
+    }
+    let (nodes, k, triangles) = (nodes as usize, key.k as usize, key.triangles as usize);
+    let mut arrays = Arrays {
+        set: set.clone(),
+        nodes: vec![Node::zeroed(); nodes],
+        parents: Vec::new(),
+        triangle_ranges: Vec::new(),
+        offsets: vec![0.0; nodes * k],
+        boxes: vec![NodeBox::zeroed(); nodes],
+        triangle_ids: vec![0; triangles],
+    };
+    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.nodes))?;
+    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.offsets))?;
+    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.boxes))?;
+    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.triangle_ids))?;
+    let stored = payload(
+        &arrays.nodes,
+        &arrays.offsets,
+        &arrays.boxes,
+        &arrays.triangle_ids,
+    );
+    if checksum(stored) != header.checksum {
+        return Err(Refused::Checksum);
+    }
+    // Ids in range before the triangles are looked up by them.
+    check::permutation(&arrays.triangle_ids, triangles)?;
+    (arrays.parents, arrays.triangle_ranges) = check::structure(&arrays.nodes, triangles)?;
+    let tree = DopTree::assemble(arrays, |i| mesh.triangle(i));
+    check::bounds(&tree)?;
+    Ok(tree)
+}
