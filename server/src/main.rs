@@ -161,12 +161,14 @@ fn check_scene(file: &Path, prepare: bool, load: &LoadOptions) -> anyhow::Result
     let mut report = scene.summary();
     if prepare {
         let started = std::time::Instant::now();
-        let bar = indicatif::ProgressBar::new(scene.parts.len() as u64).with_style(
-            indicatif::ProgressStyle::with_template("preparing {bar:40} {pos}/{len} parts {msg}")?,
+        let bar = indicatif::ProgressBar::new(scene.triangle_count() as u64).with_style(
+            indicatif::ProgressStyle::with_template(
+                "preparing {bar:40} {percent}% of the triangles, last ready: {msg}",
+            )?,
         );
         Scene::prepare_parts(&scene.parts, &|part, _| {
             bar.set_message(part.name.clone());
-            bar.inc(1);
+            bar.inc(part.mesh.triangles().len() as u64);
         });
         bar.finish_and_clear();
         report.push_str(&format!(

@@ -226,7 +226,7 @@ fn load_to_serve(
                 let spawned = std::thread::Builder::new()
                     .name("scene-preparer".into())
                     .spawn(move || {
-                        Scene::prepare_parts(&parts, &log_prepared(&name, parts.len()));
+                        Scene::prepare_parts(&parts, &log_prepared(&name, &parts));
                         tracing::info!(
                             scene = name,
                             seconds = started.elapsed().as_secs_f64(),

@@ -195,14 +195,25 @@ impl Part {
 /// a noticeable time.
 const LARGE_PART_TRIANGLES: usize = 100_000;
 
-/// What [`Scene::prepare_parts`] calls to log the parts of scene `scene` (of `total` parts) as
-/// they become ready, with how many are: large parts at info level, so that a long start-up says
-/// where it is, the others at debug level.
-pub fn log_prepared(scene: &str, total: usize) -> impl Fn(&Part, f64) + Sync + use<'_> {
-    let done = std::sync::atomic::AtomicUsize::new(0);
+/// What [`Scene::prepare_parts`] calls to log `parts` of scene `scene` as they become ready,
+/// with how many are and the percentage of their triangles done: large parts at info level, so
+/// that a long start-up says where it is, the others at debug level.
+pub fn log_prepared<'a>(scene: &'a str, parts: &[Part]) -> impl Fn(&Part, f64) + Sync + use<'a> {
+    let total_parts = parts.len();
+    let total_triangles: usize = parts.iter().map(|p| p.mesh.triangles().len()).sum();
+    let done = std::sync::Mutex::new((0usize, 0usize));
     move |part, seconds| {
-        let done = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         let triangles = part.mesh.triangles().len();
+        let (done_parts, done_triangles) = {
+            let mut done = done
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            *done = (done.0 + 1, done.1 + triangles);
+            *done
+        };
+        let percent = (100 * done_triangles)
+            .checked_div(total_triangles)
+            .unwrap_or(100);
         let tree = part.tree.provenance();
         if triangles >= LARGE_PART_TRIANGLES {
             tracing::info!(
@@ -211,7 +222,7 @@ pub fn log_prepared(scene: &str, total: usize) -> impl Fn(&Part, f64) + Sync + u
                 triangles,
                 ?tree,
                 seconds,
-                "part ready ({done} of {total})"
+                "part ready ({done_parts} of {total_parts}, {percent}% of the triangles)"
             );
         } else {
             tracing::debug!(
@@ -220,7 +231,7 @@ pub fn log_prepared(scene: &str, total: usize) -> impl Fn(&Part, f64) + Sync + u
                 triangles,
                 ?tree,
                 seconds,
-                "part ready ({done} of {total})"
+                "part ready ({done_parts} of {total_parts}, {percent}% of the triangles)"
             );
         }
     }
@@ -472,7 +483,7 @@ impl Scene {
     /// Builds every part's DOP-tree and convex hull now ([`Scene::prepare_parts`]): a scene
     /// loaded while another is served is made ready before it replaces it.
     pub fn prepare(&self) {
-        Scene::prepare_parts(&self.parts, &log_prepared(&self.name, self.parts.len()));
+        Scene::prepare_parts(&self.parts, &log_prepared(&self.name, &self.parts));
     }
 
     /// Builds the DOP-tree and convex hull of each of `parts`, the parts in parallel, rather
