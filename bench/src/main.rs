@@ -17,6 +17,7 @@ mod slope;
 mod soak;
 mod startup;
 mod synthetic;
+mod tree_build;
 mod tumble;
 
 use std::io::IsTerminal;
@@ -44,6 +45,15 @@ part to its answer to one tracker sample). Then the log-log slope of each column
 rows of at least 100k triangles (1 is linear)."
     )]
     Startup(startup::StartupArgs),
+    /// B0's tree build: the DOP-tree's against FCL's OBB-tree's on the same meshes.
+    #[command(
+        after_long_help = "Columns: mesh; triangles; dop_1_thread_s, dop_all_threads_s (median DOP-tree build, k = 18, on
+one thread and on all); dop_bytes_per_tri (all the tree holds: nodes, boxes, offsets, triangles
+and their ids); fcl_obb_s, fcl_bytes_per_tri (median FCL BVHModel<OBB> build on one thread, and
+its memUsage: nodes, indices, vertices, triangles); ratio (dop_1_thread_s over fcl_obb_s; '(ref)'
+when FCL was not found at build time and the ratio is against 2.5 s)."
+    )]
+    TreeBuild(tree_build::TreeBuildArgs),
     /// B1: the tumbling pair (the paper's Figure 3 with --figure).
     #[command(
         after_long_help = "Columns: algo (algorithm); d (distance of B from A); mean_us, median_us, max_us (time per
@@ -144,6 +154,7 @@ fn main() -> ExitCode {
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|error| error.exit());
     let result = match cli.benchmark {
         Benchmark::Startup(args) => startup::run(&args),
+        Benchmark::TreeBuild(args) => tree_build::run(&args),
         Benchmark::Tumble(args) => tumble::run_cli(&args),
         Benchmark::Random(args) => random::run_cli(&args),
         Benchmark::Orbit(args) => orbit::run_cli(&args),
