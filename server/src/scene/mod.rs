@@ -214,13 +214,17 @@ pub fn log_prepared<'a>(scene: &'a str, parts: &[Part]) -> impl Fn(&Part, f64) +
         let percent = (100 * done_triangles)
             .checked_div(total_triangles)
             .unwrap_or(100);
-        let tree = part.tree.provenance();
+        let tree = match part.tree.provenance() {
+            Some(Provenance::Read) => "read from the cache",
+            Some(Provenance::Built) => "built",
+            None => "not built",
+        };
         if triangles >= LARGE_PART_TRIANGLES {
             tracing::info!(
                 scene,
                 part = part.name,
                 triangles,
-                ?tree,
+                tree,
                 seconds,
                 "part ready ({done_parts} of {total_parts}, {percent}% of the triangles)"
             );
@@ -229,7 +233,7 @@ pub fn log_prepared<'a>(scene: &'a str, parts: &[Part]) -> impl Fn(&Part, f64) +
                 scene,
                 part = part.name,
                 triangles,
-                ?tree,
+                tree,
                 seconds,
                 "part ready ({done_parts} of {total_parts}, {percent}% of the triangles)"
             );
