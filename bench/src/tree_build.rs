@@ -16,7 +16,7 @@ use vas_server::collision::orientation::{DEFAULT_K, OrientationSet};
 use vas_server::geometry::{TriMesh, parse_mesh_spec};
 
 use crate::args::OutputArgs;
-use crate::report::{LinePlot, Series, Table, format_number};
+use crate::report::{LinePlot, Series, Table, format_number, median};
 
 /// FCL's harness, if it was built with this program.
 const FCL_HARNESS: Option<&str> = option_env!("VAS_FCL_OBB_BUILD");
@@ -85,13 +85,16 @@ pub fn run(args: &TreeBuildArgs) -> Result<()> {
             bytes = tree.bytes();
             started.elapsed().as_secs_f64()
         };
-        let dop_1_thread_s = median((0..args.runs).map(|_| one_thread.install(&mut build)));
-        let dop_all_threads_s = median((0..args.runs).map(|_| build()));
-        let fcl = match FCL_HARNESS {
+        let mut one: Vec<f64> = (0..args.runs)
+            .map(|_| one_thread.install(&mut build))
+            .collect();
+        let mut all: Vec<f64> = (0..args.runs).map(|_| build()).collect();
+        let (dop_1_thread_s, dop_all_threads_s) = (median(&mut one), median(&mut all));
+        let mut fcl = match FCL_HARNESS {
             Some(harness) => Some(fcl_builds(Path::new(harness), &mesh, args.runs)?),
             None => None,
         };
-        let fcl_obb_s = fcl.as_ref().map(|f| median(f.seconds.iter().copied()));
+        let fcl_obb_s = fcl.as_mut().map(|f| median(&mut f.seconds));
         let row = BuildRow {
             mesh: spec.clone(),
             triangles,
@@ -145,12 +148,6 @@ fn fcl_builds(harness: &Path, mesh: &TriMesh, runs: usize) -> Result<FclBuilds> 
         );
     }
     serde_json::from_slice(&output.stdout).context("reading the FCL harness's output")
-}
-
-fn median(values: impl Iterator<Item = f64>) -> f64 {
-    let mut values: Vec<f64> = values.collect();
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 fn render(rows: &[BuildRow]) -> String {

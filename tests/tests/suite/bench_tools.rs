@@ -129,3 +129,55 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
     );
     assert!(memory["growth_kib_per_min"].is_f64(), "{memory}");
 }
+
+/// `tree-build` reports each mesh's DOP-tree build and, when FCL was found as vas-bench was
+/// built, FCL's; the ratio is against FCL's median exactly when FCL was measured.
+#[test]
+fn bench_tree_build_reports_each_mesh() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let (json, svg) = (dir.path().join("build.json"), dir.path().join("build.svg"));
+    let bunny = vas_tests::configs_dir().join("meshes/low_poly_bunny.obj");
+    let meshes = format!("shape:sphere:2000,{}", bunny.display());
+    let output = std::process::Command::new(vas_tests::binary("vas-bench"))
+        .args(["tree-build", "--runs", "1", "--meshes", &meshes, "--json"])
+        .arg(&json)
+        .arg("--svg")
+        .arg(&svg)
+        .output()
+        .expect("vas-bench runs");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_plot(&svg, &["DOP-tree, 1 thread", "FCL OBB-tree"]);
+    let rows = report(&json);
+    let triangles: Vec<u64> = (rows.as_array().expect("rows").iter())
+        .map(|row| row["triangles"].as_u64().expect("triangles"))
+        .collect();
+    assert_eq!(triangles, [2000, 696]);
+    for row in rows.as_array().expect("rows") {
+        let number = |key: &str| {
+            row[key]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{key} in {row}"))
+        };
+        assert!(number("dop_1_thread_s") > 0.0 && number("dop_all_threads_s") > 0.0);
+        // Nodes, boxes and offsets of about two nodes a triangle, and the triangle itself.
+        assert!(number("dop_bytes_per_triangle") > 100.0, "{row}");
+        let fcl = row["fcl_obb_s"].as_f64();
+        assert_eq!(
+            row["ratio_measured"].as_bool(),
+            Some(fcl.is_some()),
+            "{row}"
+        );
+        let against = fcl.unwrap_or(2.5);
+        assert!(
+            (number("ratio") - number("dop_1_thread_s") / against).abs() < 1e-9,
+            "{row}"
+        );
+        if fcl.is_some() {
+            assert!(number("fcl_bytes_per_triangle") > 0.0, "{row}");
+        }
+    }
+}
