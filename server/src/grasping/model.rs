@@ -720,13 +720,13 @@ impl HandModel {
     ) {
         assert_eq!(poses.len(), self.segments.len(), "one pose per segment");
         for (i, s) in self.segments.iter().enumerate() {
-            let parent = s.parent.map_or(Isometry3::identity(), |p| poses[p]);
-            let mut local = Isometry3::from_parts(Translation3::from(s.origin), s.base_rotation);
+            let joint = Isometry3::from_parts(Translation3::from(s.origin), s.base_rotation);
+            let mut pose = s.parent.map_or(joint, |p| poses[p] * joint);
             for dof in &s.dofs {
-                visit(i, dof, &(parent * local));
-                local *= dof.motion(flex);
+                visit(i, dof, &pose);
+                pose *= dof.motion(flex);
             }
-            poses[i] = parent * local;
+            poses[i] = pose;
         }
     }
 

@@ -30,11 +30,11 @@ use crate::grasping::{FLEX_COUNT, FlexVector, HandModel, Side};
 const TIP_COORDINATES: usize = 15;
 
 /// The most refinement steps per sample.
-const REFINE_STEPS: usize = 6;
+const REFINE_STEPS: usize = 3;
 
-/// The damping of the refinement steps, in metres: a flex change that would move a fingertip
-/// less than this per radian is held back, so nearly singular poses (a straight finger) do not
-/// make the angles jump.
+/// The damping of the refinement steps at first, in metres: a flex change that would move a
+/// fingertip less than this per radian is held back, so nearly singular poses (a straight
+/// finger) do not make the angles jump.
 const DAMPING_M: f64 = 2e-3;
 
 /// The refinement stops once every fingertip is this close, in metres.
@@ -80,6 +80,15 @@ pub struct Retarget {
     pub root: Isometry3<f64>,
     /// The 22 flex values, radians, within the model's limits.
     pub flex: FlexVector,
+}
+
+/// A degree of freedom's axis where forward kinematics put it, relative to the root.
+#[derive(Debug, Clone, Copy)]
+struct DofAxis<'a> {
+    segment: usize,
+    pivot: Point3<f64>,
+    axis: Unit<Vector3<f64>>,
+    dof: &'a Dof,
 }
 
 /// Retargets samples of one hand onto one hand model.
@@ -266,24 +275,39 @@ impl Retargeter {
         flex
     }
 
-    /// The model's fingertip points, relative to the root, for `flex`, and the Jacobian of
-    /// their coordinates by the flex values; `poses` and `axes` are scratch space.
-    fn tips_and_jacobian<'a>(
+    /// The model's fingertip points, relative to the root, for `flex`, with every degree of
+    /// freedom's axis written to `axes`; `poses` is scratch space.
+    fn tips<'a>(
         &'a self,
         flex: &FlexVector,
         poses: &mut [Isometry3<f64>],
-        axes: &mut Vec<(usize, Point3<f64>, Unit<Vector3<f64>>, &'a Dof)>,
-    ) -> (Tips, TipJacobian) {
+        axes: &mut Vec<DofAxis<'a>>,
+    ) -> [Point3<f64>; 5] {
         axes.clear();
         self.model
             .forward_kinematics_with(flex, poses, |segment, dof, frame| {
-                axes.push((segment, frame * dof.pivot, frame.rotation * dof.axis, dof));
+                axes.push(DofAxis {
+                    segment,
+                    pivot: frame * dof.pivot,
+                    axis: frame.rotation * dof.axis,
+                    dof,
+                });
             });
-        let tips: [Point3<f64>; 5] = std::array::from_fn(|d| {
+        std::array::from_fn(|d| {
             poses[self.skeleton.digits[d].segments[2]] * self.skeleton.digits[d].tip
-        });
+        })
+    }
+
+    /// The Jacobian of the fingertips' coordinates by the flex values, from [`Retargeter::tips`].
+    fn jacobian(&self, tips: &[Point3<f64>; 5], axes: &[DofAxis]) -> TipJacobian {
         let mut jacobian = TipJacobian::zeros();
-        for &(segment, pivot, axis, dof) in axes.iter() {
+        for &DofAxis {
+            segment,
+            pivot,
+            axis,
+            dof,
+        } in axes
+        {
             let carries = self.skeleton.carries[segment];
             for (d, tip) in tips.iter().enumerate() {
                 if carries & (1 << d) == 0 {
@@ -297,8 +321,7 @@ impl Retargeter {
                 }
             }
         }
-        let stacked = Tips::from_iterator(tips.iter().flat_map(|t| t.coords.iter().copied()));
-        (stacked, jacobian)
+        jacobian
     }
 
     /// Damped least-squares steps that bring the model's fingertips to the tracked tips,
@@ -311,18 +334,30 @@ impl Retargeter {
         let limits = self.model.limits();
         let mut poses = vec![Isometry3::identity(); self.model.segments().len()];
         let mut axes = Vec::with_capacity(self.angles_to_flex.ncols());
-        for _ in 0..REFINE_STEPS {
-            let (tips, jacobian) = self.tips_and_jacobian(flex, &mut poses, &mut axes);
-            let residual = target - tips;
-            if residual.amax() < TIP_TOLERANCE_M {
+        // Levenberg-Marquardt: a step that made the fingertips worse (the limits make steps
+        // projected, not exact) is taken back and tried again shorter, with more damping.
+        let mut damping = DAMPING_M * DAMPING_M;
+        let mut best: Option<(f64, FlexVector, Tips, TipJacobian)> = None;
+        for evaluation in 0..=REFINE_STEPS {
+            let tips = self.tips(flex, &mut poses, &mut axes);
+            let residual =
+                target - Tips::from_iterator(tips.iter().flat_map(|t| t.coords.iter().copied()));
+            let error = residual.norm_squared();
+            if best.as_ref().is_none_or(|b| error < b.0) {
+                best = Some((error, *flex, residual, self.jacobian(&tips, &axes)));
+            } else {
+                damping *= 10.0;
+            }
+            let (_, from, residual, jacobian) = best.as_ref().expect("set on the first pass");
+            *flex = *from;
+            if residual.amax() < TIP_TOLERANCE_M || evaluation == REFINE_STEPS {
                 break;
             }
             // J Jᵀ + λ² I, column by column over the digits each flex value moves (most move
             // one fingertip); a flex value at a limit that the step would push beyond stays.
             let gradient = jacobian.transpose() * residual;
             let mut free = [true; FLEX_COUNT];
-            let mut normal = SMatrix::<f64, TIP_COORDINATES, TIP_COORDINATES>::identity()
-                * (DAMPING_M * DAMPING_M);
+            let mut normal = SMatrix::<f64, TIP_COORDINATES, TIP_COORDINATES>::identity() * damping;
             for (f, limit) in limits.iter().enumerate() {
                 free[f] = !((flex[f] <= limit.min && gradient[f] < 0.0)
                     || (flex[f] >= limit.max && gradient[f] > 0.0));
@@ -341,7 +376,7 @@ impl Retargeter {
             let Some(cholesky) = normal.cholesky() else {
                 break;
             };
-            let step = jacobian.transpose() * cholesky.solve(&residual);
+            let step = jacobian.transpose() * cholesky.solve(residual);
             let mut largest: f64 = 0.0;
             for (f, limit) in limits.iter().enumerate() {
                 if free[f] {

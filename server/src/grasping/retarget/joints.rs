@@ -321,7 +321,8 @@ impl HandJoints {
                 return Err(JointsError::NonFinite { joint: *joint });
             }
             let norm = pose.orientation.norm();
-            if !((norm - 1.0).abs() <= UNIT_TOLERANCE) {
+            let unit = (norm - 1.0).abs() <= UNIT_TOLERANCE; // false for NaN
+            if !unit {
                 return Err(JointsError::NotUnit {
                     joint: *joint,
                     norm,
