@@ -3,8 +3,8 @@
 //! with an error or accepted as a value that keeps the API's promises. A panic, a hang or a
 //! broken promise is a failure.
 //!
-//! Seeds live in `tests/__fuzz__/<target>/corpus/seed-*`. The hand-joints input has no wire type
-//! yet, so it has no target.
+//! Seeds live in `tests/__fuzz__/<target>/corpus/seed-*`. Hand joints have no wire type yet; their
+//! captures have a target.
 
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
@@ -24,7 +24,8 @@ use vas_server::collision::orientation::{DEFAULT_K, SUPPORTED_K};
 use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
 use vas_server::geometry::shapes;
 use vas_server::geometry::{FileLimits, GltfFile, TriMesh, load_mesh, mesh_from_bytes};
-use vas_server::grasping::HandModel;
+use vas_server::grasping::retarget::{Capture, Retargeter};
+use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
 use vas_server::runtime::inputs::Inputs;
 use vas_server::scene::Scene;
@@ -359,6 +360,51 @@ fn tree_cache_file() {
             tree.intersecting_pairs(&other_tree, pose, &mut pairs, &mut stats);
             pairs.sort_unstable();
             assert_eq!(&pairs, expected, "pairs at {pose}");
+        }
+    });
+}
+
+/// A captured hand pose (`vas-server retarget`), seeded with the real captures: refused with the
+/// reason, or retargeted onto the model of its side to a finite root and flex values within the
+/// joint limits, calibrated on itself or not.
+#[test]
+fn hand_capture_json() {
+    let path = Path::new("fuzz.json");
+    let retargeter = |side: Side| {
+        let file = match side {
+            Side::Left => "hands/left.toml",
+            Side::Right => "hands/right.toml",
+        };
+        let model = HandModel::load(&configs_dir().join(file)).expect("the shipped hand");
+        Retargeter::new(model).expect("the shipped hand retargets")
+    };
+    let (left, right) = (retargeter(Side::Left), retargeter(Side::Right));
+    bolero::check!().for_each(|bytes: &[u8]| {
+        let Ok(text) = std::str::from_utf8(bytes) else {
+            return;
+        };
+        let Ok(capture) = Capture::from_json(path, text) else {
+            return;
+        };
+        let joints = &capture.joints;
+        let retargeter = if joints.side == Side::Left {
+            &left
+        } else {
+            &right
+        };
+        let calibrated = retargeter.calibrated(joints).ok();
+        for retargeter in std::iter::once(retargeter).chain(calibrated.as_ref()) {
+            let Ok(fit) = retargeter.fit(joints) else {
+                continue;
+            };
+            assert!(is_finite(&fit.root), "root {}", fit.root);
+            for (value, limit) in fit.flex.iter().zip(retargeter.model().limits()) {
+                assert!(
+                    (limit.min..=limit.max).contains(value),
+                    "{} = {value} beyond its limits",
+                    limit.name
+                );
+            }
         }
     });
 }

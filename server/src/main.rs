@@ -12,6 +12,8 @@ use tracing_subscriber::EnvFilter;
 use vas_server::collision::dop_tree::{Provenance, TreeCache};
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{FileLimits, write_obj};
+use vas_server::grasping::retarget::{Capture, HandJoints, Retargeter};
+use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime;
 use vas_server::scene::{LoadOptions, Scene, default_scene_path};
 
@@ -67,6 +69,9 @@ enum Command {
         #[command(flatten)]
         load: LoadArgs,
     },
+    /// Retarget a captured hand pose (WebXR joints, JSON) onto the hand model: print the flex
+    /// angles and each fingertip's distance from the captured tip.
+    Retarget(RetargetArgs),
 }
 
 /// How scenes are loaded: the largest files read (larger ones are refused with their size), the
@@ -143,6 +148,7 @@ fn main() -> ExitCode {
         } => load
             .options()
             .and_then(|load| check_scene(&file, prepare, &load)),
+        Command::Retarget(args) => retarget(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -192,6 +198,128 @@ fn check_scene(file: &Path, prepare: bool, load: &LoadOptions) -> anyhow::Result
         Err(error) if error.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         written => written.map_err(Into::into),
     }
+}
+
+/// What `vas-server retarget` is asked.
+#[derive(Debug, Args)]
+struct RetargetArgs {
+    /// The capture to retarget.
+    capture: PathBuf,
+    /// Calibrate the model on this capture of the same hand first.
+    #[arg(long, value_name = "CAPTURE")]
+    calibrate: Option<PathBuf>,
+    /// The hand model (default: configs/hands/left.toml or right.toml, by the capture's side).
+    #[arg(long)]
+    hand: Option<PathBuf>,
+    /// Mirror the captures first: a left hand becomes a right hand, and the reverse.
+    #[arg(long)]
+    mirror: bool,
+    /// Also write the result as JSON to this file.
+    #[arg(long, value_name = "OUT")]
+    json: Option<PathBuf>,
+    /// Retarget this many times and print the mean time per sample.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    repeat: u32,
+}
+
+/// `vas-server retarget`: retargets a capture, optionally on a model calibrated on another, and
+/// prints the angles and the fingertip error (and writes them as JSON).
+fn retarget(args: &RetargetArgs) -> anyhow::Result<()> {
+    let read = |path: &Path| -> anyhow::Result<HandJoints> {
+        let capture = Capture::read(path)?;
+        Ok(if args.mirror {
+            capture.mirrored()
+        } else {
+            capture
+        }
+        .joints)
+    };
+    let joints = read(&args.capture)?;
+    let hand = args.hand.clone().unwrap_or_else(|| {
+        let file = match joints.side {
+            Side::Left => "left.toml",
+            Side::Right => "right.toml",
+        };
+        default_scene_path().with_file_name("hands").join(file)
+    });
+    let mut retargeter = Retargeter::new(HandModel::load(&hand)?)?;
+    if let Some(path) = &args.calibrate {
+        retargeter = retargeter.calibrated(&read(path)?)?;
+    }
+    let started = std::time::Instant::now();
+    let mut fit = retargeter.fit(&joints)?;
+    for _ in 1..args.repeat {
+        fit = retargeter.fit(std::hint::black_box(&joints))?;
+    }
+    let per_sample_us = started.elapsed().as_secs_f64() * 1e6 / f64::from(args.repeat);
+    let error = retargeter.fingertip_error(&fit, &joints);
+
+    let mut text = format!(
+        "{}: {:?} hand, model {}{}\nangles (degrees):\n",
+        args.capture.display(),
+        joints.side,
+        hand.display(),
+        match &args.calibrate {
+            Some(path) => format!(", calibrated on {}", path.display()),
+            None => String::new(),
+        }
+    );
+    let limits = retargeter.model().limits();
+    for (limit, value) in limits.iter().zip(fit.flex) {
+        text.push_str(&format!(
+            "  {:<24} {:>7.2}\n",
+            limit.name,
+            value.to_degrees()
+        ));
+    }
+    text.push_str("fingertip error (mm):");
+    for (finger, distance) in error.digits() {
+        text.push_str(&format!(" {finger:?} {:.2}", distance * 1e3));
+    }
+    text.push_str(&format!(
+        "; rms {:.2}, max {:.2}\nretargeted {} times, {:.2} us per sample\n",
+        error.rms() * 1e3,
+        error.max() * 1e3,
+        args.repeat,
+        per_sample_us
+    ));
+    print!("{text}");
+
+    if let Some(out) = &args.json {
+        let angles: serde_json::Map<String, serde_json::Value> = limits
+            .iter()
+            .zip(fit.flex)
+            .map(|(limit, value)| (limit.name.clone(), value.to_degrees().into()))
+            .collect();
+        let fingertips: serde_json::Map<String, serde_json::Value> = error
+            .digits()
+            .map(|(finger, distance)| {
+                (
+                    format!("{finger:?}").to_lowercase(),
+                    (distance * 1e3).into(),
+                )
+            })
+            .collect();
+        let report = serde_json::json!({
+            "capture": args.capture,
+            "side": format!("{:?}", joints.side).to_lowercase(),
+            "hand": hand,
+            "calibration": args.calibrate,
+            "angles_deg": angles,
+            "root": {
+                "position": fit.root.translation.vector.as_slice(),
+                "rotation": fit.root.rotation.coords.as_slice(),
+            },
+            "fingertip_mm": fingertips,
+            "fingertip_rms_mm": error.rms() * 1e3,
+            "fingertip_max_mm": error.max() * 1e3,
+            "repeat": args.repeat,
+            "us_per_sample": per_sample_us,
+        });
+        std::fs::write(out, serde_json::to_string_pretty(&report)? + "\n")
+            .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", out.display()))?;
+    }
+    Ok(())
 }
 
 /// `vas-server shape`: builds the object and writes it as OBJ.

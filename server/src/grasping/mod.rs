@@ -11,6 +11,8 @@
 //! * [`analysis`]: the grasp type from what touches a part, and how.
 //! * [`hand`]: one hand's grasping loop state: clasp, contacts, analysis, grasp and release with
 //!   hysteresis, cart motion, the hand-over events.
+//! * [`retarget`]: tracked OpenXR or WebXR hand joints onto the model: root and flex values,
+//!   per-user calibration, fingertip error, captures.
 //! * [`script`]: keyframed tracker and glove trajectories and the scripted grasps of the tests and
 //!   of benchmark B6.
 
@@ -20,6 +22,7 @@ pub mod collider;
 pub mod flex;
 pub mod hand;
 pub mod model;
+pub mod retarget;
 #[cfg(test)]
 mod scenarios;
 pub mod segment_mesh;

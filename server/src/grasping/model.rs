@@ -194,7 +194,12 @@ impl Dof {
 
     /// The joint's motion for a flex vector: the rotation about the pivot.
     pub fn motion(&self, flex: &FlexVector) -> Isometry3<f64> {
-        let rotation = UnitQuaternion::from_axis_angle(&self.axis, self.angle(flex));
+        self.motion_by(self.angle(flex))
+    }
+
+    /// The joint's motion when its angle is `angle` radians.
+    pub fn motion_by(&self, angle: f64) -> Isometry3<f64> {
+        let rotation = UnitQuaternion::from_axis_angle(&self.axis, angle);
         // p + R (x - p) = R x + (p - R p)
         let shift = self.pivot.coords - rotation * self.pivot.coords;
         Isometry3::from_parts(Translation3::from(shift), rotation)
@@ -644,6 +649,28 @@ impl HandModel {
         }
     }
 
+    /// This hand with its segments' geometry (joint origins, pivots, shapes) changed by `edit`,
+    /// as a per-user calibration does; the tree, the degrees of freedom' axes and flex terms and
+    /// the limits stay as they are.
+    pub fn reshaped(&self, edit: impl FnOnce(&mut [Segment])) -> HandModel {
+        let mut segments = self.segments.clone();
+        edit(&mut segments);
+        debug_assert!(
+            segments
+                .iter()
+                .zip(&self.segments)
+                .all(|(new, old)| { new.parent == old.parent && new.dofs.len() == old.dofs.len() })
+        );
+        let levers = variable_levers(&segments);
+        HandModel {
+            name: self.name.clone(),
+            side: self.side,
+            limits: self.limits.clone(),
+            segments,
+            levers,
+        }
+    }
+
     /// The model's name from its config.
     pub fn name(&self) -> &str {
         &self.name
@@ -679,16 +706,27 @@ impl HandModel {
     /// The poses of all segments relative to the hand root, for flex vector `flex`, written to
     /// `poses` (which must hold one entry per segment).
     pub fn forward_kinematics(&self, flex: &FlexVector, poses: &mut [Isometry3<f64>]) {
+        self.forward_kinematics_with(flex, poses, |_, _, _| {});
+    }
+
+    /// [`HandModel::forward_kinematics`] that also shows `visit` every degree of freedom with
+    /// its segment and the frame (relative to the hand root) its axis and pivot are written in:
+    /// what a Jacobian of the segment poses needs.
+    pub fn forward_kinematics_with<'a>(
+        &'a self,
+        flex: &FlexVector,
+        poses: &mut [Isometry3<f64>],
+        mut visit: impl FnMut(SegmentId, &'a Dof, &Isometry3<f64>),
+    ) {
         assert_eq!(poses.len(), self.segments.len(), "one pose per segment");
         for (i, s) in self.segments.iter().enumerate() {
-            let mut local = Isometry3::from_parts(Translation3::from(s.origin), s.base_rotation);
+            let joint = Isometry3::from_parts(Translation3::from(s.origin), s.base_rotation);
+            let mut pose = s.parent.map_or(joint, |p| poses[p] * joint);
             for dof in &s.dofs {
-                local *= dof.motion(flex);
+                visit(i, dof, &pose);
+                pose *= dof.motion(flex);
             }
-            poses[i] = match s.parent {
-                None => local,
-                Some(p) => poses[p] * local,
-            };
+            poses[i] = pose;
         }
     }
 

@@ -8,3 +8,4 @@ mod examples;
 mod faults;
 mod fixtures;
 mod replays;
+mod retarget;
