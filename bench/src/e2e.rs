@@ -21,11 +21,12 @@ use serde::Serialize;
 use crate::args::{OutputArgs, ServerArgs};
 use crate::report::{LinePlot, Series};
 use vas_client::recording::{InputSample, Recording};
-use vas_client::{Client, Wake};
+use vas_client::{Client, Frame, Wake};
 use vas_protocol::services::remove_prefix_segment;
 use vas_protocol::wall_clock_ns;
 
 use crate::echo::READY_LINE;
+use crate::process::stop_child;
 use crate::synthetic;
 use vas_client::latency::LatencySummary;
 
@@ -111,12 +112,12 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     for index in 0..args.warmup + args.samples {
         let measured = index >= args.warmup;
         let tracker = InputSample::Tracker(synthetic::tracker(index + 1));
-        match round_trip(&mut echo, tracker, timeout)? {
+        match round_trip(&mut echo, tracker, timeout, drop)? {
             Some(latency) if measured => raw.push(latency),
             None if measured => unanswered_raw += 1,
             _ => {}
         }
-        match round_trip(&mut server, inputs.next_sample(), timeout)? {
+        match round_trip(&mut server, inputs.next_sample(), timeout, drop)? {
             Some(latency) if measured => vas.push(latency),
             None if measured => unanswered_vas += 1,
             _ => {}
@@ -168,16 +169,19 @@ fn plot(report: &E2eReport) -> LinePlot {
 }
 
 /// Sends `input` stamped now and waits for the hand frame answering it; its round trip, or
-/// `None` if none came within `timeout`. SIGINT or SIGTERM ends the benchmark.
-fn round_trip(
+/// `None` if none came within `timeout`. Every other frame received meanwhile goes to `others`
+/// (`drop` ignores them). SIGINT or SIGTERM ends the benchmark.
+pub fn round_trip(
     client: &mut Client,
     input: InputSample,
     timeout: Duration,
+    others: impl FnMut(Frame),
 ) -> anyhow::Result<Option<Duration>> {
     let input = input.with_timestamp(wall_clock_ns());
     let sent_at = Instant::now();
     client.send_input(&input)?;
-    let answer = client.wait_for_hand_frame(timeout, |frame| input.is_answered_by(frame), drop)?;
+    let answer =
+        client.wait_for_hand_frame(timeout, |frame| input.is_answered_by(frame), others)?;
     let round_trip = sent_at.elapsed();
     if answer.is_none() && client.sleep(Duration::ZERO) == Wake::Terminated {
         bail!("interrupted");
@@ -313,32 +317,11 @@ impl EchoProcess {
         tracing::debug!(pid = echo.child.id(), prefix, "echo ready");
         Ok(echo)
     }
-
-    /// Stops the echo with SIGTERM, and kills it if it does not end in time.
-    fn stop(&mut self) {
-        let pid = self.child.id();
-        // SAFETY: kill(2) only sends a signal; `pid` is our child, which has not been reaped
-        // (we own its `Child` and wait for it only below), so the id names no other process.
-        let signalled = libc::pid_t::try_from(pid)
-            .is_ok_and(|pid| unsafe { libc::kill(pid, libc::SIGTERM) } == 0);
-        let deadline = Instant::now() + Self::EXIT_PATIENCE;
-        while signalled && Instant::now() < deadline {
-            match self.child.try_wait() {
-                Ok(Some(_)) => return,
-                Ok(None) => std::thread::sleep(Duration::from_millis(10)),
-                Err(_) => break,
-            }
-        }
-        tracing::warn!(pid, "the echo did not stop on SIGTERM; killing it");
-        if let Err(error) = self.child.kill().and_then(|()| self.child.wait().map(drop)) {
-            tracing::error!(pid, %error, "cannot kill the echo");
-        }
-    }
 }
 
 impl Drop for EchoProcess {
     fn drop(&mut self) {
-        self.stop();
+        stop_child(&mut self.child, libc::SIGTERM, Self::EXIT_PATIENCE, "echo");
         // SAFETY: the echo has ended (killed if SIGTERM did not end it), and the
         // client on its prefix is dropped before it (declared after it in `run`).
         if let Err(error) = unsafe { remove_prefix_segment(&self.prefix) } {

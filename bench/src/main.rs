@@ -1,15 +1,19 @@
 //! `vas-bench`: the benchmarks of BENCHMARKS.md. B1-B6 run the simulation library in this
-//! process; B7 (`e2e`) and the soak talk to a running `vas-server` over iceoryx2, and B9
-//! (`browser`) to a server and a `vas-viewer` through headless Chromium. Every benchmark prints its table and, when asked, writes `--json FILE` and draws `--svg FILE`.
+//! process; B7 (`e2e`) and the soak talk to a running `vas-server` over iceoryx2, B9
+//! (`browser`) to a server and a `vas-viewer` through headless Chromium, and B0's start-up and
+//! B8 (`assembly`) start servers of their own. Every benchmark prints its table and, when asked, writes `--json FILE` and draws `--svg FILE`.
 
 mod args;
+mod assembly;
 mod baselines;
 mod bounce;
 mod browser;
 mod e2e;
 mod echo;
 mod grasp;
+mod oracle;
 mod orbit;
+mod process;
 mod random;
 mod report;
 mod slide;
@@ -118,6 +122,26 @@ server); p50_us, p99_us, max_us (from publishing a sample to receiving the hand 
 answers it); samples (measured exchanges); unanswered (no answer within the timeout)."
     )]
     E2e(e2e::E2eArgs),
+    /// B8: a car-like assembly of 1,000 parts and 5M triangles: start-up cold and cached,
+    /// memory, and a grasped bar slid along a panel at 1 kHz.
+    #[command(
+        after_long_help = "Generates the assembly (seeded) as STL files and a scene, then starts vas-server on it twice,
+each with --tree-cache. Figures: ready_s_cold (from starting the server to its answer to the
+first sample, the tree cache empty: every tree built and stored); ready_s_cached (the same with
+the cache the cold run filled); tree_cache_files (trees stored); peak_rss_mb (the server's
+VmHWM, the larger of the two runs, MiB); bytes_per_triangle (peak RSS) (that peak over the
+triangles: everything the server holds, not the trees alone). In the cached run, after a reset,
+the hand is driven at 1 kHz: it grasps the bar, presses its end onto the right side panel and
+slides it along: drive_s (its time); samples, unanswered (tracker samples sent, and those not
+answered within --answer-timeout-ms); grasped (a parts frame showed the bar grasped);
+sliding_frames (parts frames that showed it sliding along a contact); slid_m (how far it moved
+while sliding); checked_poses, penetrations (the bar's published poses, and those parry finds
+penetrating a static part near the path: must be 0); e2e_p50_us, e2e_p99_us, e2e_max_us (from
+publishing a tracker sample to the hand frame answering it, as in `e2e`). Per loop, from the
+server's log over the drive: hz (frames over the drive's time); p99_us, max_us (frame time:
+the largest window's 99th percentile, and the longest)."
+    )]
+    Assembly(assembly::AssemblyArgs),
     /// Feeds a running server at a steady rate for a long time; reports dropped samples and
     /// the server's memory.
     #[command(
@@ -162,6 +186,7 @@ fn main() -> ExitCode {
         Benchmark::Slide(args) => slide::run_bench(&args).map(drop),
         Benchmark::Grasp(args) => grasp::run_cli(&args),
         Benchmark::E2e(args) => e2e::run(&args),
+        Benchmark::Assembly(args) => assembly::run(&args),
         Benchmark::Soak(args) => soak::run(&args),
         Benchmark::Browser(args) => browser::run(&args),
         Benchmark::Echo(args) => echo::run(args.prefix.as_deref()),

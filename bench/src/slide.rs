@@ -18,9 +18,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use crate::args::OutputArgs;
+use crate::oracle::PenetrationOracle;
 use crate::report::{LinePlot, Series, Table, format_number, median};
-use vas_server::collision::parry_mesh::ORACLE_SCALE;
-use vas_server::collision::{DopTree, MeshCollider, ParryMesh, QueryStats};
+use vas_server::collision::DopTree;
 use vas_server::geometry::{TriMesh, shapes};
 use vas_server::scene::Scene;
 use vas_server::sliding::world::{Obstacle, PairwiseWorld, SlideBody, WorldStats};
@@ -118,7 +118,13 @@ pub fn run(scenario: &Scenario, check: bool, split_long_queries: bool) -> RunRes
         })
         .collect();
     let mut world = PairwiseWorld::new(part, obstacles).split_long_queries(split_long_queries);
-    let oracle = check.then(|| PenetrationOracle::new(scenario));
+    let oracle = check.then(|| {
+        let obstacles = scenario.obstacles.iter().map(|o| {
+            let mesh = o.oracle_mesh.as_deref().unwrap_or(&o.mesh);
+            (mesh, o.pose)
+        });
+        PenetrationOracle::new(&scenario.part, obstacles)
+    });
     let mut machine = SlideMachine::new(
         &scenario.start,
         pivot.coords,
@@ -181,43 +187,6 @@ pub fn run(scenario: &Scenario, check: bool, split_long_queries: bool) -> RunRes
     result.machine = *machine.stats();
     result.world = *world.stats();
     result
-}
-
-/// parry3d's mesh-mesh intersection test of the visible part against every obstacle.
-///
-/// The test runs in millimetres: parry's GJK reports "intersecting" for any distance below
-/// 1.2e-6 of its length unit, which in metres would flag the micrometre gaps a contact tolerance
-/// of a hundredth of a millimetre leaves. Intersection does not change under uniform scaling,
-/// and in millimetres that threshold (1.2 nm) is below the f32 resolution of the coordinates.
-struct PenetrationOracle {
-    part: ParryMesh,
-    obstacles: Vec<(ParryMesh, Pose)>,
-}
-
-impl PenetrationOracle {
-    fn new(scenario: &Scenario) -> Self {
-        PenetrationOracle {
-            part: ParryMesh::in_millimetres(&scenario.part),
-            obstacles: scenario
-                .obstacles
-                .iter()
-                .map(|o| {
-                    let mesh = o.oracle_mesh.as_deref().unwrap_or(&o.mesh);
-                    (ParryMesh::in_millimetres(mesh), o.pose)
-                })
-                .collect(),
-        }
-    }
-
-    fn penetrates(&self, part_pose: &Pose) -> bool {
-        let inverse = part_pose.inverse();
-        self.obstacles.iter().any(|(mesh, pose)| {
-            let mut relative = inverse * pose;
-            relative.translation.vector *= ORACLE_SCALE;
-            self.part
-                .intersects(mesh, &relative, &mut QueryStats::default())
-        })
-    }
 }
 
 /// A copy of `mesh` with the winding of a random half of its triangles reversed (fixed seed):

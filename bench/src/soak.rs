@@ -14,6 +14,7 @@ use vas_protocol::{HandFrame, InputStamp, wall_clock_ns};
 use vas_client::latency::LatencySummary;
 
 use crate::args::{OutputArgs, ServerArgs};
+use crate::process::status_kib;
 use crate::report::{LinePlot, Series};
 use crate::slope::least_squares_slope;
 use crate::synthetic;
@@ -202,7 +203,7 @@ fn pace(
         elapsed_s: 0.0,
         interrupted: false,
         lateness: Vec::with_capacity(sent.tracker.len()),
-        memory: vec![(0.0, resident_kib(pid)?)],
+        memory: vec![(0.0, status_kib(pid, "VmRSS")?)],
     };
     let start = Instant::now();
     let mut next_memory_sample = start + RSS_PERIOD;
@@ -225,7 +226,7 @@ fn pace(
         if Instant::now() >= next_memory_sample {
             pacing
                 .memory
-                .push((start.elapsed().as_secs_f64(), resident_kib(pid)?));
+                .push((start.elapsed().as_secs_f64(), status_kib(pid, "VmRSS")?));
             next_memory_sample += RSS_PERIOD;
         }
     }
@@ -241,7 +242,7 @@ fn pace(
     }
     pacing
         .memory
-        .push((start.elapsed().as_secs_f64(), resident_kib(pid)?));
+        .push((start.elapsed().as_secs_f64(), status_kib(pid, "VmRSS")?));
     Ok(pacing)
 }
 
@@ -475,52 +476,12 @@ impl AnswerBook {
     }
 }
 
-/// The resident memory of process `pid` in KiB, from `/proc/<pid>/status`.
-fn resident_kib(pid: u32) -> anyhow::Result<u64> {
-    let path = format!("/proc/{pid}/status");
-    let status = std::fs::read_to_string(&path)
-        .with_context(|| format!("reading {path}: is process {pid} (the server) running?"))?;
-    parse_vm_rss(&status).with_context(|| format!("{path} has no readable VmRSS line"))
-}
-
-/// The `VmRSS` value of a `/proc/<pid>/status` text, in KiB.
-fn parse_vm_rss(status: &str) -> Option<u64> {
-    let line = status
-        .lines()
-        .find_map(|line| line.strip_prefix("VmRSS:"))?;
-    let mut fields = line.split_whitespace();
-    let kib = fields.next()?.parse().ok()?;
-    (fields.next() == Some("kB")).then_some(kib)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn stamp(seq: u64, timestamp_ns: u64) -> InputStamp {
         InputStamp { seq, timestamp_ns }
-    }
-
-    #[test]
-    fn the_resident_set_is_read_from_a_status_text() {
-        let status = "Name:\tvas-server\nVmPeak:\t  900 kB\nVmRSS:\t   12345 kB\nThreads:\t4\n";
-        assert_eq!(parse_vm_rss(status), Some(12345));
-        assert_eq!(parse_vm_rss("Name:\tx\n"), None);
-        assert_eq!(parse_vm_rss("VmRSS:\tlots kB\n"), None);
-        assert_eq!(parse_vm_rss("VmRSS:\t12 MB\n"), None);
-    }
-
-    #[test]
-    fn this_process_has_resident_memory() {
-        let kib = resident_kib(std::process::id()).expect("our own status");
-        assert!(kib > 0);
-    }
-
-    #[test]
-    fn a_missing_process_is_a_clear_error() {
-        // Process ids are below 2^22 on Linux.
-        let error = resident_kib(u32::MAX).expect_err("no such process");
-        assert!(error.to_string().contains("is process"), "{error}");
     }
 
     #[test]

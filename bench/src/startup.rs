@@ -5,20 +5,17 @@
 //! each from 100k triangles up says how it grows.
 
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use serde::Serialize;
-use vas_client::Client;
-use vas_client::recording::InputSample;
-use vas_protocol::services::remove_prefix_segment;
 use vas_protocol::{TrackerSample, WirePose, wall_clock_ns};
 use vas_server::collision::{DopTree, MeshCollider};
 use vas_server::geometry::shapes::{ShapeKind, ShapeSpec};
 use vas_server::geometry::{ConvexHull, EdgeAdjacency};
 
 use crate::args::OutputArgs;
+use crate::process::{ServerProcess, server_binary};
 use crate::report::{LinePlot, Series, Table, format_number};
 use crate::slope::least_squares_slope;
 
@@ -82,12 +79,7 @@ const COLUMNS: [Column; 5] = [
 const SLOPE_FROM_TRIANGLES: usize = 100_000;
 
 pub fn run(args: &StartupArgs) -> Result<()> {
-    let server = match &args.server {
-        Some(path) => path.clone(),
-        None => std::env::current_exe()
-            .context("locating vas-bench")?
-            .with_file_name("vas-server"),
-    };
+    let server = server_binary(args.server.as_deref())?;
     let mut rows = Vec::new();
     for &triangles in &args.triangles {
         let mut row = stages(args.shape, triangles)?;
@@ -140,8 +132,8 @@ fn stages(shape: ShapeKind, triangles: usize) -> Result<StartupRow> {
     })
 }
 
-/// Starts `server` in lockstep on a scene of a floor and one movable part, sends one tracker
-/// sample once it answers control requests, and returns the time from its start to the answer.
+/// Starts `server` in lockstep on a scene of a floor and one movable part and returns the time
+/// from its start to its answer to one tracker sample.
 fn ready(
     server: &std::path::Path,
     shape: ShapeKind,
@@ -164,45 +156,7 @@ fn ready(
     )
     .context("writing the scene")?;
     let prefix = format!("vas_b0_{}_{triangles}_", std::process::id());
-    let timeout = Duration::from_secs(timeout_s);
-    let started = Instant::now();
-    let child = Command::new(server)
-        .args(["run", "--lockstep", "--prefix", &prefix, "--scene"])
-        .arg(&scene)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(
-            std::fs::File::create(folder.path().join("server.log")).context("the server's log")?,
-        )
-        .spawn()
-        .with_context(|| format!("starting {}", server.display()))?;
-    let mut server = ServerProcess(child);
-    let mut client = crate::args::connect(Some(&prefix))?;
-    // Asked again each second, so that a server that exits (a bad scene) is noticed at once.
-    while let Err(error) = client.scene_info(Duration::from_secs(1)) {
-        let exited = !matches!(server.0.try_wait(), Ok(None));
-        if exited || started.elapsed() > timeout {
-            let log = std::fs::read_to_string(folder.path().join("server.log")).unwrap_or_default();
-            bail!("the server does not answer control requests ({error}); its log:\n{log}");
-        }
-    }
-    let answered = first_answer(&mut client, timeout)?;
-    let ready = started.elapsed();
-    drop(client);
-    server.stop();
-    // SAFETY: the server has ended (killed if SIGINT did not end it) and this client is gone.
-    if let Err(error) = unsafe { remove_prefix_segment(&prefix) } {
-        tracing::warn!(%error, "the server's prefix stays in shared memory");
-    }
-    if !answered {
-        bail!("no answer to the first sample within {timeout_s} s");
-    }
-    Ok(ready)
-}
-
-/// Sends one tracker sample and waits for the hand frame answering it.
-fn first_answer(client: &mut Client, timeout: Duration) -> Result<bool> {
-    let sample = InputSample::Tracker(TrackerSample {
+    let first = TrackerSample {
         seq: 1,
         timestamp_ns: wall_clock_ns(),
         hand: WirePose {
@@ -211,44 +165,17 @@ fn first_answer(client: &mut Client, timeout: Duration) -> Result<bool> {
         },
         cart: WirePose::IDENTITY,
         sensor_id: 0,
-    });
-    client.send_input(&sample)?;
-    let answer = client.wait_for_hand_frame(timeout, |frame| sample.is_answered_by(frame), drop)?;
-    Ok(answer.is_some())
-}
-
-/// The server process, stopped with SIGINT (by its pid) when done or dropped.
-struct ServerProcess(Child);
-
-impl ServerProcess {
-    /// How long a stopped server may take to exit before it is killed.
-    const EXIT_PATIENCE: Duration = Duration::from_secs(5);
-
-    fn stop(&mut self) {
-        let pid = self.0.id();
-        // SAFETY: kill(2) only sends a signal; `pid` is our child, not yet reaped (we own its
-        // `Child` and wait for it only below), so the id names no other process.
-        let signalled = libc::pid_t::try_from(pid)
-            .is_ok_and(|pid| unsafe { libc::kill(pid, libc::SIGINT) } == 0);
-        let deadline = Instant::now() + Self::EXIT_PATIENCE;
-        while signalled && Instant::now() < deadline {
-            match self.0.try_wait() {
-                Ok(Some(_)) => return,
-                Ok(None) => std::thread::sleep(Duration::from_millis(10)),
-                Err(_) => break,
-            }
-        }
-        tracing::warn!(pid, "the server did not stop on SIGINT; killing it");
-        let _ = self.0.kill().and_then(|()| self.0.wait().map(drop));
-    }
-}
-
-impl Drop for ServerProcess {
-    fn drop(&mut self) {
-        if matches!(self.0.try_wait(), Ok(None)) {
-            self.stop();
-        }
-    }
+    };
+    let started = ServerProcess::start_ready(
+        server,
+        &prefix,
+        &["--lockstep".as_ref(), "--scene".as_ref(), scene.as_os_str()],
+        &folder.path().join("server.log"),
+        first,
+        Duration::from_secs(timeout_s),
+    )?;
+    started.server.stop(started.client);
+    Ok(started.ready)
 }
 
 /// The results as a table, with the slopes under it.

@@ -673,18 +673,16 @@ impl Client {
                 }
                 // A request that reached a server is never sent again (loading a scene twice
                 // would be wrong); one that reached none is sent again once a server may be up.
-                let delivered = pending.number_of_server_connections() > 0;
-                let nap = if delivered {
-                    remaining
-                } else {
-                    remaining.min(CONTROL_RETRY)
-                };
-                self.control_listener
-                    .timed_wait(|_| {}, nap)
-                    .map_err(|error| ClientError::ipc("wait for a control response", error))?;
-                if !delivered {
+                // The nap is a sleep: this client's own notification wakes its control
+                // listener at once, so that waiting on it would send the request again and
+                // again, spinning for as long as no server is up.
+                if pending.number_of_server_connections() == 0 {
+                    std::thread::sleep(remaining.min(CONTROL_RETRY));
                     break;
                 }
+                self.control_listener
+                    .timed_wait(|_| {}, remaining)
+                    .map_err(|error| ClientError::ipc("wait for a control response", error))?;
             }
         }
     }

@@ -1,5 +1,6 @@
 //! The client library over real iceoryx2 services, without a server: what a client sends reaches
-//! an input tap, waits end on data or timeout, and control requests without a server time out.
+//! an input tap, waits end on data or timeout, and control requests without a server time out
+//! without spinning.
 
 use std::time::Duration;
 
@@ -80,17 +81,37 @@ fn waiting_without_frames_times_out() {
     unsafe { forget(&prefix) };
 }
 
+/// Without a server a control request times out, sent again now and then meanwhile without
+/// spinning: a client waiting for a starting server leaves the processor to it.
 #[test]
 fn control_requests_without_a_server_time_out() {
     let prefix = prefix("noserver");
     let client = Client::connect(Some(&prefix)).expect("client");
+    let cpu_before = thread_cpu_ticks();
     let error = client
-        .scene_info(Duration::from_millis(100))
+        .scene_info(Duration::from_millis(500))
         .expect_err("no server answers");
     assert!(matches!(error, ClientError::Timeout { .. }), "{error}");
+    let cpu = thread_cpu_ticks() - cpu_before;
+    // Clock ticks are 10 ms: the wait spun if it took a fifth of its half second.
+    assert!(
+        cpu < 10,
+        "{cpu} clock ticks of processor time in half a second"
+    );
     drop(client);
     // SAFETY: the client was the prefix's only node.
     unsafe { forget(&prefix) };
+}
+
+/// The processor time this thread has used (user and system), in clock ticks: fields 14 and 15
+/// of `/proc/thread-self/stat`, counted after the command name (in parentheses, and free to
+/// hold spaces), whose closing parenthesis ends field 2.
+fn thread_cpu_ticks() -> u64 {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").expect("the thread's stat");
+    let after_name = &stat[stat.rfind(')').expect("a command name") + 1..];
+    let fields: Vec<&str> = after_name.split_whitespace().collect();
+    let ticks = |field: usize| -> u64 { fields[field - 3].parse().expect("a tick count") };
+    ticks(14) + ticks(15)
 }
 
 #[test]

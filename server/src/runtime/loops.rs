@@ -187,62 +187,62 @@ const JOIN_POLL: Duration = Duration::from_millis(10);
 /// How often a loop logs its rate.
 const RATE_LOG_PERIOD: Duration = Duration::from_secs(10);
 
-/// Frames a loop processed and the time it spent on them: the rate it sustains is frames per
-/// busy second, whatever rate its input comes at.
+/// The time a loop spent on each frame of the current window: the rate it sustains is frames per
+/// busy second, whatever rate its input comes at. A window ends every [`RATE_LOG_PERIOD`], at a
+/// restart (so that one scene's figures are not mixed with the next's) and when the loop ends.
 struct LoopMeter {
     name: &'static str,
-    frames: u64,
-    busy: Duration,
-    /// The longest frame since the last log.
-    longest: Duration,
+    /// Each frame's processing time since the window began.
+    frames: Vec<Duration>,
     since: Instant,
-    logged: (u64, Duration),
 }
 
 impl LoopMeter {
     fn new(name: &'static str) -> LoopMeter {
         LoopMeter {
             name,
-            frames: 0,
-            busy: Duration::ZERO,
-            longest: Duration::ZERO,
+            frames: Vec::new(),
             since: Instant::now(),
-            logged: (0, Duration::ZERO),
         }
     }
 
-    /// Counts a frame whose processing started at `started`, and logs the rate now and then.
+    /// Counts a frame whose processing started at `started`, and logs the window now and then.
     fn frame_done(&mut self, started: Instant) {
-        let took = started.elapsed();
-        self.frames += 1;
-        self.busy += took;
-        self.longest = self.longest.max(took);
+        self.frames.push(started.elapsed());
         if self.since.elapsed() >= RATE_LOG_PERIOD {
             self.log();
         }
     }
 
-    /// Logs the frames and busy time since the last log, and the rate they sustain.
+    /// Logs the window's frames, their rate, mean, 99th percentile (nearest rank) and longest
+    /// time, and starts a new window.
     fn log(&mut self) {
-        let frames = self.frames - self.logged.0;
-        let busy = self.busy - self.logged.1;
-        if frames > 0 {
-            let window = self.since.elapsed().as_secs_f64();
+        let window = self.since.elapsed().as_secs_f64();
+        let count = self.frames.len();
+        if let Some(p99) = p99(&mut self.frames) {
+            let busy = self.frames.iter().sum::<Duration>().as_secs_f64();
+            let longest = self.frames.iter().max().copied().unwrap_or(p99);
             tracing::info!(
                 loop_name = self.name,
-                frames,
-                frames_per_s = format_args!("{:.0}", frames as f64 / window),
-                busy_percent = format_args!("{:.1}", 100.0 * busy.as_secs_f64() / window),
-                mean_us = format_args!("{:.1}", busy.as_secs_f64() * 1e6 / frames as f64),
-                max_us = format_args!("{:.1}", self.longest.as_secs_f64() * 1e6),
-                sustains_per_s = format_args!("{:.0}", frames as f64 / busy.as_secs_f64()),
+                frames = count,
+                frames_per_s = format_args!("{:.0}", count as f64 / window),
+                busy_percent = format_args!("{:.1}", 100.0 * busy / window),
+                mean_us = format_args!("{:.1}", busy * 1e6 / count as f64),
+                p99_us = format_args!("{:.1}", p99.as_secs_f64() * 1e6),
+                max_us = format_args!("{:.1}", longest.as_secs_f64() * 1e6),
+                sustains_per_s = format_args!("{:.0}", count as f64 / busy),
                 "loop rate"
             );
         }
-        self.logged = (self.frames, self.busy);
-        self.longest = Duration::ZERO;
+        self.frames.clear();
         self.since = Instant::now();
     }
+}
+
+/// The 99th percentile of `times` by nearest rank (reordering them); `None` for no times.
+fn p99(times: &mut [Duration]) -> Option<Duration> {
+    let rank = (times.len() * 99).div_ceil(100).checked_sub(1)?;
+    Some(*times.select_nth_unstable(rank).1)
 }
 
 /// The period of a loop rate (validated by the scene: positive and finite).
@@ -277,7 +277,11 @@ impl GraspingLoop {
             match received {
                 Received::Work(Work::Frame(input)) => self.step(input),
                 Received::Work(Work::Control(change)) => {
+                    let restart = matches!(change, Change::Restart(_));
                     self.apply(change);
+                    if restart {
+                        meter.log();
+                    }
                     continue;
                 }
                 Received::Timeout => match self.last {
@@ -364,7 +368,11 @@ impl SlidingLoop {
             match received {
                 Received::Work(Work::Frame(frame)) => self.slide(frame),
                 Received::Work(Work::Control(change)) => {
+                    let restart = matches!(change, Change::Restart(_));
                     self.apply(change);
+                    if restart {
+                        meter.log();
+                    }
                     continue;
                 }
                 Received::Timeout => self.keep_sliding(),
@@ -513,6 +521,7 @@ impl CollisionLoop {
                     let bodies = restart.hand_bodies.clone();
                     self.verifier = Some(Verifier::new(&restart.scene, bodies));
                     self.epoch = restart.epoch;
+                    meter.log();
                 }
                 Received::Work(Work::Control(Change::Metaphor(_))) => {}
                 Received::Timeout => {}
@@ -592,6 +601,18 @@ mod tests {
         let file = folder.join("handle.toml");
         std::fs::write(&file, text).expect("the scene file is written");
         Arc::new(Scene::load(&file).expect("the scene loads"))
+    }
+
+    #[test]
+    fn the_99th_percentile_is_the_nearest_rank() {
+        let micros = |range: std::ops::RangeInclusive<u64>| -> Vec<Duration> {
+            range.rev().map(Duration::from_micros).collect()
+        };
+        assert_eq!(p99(&mut []), None);
+        assert_eq!(p99(&mut micros(7..=7)), Some(Duration::from_micros(7)));
+        assert_eq!(p99(&mut micros(1..=100)), Some(Duration::from_micros(99)));
+        assert_eq!(p99(&mut micros(1..=1000)), Some(Duration::from_micros(990)));
+        assert_eq!(p99(&mut micros(1..=50)), Some(Duration::from_micros(50)));
     }
 
     #[test]

@@ -450,10 +450,12 @@ fn power_grasp_on(part: &Part) -> Vec<Keyframe> {
     power_grasp_at(&part.pose, HANDLE_RADIUS)
 }
 
-/// [`power_grasp_on`] a cylinder of `radius` whose axis and middle are at `handle` (its z axis):
-/// the hand comes as much closer to the axis as the cylinder is thinner than the script's
-/// handle, so that the palm meets its surface as it meets the handle's.
-fn power_grasp_at(handle: &Isometry3<f64>, radius: f64) -> Vec<Keyframe> {
+/// The scripted power grasp up to the closed fist on a cylinder of `radius` whose axis and middle
+/// are at `handle` (its z axis), the cart at the world's origin; then the hand eases its press,
+/// so that the held part, which follows the tracked hand from the grasp on, stays where it was
+/// grasped. The hand comes as much closer to the axis as the cylinder is thinner than the
+/// script's handle, so that the palm meets its surface as it meets the handle's.
+pub fn power_grasp_at(handle: &Isometry3<f64>, radius: f64) -> Vec<Keyframe> {
     let script = ScriptedGrasp::PowerOnHandle;
     let thinner = Translation3::new(0.0, 0.0, HANDLE_RADIUS - radius);
     let placement = handle * (thinner * script.part_pose()).inverse();

@@ -1,5 +1,5 @@
-//! The benchmarks of `vas-bench` against a real server: a short `e2e` and a short
-//! `soak` produce complete reports. Figures are not checked (speed is for benchmarks, not
+//! The benchmarks of `vas-bench` against real servers: a short `e2e`, a short `soak`, the tree
+//! build and a small `assembly` produce complete reports. Figures are not checked (speed is for benchmarks, not
 //! tests), only that every sample was measured and the reports hang together.
 
 use std::process::Stdio;
@@ -180,4 +180,80 @@ fn bench_tree_build_reports_each_mesh() {
             assert!(number("fcl_bytes_per_triangle") > 0.0, "{row}");
         }
     }
+}
+
+/// `assembly` at a small scale: 30 parts and 200,000 triangles generated, the server started on
+/// them cold and with the tree cache it filled, and the bar grasped and slid along the right side
+/// panel for a second at 1 kHz; parry finds none of its published poses penetrating.
+#[test]
+fn bench_assembly_grasps_and_slides_the_bar_without_penetration() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let (json, svg) = (dir.path().join("b8.json"), dir.path().join("b8.svg"));
+    let output = std::process::Command::new(vas_tests::binary("vas-bench"))
+        .args([
+            "assembly",
+            "--parts",
+            "30",
+            "--triangles",
+            "200000",
+            "--seconds",
+            "1",
+        ])
+        .args(["--timeout-s", "60", "--hand"])
+        .arg(vas_tests::configs_dir().join("hands/right.toml"))
+        .arg("--json")
+        .arg(&json)
+        .arg("--svg")
+        .arg(&svg)
+        .output()
+        .expect("vas-bench runs");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_plot(
+        &svg,
+        &[
+            "median of 50 ms",
+            "longest of 50 ms",
+            "grasped",
+            "slide starts",
+        ],
+    );
+    let report = report(&json);
+    let number = |key: &str| {
+        report[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{key} in {report}"))
+    };
+    for key in [
+        "ready_s_cold",
+        "ready_s_cached",
+        "peak_rss_mb",
+        "bytes_per_triangle",
+        "grasping_hz",
+        "grasping_p99_us",
+        "sliding_hz",
+        "sliding_p99_us",
+        "collision_hz",
+        "collision_p99_us",
+        "e2e_p99_us",
+    ] {
+        assert!(number(key) > 0.0, "{key} in {report}");
+    }
+    assert_eq!(
+        (report["parts"].as_u64(), report["triangles"].as_u64()),
+        (Some(30), Some(200_000)),
+        "{report}"
+    );
+    // A tree a part: every generated mesh differs.
+    assert_eq!(report["tree_cache_files"].as_u64(), Some(30), "{report}");
+    assert_eq!(report["grasped"].as_bool(), Some(true), "{report}");
+    assert_eq!(report["unanswered"].as_u64(), Some(0), "{report}");
+    assert!(number("checked_poses") > 100.0, "{report}");
+    assert_eq!(report["penetrations"].as_u64(), Some(0), "{report}");
+    // The slide takes the bar 40 cm forward and 10 cm up and down along the panel.
+    assert!(number("sliding_frames") > 100.0, "{report}");
+    assert!(number("slid_m") > 0.3, "{report}");
 }
