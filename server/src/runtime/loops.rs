@@ -321,6 +321,7 @@ impl GraspingLoop {
         self.outbox.send(Work::Frame(GraspedFrame {
             stamps: input.stamps,
             input: input.input,
+            tracked: input.tracked,
             hand,
         }));
     }
@@ -423,6 +424,7 @@ impl SlidingLoop {
                     flex: hand_frame.pose.flex.map(|v| v as f32),
                     touching,
                     grasp: wire_grasp(hand_frame.grasp),
+                    tracked: frame.tracked,
                 };
                 (hand, held, hand_frame.events.clone())
             }
@@ -432,6 +434,7 @@ impl SlidingLoop {
                     flex: frame.input.flex,
                     touching: Vec::new(),
                     grasp: wire_grasp(None),
+                    tracked: frame.tracked,
                 },
                 None,
                 Vec::new(),
@@ -639,8 +642,10 @@ mod tests {
                 stamps: Stamps {
                     tracker: stamp,
                     glove: stamp,
+                    joints: InputStamp::default(),
                 },
                 input: *input,
+                tracked: true,
             }));
             let frame = verified_out
                 .recv_timeout(Duration::from_secs(60))
