@@ -12,6 +12,8 @@
 //! combinatorial structure of the cone chosen; the cones are taken from the vertices of a
 //! *generic* DOP (every vertex on exactly three planes), whose normal cones tile the sphere.
 
+use std::sync::OnceLock;
+
 use nalgebra::{Matrix3, Vector3};
 use thiserror::Error;
 
@@ -77,7 +79,19 @@ impl OrientationSet {
     /// 18 = axes and the 6 edge diagonals `(1, ±1, 0)`; 26 = all of those; 24 = the 12 directions
     /// `(0, ±1, ±2)` and their permutations (face normals of the tetrakis hexahedron, an evenly
     /// spread set of 12 directions).
+    ///
+    /// Each set is built once per process (its lookup table takes milliseconds) and cloned
+    /// after: an assembly of a thousand parts asks for it a thousand times.
     pub fn new(k: usize) -> Result<Self, OrientationError> {
+        static BUILT: [OnceLock<OrientationSet>; SUPPORTED_K.len()] =
+            [const { OnceLock::new() }; SUPPORTED_K.len()];
+        let index = (SUPPORTED_K.iter().position(|&supported| supported == k))
+            .ok_or(OrientationError::Unsupported(k))?;
+        Ok(BUILT[index].get_or_init(|| Self::build(k)).clone())
+    }
+
+    /// Builds the set of `k` orientations, one of [`SUPPORTED_K`].
+    fn build(k: usize) -> Self {
         let coordinate = [[1., 0., 0.], [0., 1., 0.], [0., 0., 1.]];
         let corner = [[1., 1., 1.], [1., 1., -1.], [1., -1., 1.], [-1., 1., 1.]];
         let edge = [
@@ -108,7 +122,7 @@ impl OrientationSet {
             18 => [&coordinate[..], &edge[..]].concat(),
             24 => tetrakis.to_vec(),
             26 => [&coordinate[..], &corner[..], &edge[..]].concat(),
-            _ => return Err(OrientationError::Unsupported(k)),
+            _ => unreachable!("k = {k} is not one of SUPPORTED_K"),
         };
         let axes: Vec<Vector3<f64>> = raw.iter().map(|a| Vector3::from(*a).normalize()).collect();
         let vertices = generic_vertices(&axes);
@@ -119,7 +133,7 @@ impl OrientationSet {
             cell_vertices: Vec::new(),
         };
         set.build_cube_map();
-        Ok(set)
+        set
     }
 
     /// Number of orientations (half-spaces) k.
