@@ -9,10 +9,9 @@
 //! and fittings of about 1,000. The procedural shapes meet their counts only about, so the floor
 //! pan takes what is left: the assembly has exactly the triangles asked for.
 //!
-//! The bar comes first and the panels next: the grasping hand considers the first 64 parts of a
-//! scene only (`grasping::collider::MAX_OBJECTS`). The fittings are kept out of the region the
-//! bar and the hand sweep on the scripted path, so that the bar meets the right side panel and
-//! nothing else.
+//! The bar comes first and the panels next. The fittings are kept out of the region the bar and
+//! the hand sweep on the scripted path, so that the bar meets the right side panel and nothing
+//! else.
 
 use std::f64::consts::TAU;
 use std::fs::File;

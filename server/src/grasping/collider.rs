@@ -122,6 +122,11 @@ pub struct PartGeometry {
 }
 
 impl PartGeometry {
+    /// A sphere around the part, in its own frame: its centre and radius.
+    pub fn bound(&self) -> (Point3<f64>, f64) {
+        self.bound
+    }
+
     /// Builds the part's DOP-tree (default orientations); see [`PartGeometry::with_tree`].
     pub fn new(mesh: impl Into<Arc<TriMesh>>) -> PartGeometry {
         let mesh = mesh.into();

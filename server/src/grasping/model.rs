@@ -691,6 +691,27 @@ impl HandModel {
         &self.segments
     }
 
+    /// How far from the hand root any point of the hand can be, whatever its flex values: along
+    /// each segment's chain, the joint offsets and, per degree of freedom, twice its pivot's
+    /// distance (a rotation about a pivot `p` moves a point by at most `2 |p|` more than it
+    /// turns it), then the segment's own reach.
+    pub fn reach(&self) -> f64 {
+        let mut frame_reach = Vec::with_capacity(self.segments.len());
+        let mut reach: f64 = 0.0;
+        for segment in &self.segments {
+            let parent = segment.parent.map_or(0.0, |p| frame_reach[p]);
+            let pivots: f64 = segment
+                .dofs
+                .iter()
+                .map(|d| 2.0 * d.pivot.coords.norm())
+                .sum();
+            let frame = parent + segment.origin.norm() + pivots;
+            frame_reach.push(frame);
+            reach = reach.max(frame + segment.shape.reach());
+        }
+        reach
+    }
+
     /// The palm's segment id.
     pub fn palm(&self) -> SegmentId {
         0

@@ -22,10 +22,11 @@
 
 use std::sync::Arc;
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector3};
 
 use super::frames::ContactAt;
 use crate::collision::DopTree;
+use crate::grasping::collider::MAX_OBJECTS;
 use crate::grasping::{
     GraspEvent, GraspingHand, HandFrame, HandInput, Obstacle as HandObstacle, PartGeometry, PartId,
 };
@@ -64,21 +65,67 @@ impl GraspStage {
         }
     }
 
-    /// Steps the hand towards `input` against every part at its visible pose.
+    /// Steps the hand towards `input` against the parts within its reach, at their visible
+    /// poses.
     pub fn step(&mut self, input: &HandInput) -> HandFrame {
-        let obstacles: Vec<HandObstacle> = self
-            .parts
-            .iter()
-            .zip(&self.poses)
-            .enumerate()
-            .map(|(id, (geometry, pose))| HandObstacle {
-                part: id as PartId,
-                geometry,
-                pose: *pose,
-            })
-            .collect();
+        let obstacles = obstacles_within_reach(&self.hand, &self.parts, &self.poses, input);
         self.hand.step(input, &obstacles)
     }
+}
+
+/// The parts the hand can touch in this step: those whose bounding sphere comes within the
+/// hand's reach of the path of its root, from where it is seen to where the input puts it,
+/// and the held part. A scene of a thousand parts gives the clasp the few near the hand;
+/// should more than [`MAX_OBJECTS`] be near, the nearest are kept (the held part first).
+fn obstacles_within_reach<'p>(
+    hand: &GraspingHand,
+    parts: &'p [PartGeometry],
+    poses: &[Isometry3<f64>],
+    input: &HandInput,
+) -> Vec<HandObstacle<'p>> {
+    let from = hand.visible().root.translation.vector;
+    let to = (input.cart * input.tracker).translation.vector;
+    let reach = hand.model().reach() + REACH_MARGIN;
+    let held = hand.held().map(|held| held.part);
+    let mut near: Vec<(f64, HandObstacle)> = (parts.iter().zip(poses).enumerate())
+        .filter_map(|(id, (geometry, pose))| {
+            let (centre, radius) = geometry.bound();
+            let distance = distance_to_segment(&(pose * centre).coords, &from, &to);
+            let id = id as PartId;
+            let key = if held == Some(id) { -1.0 } else { distance };
+            (held == Some(id) || distance <= reach + radius).then_some((
+                key,
+                HandObstacle {
+                    part: id,
+                    geometry,
+                    pose: *pose,
+                },
+            ))
+        })
+        .collect();
+    if near.len() > MAX_OBJECTS {
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        near.truncate(MAX_OBJECTS);
+        near.sort_by_key(|(_, obstacle)| obstacle.part);
+    }
+    near.into_iter().map(|(_, obstacle)| obstacle).collect()
+}
+
+/// Added to the hand's reach when choosing the parts it may touch: covers the clasp's contact
+/// probes, which reach a little beyond the segments.
+const REACH_MARGIN: f64 = 0.05;
+
+/// The distance from `point` to the segment from `a` to `b` (NaN when a coordinate is not
+/// finite).
+fn distance_to_segment(point: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let along = b - a;
+    let length_squared = along.norm_squared();
+    let t = if length_squared > 0.0 {
+        ((point - a).dot(&along) / length_squared).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (point - (a + t * along)).norm()
 }
 
 /// A part as the sliding stage needs it.
@@ -601,6 +648,54 @@ mod tests {
             }
         }
         ghost_depth
+    }
+
+    #[test]
+    fn the_hand_is_stepped_against_the_parts_within_its_reach_however_many_there_are() {
+        let hand = GraspingHand::new(
+            Arc::new(right_hand()),
+            GraspParams::default(),
+            HandPose {
+                root: Isometry3::identity(),
+                flex: [0.0; FLEX_COUNT],
+            },
+        )
+        .expect("the right hand's segment meshes build");
+        let reach = hand.model().reach();
+        assert!((0.1..0.5).contains(&reach), "reach {reach} m");
+        let cube = || shapes::cuboid(Vector3::repeat(0.01), 12);
+        let at = |x: f64| Isometry3::translation(x, 0.0, 0.0);
+        // A hundred cubes: every fourth within reach of the hand's path, the rest far off.
+        let parts: Vec<Part> = (0..100)
+            .map(|i| {
+                let x = if i % 4 == 3 {
+                    0.001 * i as f64
+                } else {
+                    10.0 + i as f64
+                };
+                part(&format!("cube {i}"), cube(), at(x), false)
+            })
+            .collect();
+        let mut stage = GraspStage::new(hand, &parts);
+        let moving_to = |x: f64| HandInput {
+            cart: Isometry3::identity(),
+            tracker: at(x),
+            flex: [0.0; FLEX_COUNT],
+        };
+        let ids = |stage: &GraspStage, input| -> Vec<PartId> {
+            (obstacles_within_reach(&stage.hand, &stage.parts, &stage.poses, &input).iter())
+                .map(|o| o.part)
+                .collect()
+        };
+        let near: Vec<PartId> = (3..100).step_by(4).collect();
+        assert_eq!(ids(&stage, moving_to(0.0)), near);
+        // Every cube far off: none; every cube in reach, 2 mm apart: the nearest ones.
+        stage.set_part_poses(&vec![at(100.0); 100]);
+        assert!(ids(&stage, moving_to(0.0)).is_empty());
+        let poses: Vec<_> = (0..100).map(|i| at(0.002 * i as f64)).collect();
+        stage.set_part_poses(&poses);
+        let nearest: Vec<PartId> = (0..MAX_OBJECTS as PartId).collect();
+        assert_eq!(ids(&stage, moving_to(0.0)), nearest);
     }
 
     #[test]
