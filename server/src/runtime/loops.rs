@@ -325,7 +325,6 @@ impl GraspingLoop {
         self.outbox.send(Work::Frame(GraspedFrame {
             stamps: input.stamps,
             input: input.input,
-            tracked: input.tracked,
             hand,
         }));
     }
@@ -432,7 +431,6 @@ impl SlidingLoop {
                     flex: hand_frame.pose.flex.map(|v| v as f32),
                     touching,
                     grasp: wire_grasp(hand_frame.grasp),
-                    tracked: frame.tracked,
                 };
                 (hand, held, hand_frame.events.clone())
             }
@@ -442,7 +440,6 @@ impl SlidingLoop {
                     flex: frame.input.flex,
                     touching: Vec::new(),
                     grasp: wire_grasp(None),
-                    tracked: frame.tracked,
                 },
                 None,
                 Vec::new(),
@@ -663,10 +660,8 @@ mod tests {
                 stamps: Stamps {
                     tracker: stamp,
                     glove: stamp,
-                    joints: InputStamp::default(),
                 },
                 input: *input,
-                tracked: true,
             }));
             let frame = verified_out
                 .recv_timeout(Duration::from_secs(60))

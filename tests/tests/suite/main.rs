@@ -7,6 +7,5 @@ mod end_to_end;
 mod examples;
 mod faults;
 mod fixtures;
-mod hand_joints;
 mod replays;
 mod retarget;
