@@ -244,6 +244,7 @@ impl InputStream {
             sent: 0,
             tracker_seq: 0,
             glove_seq: 0,
+            joints_seq: 0,
         }
     }
 }
@@ -254,6 +255,7 @@ struct NumberedInputs {
     sent: usize,
     tracker_seq: u64,
     glove_seq: u64,
+    joints_seq: u64,
 }
 
 impl NumberedInputs {
@@ -277,6 +279,11 @@ impl NumberedInputs {
                 self.glove_seq += 1;
                 sample.seq = self.glove_seq;
                 InputSample::Glove(sample)
+            }
+            Some(InputSample::HandJoints(mut sample)) => {
+                self.joints_seq += 1;
+                sample.seq = self.joints_seq;
+                InputSample::HandJoints(sample)
             }
         }
     }

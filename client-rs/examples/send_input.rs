@@ -76,6 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let stream = match input {
             InputSample::Tracker(_) => "tracker",
             InputSample::Glove(_) => "glove",
+            InputSample::HandJoints(_) => "hand_joints",
         };
         let bend = BENDING_JOINTS.iter().map(|&j| answer.flex[j]).sum::<f32>()
             / BENDING_JOINTS.len() as f32;

@@ -13,9 +13,9 @@ use serde::Serialize;
 use vas_protocol::services::{self, config_with_prefix};
 use vas_protocol::{
     ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, ForceFrame, GeometryHeader,
-    GloveSample, HandFrame, HandSide, InputStats, MAX_PATH_BYTES, MeshData, PART_MOVABLE,
-    PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor, TrackerSample, WirePose,
-    WireText,
+    GloveSample, HandFrame, HandJointsSample, HandSide, InputStats, MAX_PATH_BYTES, MeshData,
+    PART_MOVABLE, PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor,
+    TrackerSample, WirePose, WireText,
 };
 
 use crate::ClientError;
@@ -54,6 +54,7 @@ impl ClientBuilder {
         let node = create_node(self.prefix.as_deref(), self.handle_termination_signals)?;
         let tracker = services::open_tracker(&node)?;
         let glove = services::open_glove(&node)?;
+        let hand_joints = services::open_hand_joints(&node)?;
         let parts = services::open_parts(&node)?;
         let hand = services::open_hand(&node)?;
         let events = services::open_events(&node)?;
@@ -61,6 +62,7 @@ impl ClientBuilder {
         let control = services::open_control(&node)?;
         let tracker_wakeup = services::open_wakeup(&node, services::TRACKER)?;
         let glove_wakeup = services::open_wakeup(&node, services::GLOVE)?;
+        let hand_joints_wakeup = services::open_wakeup(&node, services::HAND_JOINTS)?;
         let parts_wakeup = services::open_wakeup(&node, services::PARTS)?;
         let hand_wakeup = services::open_wakeup(&node, services::HAND)?;
         let events_wakeup = services::open_wakeup(&node, services::EVENTS)?;
@@ -81,6 +83,14 @@ impl ClientBuilder {
                 .create()
                 .map_err(ClientError::port)?,
             glove_notifier: glove_wakeup
+                .notifier_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            hand_joints: hand_joints
+                .publisher_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            hand_joints_notifier: hand_joints_wakeup
                 .notifier_builder()
                 .create()
                 .map_err(ClientError::port)?,
@@ -290,6 +300,8 @@ pub struct Client {
     tracker_notifier: Notifier<ipc::Service>,
     glove: Publisher<ipc::Service, GloveSample, ()>,
     glove_notifier: Notifier<ipc::Service>,
+    hand_joints: Publisher<ipc::Service, HandJointsSample, ()>,
+    hand_joints_notifier: Notifier<ipc::Service>,
     parts: Subscriber<ipc::Service, [PartState], PartsFrameHeader>,
     parts_listener: Listener<ipc::Service>,
     hand: Subscriber<ipc::Service, HandFrame, ()>,
@@ -354,11 +366,23 @@ impl Client {
         Ok(())
     }
 
-    /// Sends a sample of either input stream and wakes the server.
+    /// Sends a hand-joints sample (one hand's 26 OpenXR joints) and wakes the server.
+    pub fn send_hand_joints(&self, sample: &HandJointsSample) -> Result<(), ClientError> {
+        self.hand_joints
+            .send_copy(*sample)
+            .map_err(|error| ClientError::ipc("send a hand-joints sample", error))?;
+        self.hand_joints_notifier
+            .notify()
+            .map_err(|error| ClientError::ipc("notify the hand-joints service", error))?;
+        Ok(())
+    }
+
+    /// Sends a sample of any input stream and wakes the server.
     pub fn send_input(&self, input: &InputSample) -> Result<(), ClientError> {
         match input {
             InputSample::Tracker(sample) => self.send_tracker(sample),
             InputSample::Glove(sample) => self.send_glove(sample),
+            InputSample::HandJoints(sample) => self.send_hand_joints(sample),
         }
     }
 

@@ -28,7 +28,7 @@ enum Command {
     },
     /// Print the server's scene (parts, meshes, ids) and input counters as JSON.
     Info,
-    /// Record the tracker and glove input that reaches the server, as JSON Lines.
+    /// Record the tracker, glove and hand-joints input that reaches the server, as JSON Lines.
     Record(cli::record::RecordArgs),
     /// Play a recording into the server.
     Replay(cli::replay::ReplayArgs),
@@ -36,6 +36,8 @@ enum Command {
     SendTracker(cli::send::TrackerArgs),
     /// Send one glove sample.
     SendGlove(cli::send::GloveArgs),
+    /// Send one hand-joints sample (26 OpenXR joints of one hand) read from JSON.
+    SendHandJoints(cli::send::HandJointsArgs),
     /// Put the scene back to its initial state.
     Reset,
     /// Replace the served scene by a scene file, or by a scene the server offers by name.
@@ -61,6 +63,7 @@ fn main() -> ExitCode {
         Command::Replay(replay) => cli::replay::run(prefix, &replay),
         Command::SendTracker(tracker) => cli::send::tracker(prefix, &tracker),
         Command::SendGlove(glove) => cli::send::glove(prefix, &glove),
+        Command::SendHandJoints(joints) => cli::send::hand_joints(prefix, &joints),
         Command::Reset => cli::control::reset(prefix),
         Command::LoadScene(load) => cli::control::load_scene(prefix, &load),
         Command::Scenes => cli::control::scenes(prefix),

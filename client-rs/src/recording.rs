@@ -1,28 +1,32 @@
 //! Recordings: input streams saved as JSON Lines, for replay and regression tests.
 //!
 //! The first line is a [`RecordingHeader`] (format name and version, scene, description); every
-//! further line is a [`RecordedSample`]: the time in seconds since the first sample and either a
-//! tracker or a glove sample, e.g.
+//! further line is a [`RecordedSample`]: the time in seconds since the first sample and a
+//! tracker, glove or hand-joints sample, e.g.
 //!
 //! ```text
-//! {"format":"vas-recording","version":1,"scene":"demo","description":"reach and grasp"}
+//! {"format":"vas-recording","version":2,"scene":"demo","description":"reach and grasp"}
 //! {"time":0.0,"tracker":{"seq":1,"timestamp_ns":...,"hand":{...},"cart":{...},"sensor_id":0}}
 //! {"time":0.011,"glove":{"seq":1,"timestamp_ns":...,"flex":[0.0, ...]}}
+//! {"time":0.02,"hand_joints":{"seq":1,"timestamp_ns":...,"joints":[{"position":[...],
+//!     "rotation":[...],"radius":0.01,"flags":15}, ...],"side":0}}
 //! ```
 //!
-//! JSON has no NaN or infinity, so samples with non-finite values cannot be recorded.
+//! Version 2 added the hand-joints lines; version 1 recordings (tracker and glove only) are read
+//! as they are. JSON has no NaN or infinity, so samples with non-finite values cannot be
+//! recorded.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use vas_protocol::{GloveSample, HandFrame, InputStamp, TrackerSample};
+use vas_protocol::{GloveSample, HandFrame, HandJointsSample, InputStamp, TrackerSample};
 
 /// The `format` value of every recording header.
 pub const FORMAT: &str = "vas-recording";
-/// The format version this library writes and reads.
-pub const VERSION: u32 = 1;
+/// The format version this library writes; it reads this one and every earlier one.
+pub const VERSION: u32 = 2;
 
 /// First line of a recording.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -50,31 +54,31 @@ impl RecordingHeader {
     }
 }
 
-/// One input sample of either stream.
+/// One input sample of any stream.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "samples are copied to and from the wire as they are; boxing would allocate per sample"
+)]
 pub enum InputSample {
     /// A tracker sample.
     Tracker(TrackerSample),
     /// A glove sample.
     Glove(GloveSample),
+    /// A hand-joints sample.
+    HandJoints(HandJointsSample),
 }
 
 impl InputSample {
     /// The sample's sequence number (in its own stream).
     pub fn seq(&self) -> u64 {
-        match self {
-            Self::Tracker(sample) => sample.seq,
-            Self::Glove(sample) => sample.seq,
-        }
+        self.stamp().seq
     }
 
     /// The sample's timestamp in nanoseconds since the Unix epoch.
     pub fn timestamp_ns(&self) -> u64 {
-        match self {
-            Self::Tracker(sample) => sample.timestamp_ns,
-            Self::Glove(sample) => sample.timestamp_ns,
-        }
+        self.stamp().timestamp_ns
     }
 
     /// The stamp an output frame carries when it answers this sample.
@@ -82,14 +86,17 @@ impl InputSample {
         match self {
             Self::Tracker(sample) => sample.stamp(),
             Self::Glove(sample) => sample.stamp(),
+            Self::HandJoints(sample) => sample.stamp(),
         }
     }
 
-    /// Whether `frame` answers this sample: it carries the sample's stamp for its stream.
+    /// Whether `frame` answers this sample: it carries the sample's stamp for its stream (and,
+    /// for hand joints, it is the frame of the sample's hand).
     pub fn is_answered_by(&self, frame: &HandFrame) -> bool {
         match self {
             Self::Tracker(_) => frame.tracker == self.stamp(),
             Self::Glove(_) => frame.glove == self.stamp(),
+            Self::HandJoints(sample) => frame.joints == self.stamp() && frame.hand == sample.side,
         }
     }
 
@@ -98,6 +105,7 @@ impl InputSample {
         match &mut self {
             Self::Tracker(sample) => sample.timestamp_ns = timestamp_ns,
             Self::Glove(sample) => sample.timestamp_ns = timestamp_ns,
+            Self::HandJoints(sample) => sample.timestamp_ns = timestamp_ns,
         }
         self
     }
@@ -107,6 +115,7 @@ impl InputSample {
         match self {
             Self::Tracker(sample) => sample.hand.is_finite() && sample.cart.is_finite(),
             Self::Glove(sample) => sample.flex.iter().all(|v| v.is_finite()),
+            Self::HandJoints(sample) => sample.is_finite(),
         }
     }
 }
@@ -195,11 +204,11 @@ impl Recording {
             if header.is_none() {
                 let parsed: RecordingHeader = serde_json::from_str(&text)
                     .map_err(|error| invalid(line, format!("not a recording header: {error}")))?;
-                if parsed.format != FORMAT || parsed.version != VERSION {
+                if parsed.format != FORMAT || !(1..=VERSION).contains(&parsed.version) {
                     return Err(invalid(
                         line,
                         format!(
-                            "format {:?} version {} is not {FORMAT:?} version {VERSION}",
+                            "format {:?} version {} is not {FORMAT:?} version 1 to {VERSION}",
                             parsed.format, parsed.version
                         ),
                     ));
@@ -209,6 +218,17 @@ impl Recording {
             }
             let sample: RecordedSample = serde_json::from_str(&text)
                 .map_err(|error| invalid(line, format!("not a recorded sample: {error}")))?;
+            if matches!(sample.input, InputSample::HandJoints(_))
+                && header
+                    .as_ref()
+                    .is_some_and(|h: &RecordingHeader| h.version < 2)
+            {
+                return Err(invalid(
+                    line,
+                    "a hand-joints sample in a version 1 recording (they came with version 2)"
+                        .to_owned(),
+                ));
+            }
             // JSON has no infinity, but a number beyond `f32`'s range reads as one.
             if !sample.input.is_finite() {
                 return Err(invalid(

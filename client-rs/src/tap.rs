@@ -6,14 +6,14 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use vas_protocol::services;
-use vas_protocol::{GloveSample, TrackerSample};
+use vas_protocol::{GloveSample, HandJointsSample, TrackerSample};
 
 use crate::ClientError;
 use crate::client::create_node;
 use crate::recording::InputSample;
 use crate::wait::{Wake, new_waitset, wait_until_ready};
 
-/// A second reader of the tracker and glove streams, beside the server: what a recorder or an
+/// A second reader of the input streams (tracker, glove, hand joints), beside the server: what a recorder or an
 /// input monitor uses. It sees every sample the senders publish, valid or not.
 pub struct InputTap {
     // Keeps the ports' node alive.
@@ -22,6 +22,8 @@ pub struct InputTap {
     tracker_listener: Listener<ipc::Service>,
     glove: Subscriber<ipc::Service, GloveSample, ()>,
     glove_listener: Listener<ipc::Service>,
+    hand_joints: Subscriber<ipc::Service, HandJointsSample, ()>,
+    hand_joints_listener: Listener<ipc::Service>,
     waitset: WaitSet<ipc::Service>,
 }
 
@@ -37,6 +39,8 @@ impl InputTap {
         let glove = services::open_glove(&node)?;
         let tracker_wakeup = services::open_wakeup(&node, services::TRACKER)?;
         let glove_wakeup = services::open_wakeup(&node, services::GLOVE)?;
+        let hand_joints = services::open_hand_joints(&node)?;
+        let hand_joints_wakeup = services::open_wakeup(&node, services::HAND_JOINTS)?;
         Ok(Self {
             tracker: tracker
                 .subscriber_builder()
@@ -54,6 +58,14 @@ impl InputTap {
                 .listener_builder()
                 .create()
                 .map_err(ClientError::port)?,
+            hand_joints: hand_joints
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            hand_joints_listener: hand_joints_wakeup
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)?,
             waitset: new_waitset(handle_termination_signals)?,
             _node: node,
         })
@@ -62,21 +74,27 @@ impl InputTap {
     /// Blocks until a sample is ready, the timeout passes or a handled termination signal
     /// arrives.
     pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
-        let (tracker, glove) = (&self.tracker, &self.glove);
+        let (tracker, glove, hand_joints) = (&self.tracker, &self.glove, &self.hand_joints);
         wait_until_ready(
             &self.waitset,
-            &[&self.tracker_listener, &self.glove_listener],
+            &[
+                &self.tracker_listener,
+                &self.glove_listener,
+                &self.hand_joints_listener,
+            ],
             timeout,
             || {
                 let has = |result: Result<bool, _>| {
                     result.map_err(|error| ClientError::ipc("check a subscriber", error))
                 };
-                Ok(has(tracker.has_samples())? || has(glove.has_samples())?)
+                Ok(has(tracker.has_samples())?
+                    || has(glove.has_samples())?
+                    || has(hand_joints.has_samples())?)
             },
         )
     }
 
-    /// Every queued sample of both streams, ordered by their timestamps.
+    /// Every queued sample of every stream, ordered by their timestamps.
     pub fn receive(&mut self) -> Result<Vec<InputSample>, ClientError> {
         let mut samples = Vec::new();
         while let Some(sample) = self
@@ -92,6 +110,13 @@ impl InputTap {
             .map_err(|error| ClientError::ipc("receive a glove sample", error))?
         {
             samples.push(InputSample::Glove(*sample.payload()));
+        }
+        while let Some(sample) = self
+            .hand_joints
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a hand-joints sample", error))?
+        {
+            samples.push(InputSample::HandJoints(*sample.payload()));
         }
         samples.sort_by_key(InputSample::timestamp_ns);
         Ok(samples)

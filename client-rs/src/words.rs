@@ -31,13 +31,18 @@ impl SceneWords {
 
     /// The event in a sentence: "grasp peg (power) at sample 44", "release peg at sample 90",
     /// "contact begin peg – block at sample 61". The sample is the input that caused it (the
-    /// newer of the frame's tracker and glove samples).
+    /// newest of the frame's tracker, glove and hand-joints samples).
     pub fn event(&self, event: &SimEvent) -> String {
-        let sample = if event.glove.timestamp_ns > event.tracker.timestamp_ns {
-            event.glove.seq
-        } else {
-            event.tracker.seq
-        };
+        let sample = [event.tracker, event.glove, event.joints]
+            .into_iter()
+            .reduce(|newest, stamp| {
+                if stamp.timestamp_ns > newest.timestamp_ns {
+                    stamp
+                } else {
+                    newest
+                }
+            })
+            .map_or(0, |stamp| stamp.seq);
         let part = self.part(event.part);
         let what = match EventKind::try_from(event.kind) {
             Ok(EventKind::Grasp) => format!("grasp {part} ({})", grasp_name(event.grasp_type)),
@@ -110,6 +115,7 @@ mod tests {
                 seq: 7,
                 timestamp_ns: 1,
             },
+            joints: InputStamp::default(),
             timestamp_ns: 5,
             kind: kind as u32,
             grasp_type: grasp as u32,
@@ -135,6 +141,11 @@ mod tests {
         let mut release = event(EventKind::Release, GraspType::None, 1, HAND_PART_ID);
         release.glove.timestamp_ns = 9;
         assert_eq!(words.event(&release), "release peg at sample 7");
+        release.joints = InputStamp {
+            seq: 12,
+            timestamp_ns: 10,
+        };
+        assert_eq!(words.event(&release), "release peg at sample 12");
         assert_eq!(words.part(HAND_PART_ID), "hand");
         assert_eq!(words.part(5), "part 5");
         assert_eq!(

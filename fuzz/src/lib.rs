@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 
 use bolero::generator::TypeGenerator;
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
-use vas_protocol::{ControlRequest, GloveSample, MAX_POSITION_M, TrackerSample};
+use vas_protocol::{ControlRequest, GloveSample, HandJointsSample, MAX_POSITION_M, TrackerSample};
 use vas_server::collision::orientation::{DEFAULT_K, SUPPORTED_K};
 use vas_server::collision::{DopTree, MeshCollider, OrientationSet};
 use vas_server::geometry::mesh::MAX_COORDINATE;
@@ -108,6 +108,9 @@ pub unsafe trait AnyBitPattern: Copy {}
 unsafe impl AnyBitPattern for TrackerSample {}
 // SAFETY: `u64`, `u64` and `[f32; 22]`.
 unsafe impl AnyBitPattern for GloveSample {}
+// SAFETY: `u64`, `u64`, 26 `JointLocation`s (`[f64; 3]`, `[f64; 4]`, `f32`, `u32`) and a `u32`;
+// the padding after it may hold anything.
+unsafe impl AnyBitPattern for HandJointsSample {}
 // SAFETY: `u32`, `u32` and a `WireText` (a `u32` length and bytes); the length is checked on
 // every read (`WireText::as_str`), nothing unsafe relies on it.
 unsafe impl AnyBitPattern for ControlRequest {}

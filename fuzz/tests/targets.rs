@@ -3,8 +3,7 @@
 //! with an error or accepted as a value that keeps the API's promises. A panic, a hang or a
 //! broken promise is a failure.
 //!
-//! Seeds live in `tests/__fuzz__/<target>/corpus/seed-*`. Hand joints have no wire type yet; their
-//! captures have a target.
+//! Seeds live in `tests/__fuzz__/<target>/corpus/seed-*`.
 
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
@@ -17,7 +16,7 @@ use vas_fuzz::{
 };
 use vas_protocol::{
     ControlRequest, ControlRequestKind, ControlStatus, FLEX_LIMITS_RAD, GloveSample,
-    PartDescription, TrackerSample,
+    HandJointsSample, PartDescription, TrackerSample,
 };
 use vas_server::collision::dop_tree::{DEFAULT_LEAF_SIZE, TreeCache};
 use vas_server::collision::orientation::{DEFAULT_K, SUPPORTED_K};
@@ -215,6 +214,44 @@ fn glove_samples() {
                 assert!((low..=high).contains(value), "{sample:?} gave {flex:?}");
             }
         }
+    });
+}
+
+/// The right hand model, loaded once.
+fn right_hand() -> &'static HandModel {
+    static HAND: OnceLock<HandModel> = OnceLock::new();
+    HAND.get_or_init(|| {
+        HandModel::load(&configs_dir().join("hands/right.toml")).expect("the shipped hand")
+    })
+}
+
+/// Hand-joints samples through the I/O thread's validation and retargeting onto a right hand
+/// (seeded with the two real captures as right hands): each is counted once, accepted,
+/// untracked or rejected, and an accepted one becomes a target with a finite root of unit
+/// rotation and flex values within the hand's joint limits.
+#[test]
+fn hand_joints_samples() {
+    bolero::check!().for_each(|bytes: &[u8]| {
+        let mut inputs = Inputs::for_hand(Some(right_hand()));
+        let samples = values_from_bytes::<HandJointsSample>(bytes);
+        for sample in &samples {
+            if inputs.apply_hand_joints(sample).is_err() {
+                continue;
+            }
+            let input = inputs.frame().input;
+            let root = input.cart * input.tracker;
+            assert!(is_finite(&root), "{sample:?} gave {root}");
+            assert!((root.rotation.norm() - 1.0).abs() < 1e-9, "{sample:?}");
+            for (value, limit) in input.flex.iter().zip(right_hand().limits()) {
+                let (low, high) = (limit.min as f32, limit.max as f32);
+                assert!((low..=high).contains(value), "{} = {value}", limit.name);
+            }
+        }
+        let stats = inputs.stats();
+        assert_eq!(
+            stats.joints_accepted + stats.joints_untracked + stats.joints_rejected(),
+            samples.len() as u64
+        );
     });
 }
 

@@ -164,15 +164,42 @@ pub struct InputStats {
     pub glove_values_clamped: u64,
     /// Tracker samples rejected for a position beyond [`MAX_POSITION_M`](crate::MAX_POSITION_M).
     pub tracker_rejected_out_of_range: u64,
+    /// Hand-joints samples accepted and retargeted onto their hand.
+    pub joints_accepted: u64,
+    /// Hand-joints samples that say their hand is not tracked (a joint the retargeting needs is
+    /// not valid): not rejected, the hand stays where it was and its frames say it is untracked.
+    pub joints_untracked: u64,
+    /// Hand-joints samples rejected for a NaN or infinite position or radius.
+    pub joints_rejected_non_finite: u64,
+    /// Hand-joints samples rejected for an orientation that is not a unit quaternion.
+    pub joints_rejected_quaternion: u64,
+    /// Hand-joints samples rejected for a position beyond
+    /// [`MAX_POSITION_M`](crate::MAX_POSITION_M).
+    pub joints_rejected_out_of_range: u64,
+    /// Hand-joints samples rejected as no hand: joints out of anatomical order, or bones of
+    /// impossible length.
+    pub joints_rejected_anatomy: u64,
+    /// Hand-joints samples rejected for naming a side the scene has no hand for (or no side).
+    pub joints_rejected_no_such_hand: u64,
 }
 
 impl InputStats {
-    /// All rejected samples, tracker and glove.
+    /// All rejected samples, of every input stream.
     pub fn rejected(&self) -> u64 {
         self.tracker_rejected_non_finite
             + self.tracker_rejected_quaternion
             + self.tracker_rejected_out_of_range
             + self.glove_rejected_non_finite
+            + self.joints_rejected()
+    }
+
+    /// Rejected hand-joints samples.
+    pub fn joints_rejected(&self) -> u64 {
+        self.joints_rejected_non_finite
+            + self.joints_rejected_quaternion
+            + self.joints_rejected_out_of_range
+            + self.joints_rejected_anatomy
+            + self.joints_rejected_no_such_hand
     }
 }
 
@@ -221,7 +248,7 @@ pub const MAX_HANDS: usize = 2;
 /// One flat type for every request kind: the fields a kind does not use are zero. Every response
 /// carries the scene summary and the input counters, so any request doubles as a status query.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("vas::control::ControlResponse::v4")]
+#[type_name("vas::control::ControlResponse::v5")]
 #[repr(C)]
 pub struct ControlResponse {
     /// A [`ControlStatus`] code.

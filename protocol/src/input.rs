@@ -1,8 +1,10 @@
-//! Input samples (tracker and glove) and their validation.
+//! Input samples (tracker, glove and hand joints) and their validation.
 //!
 //! The server trusts no input: [`TrackerSample::validate`] rejects non-finite values and
 //! rotations that are not unit quaternions, [`GloveSample::validate`] rejects non-finite flex
-//! values and clamps the others into the joint limits, reporting which were clamped.
+//! values and clamps the others into the joint limits, reporting which were clamped. A
+//! [`HandJointsSample`] is validated by the server against the anatomy of a hand as well
+//! (`vas_server::grasping::retarget`), so its checks live there.
 
 use iceoryx2::prelude::ZeroCopySend;
 use nalgebra::Isometry3;
@@ -57,6 +59,90 @@ pub struct GloveSample {
     pub timestamp_ns: u64,
     /// Joint angles in radians, in CyberGlove order ([`FLEX_JOINT_NAMES`]).
     pub flex: [f32; FLEX_COUNT],
+}
+
+/// Number of joints of a [`HandJointsSample`]: OpenXR's hand joints (XR_EXT_hand_tracking).
+pub const HAND_JOINT_COUNT: usize = 26;
+
+/// [`JointLocation::flags`] bit: the orientation is valid (OpenXR's
+/// `XR_SPACE_LOCATION_ORIENTATION_VALID_BIT`).
+pub const JOINT_ORIENTATION_VALID: u32 = 1 << 0;
+/// [`JointLocation::flags`] bit: the position is valid (`XR_SPACE_LOCATION_POSITION_VALID_BIT`).
+pub const JOINT_POSITION_VALID: u32 = 1 << 1;
+/// [`JointLocation::flags`] bit: the orientation is tracked, not inferred
+/// (`XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT`).
+pub const JOINT_ORIENTATION_TRACKED: u32 = 1 << 2;
+/// [`JointLocation::flags`] bit: the position is tracked, not inferred
+/// (`XR_SPACE_LOCATION_POSITION_TRACKED_BIT`).
+pub const JOINT_POSITION_TRACKED: u32 = 1 << 3;
+
+/// One hand joint's location, as OpenXR's `XrHandJointLocationEXT` gives it.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[repr(C)]
+pub struct JointLocation {
+    /// Position in metres, in tracking space (the cart's frame).
+    pub position: [f64; 3],
+    /// Orientation as a unit quaternion in x, y, z, w order; the joint frame is OpenXR's: `-Z`
+    /// along the bone toward the fingertip, `+Y` on the back of the hand.
+    pub rotation: [f64; 4],
+    /// Distance from the joint to the skin, in metres (OpenXR's radius is a `float`).
+    pub radius: f32,
+    /// Which of position and orientation are valid and tracked: the `JOINT_*` bits, OpenXR's
+    /// `XrSpaceLocationFlags`.
+    pub flags: u32,
+}
+
+impl JointLocation {
+    /// The joint's pose.
+    pub fn pose(&self) -> WirePose {
+        WirePose {
+            position: self.position,
+            rotation: self.rotation,
+        }
+    }
+}
+
+/// One hand's tracked joints: OpenXR's 26 in OpenXR order, each with its pose, radius and
+/// validity flags, and which hand it is.
+///
+/// The order is `XrHandJointEXT`'s: palm 0, wrist 1, thumb metacarpal, proximal, distal, tip
+/// 2-5, then index, middle, ring and little finger each metacarpal, proximal, intermediate,
+/// distal, tip (6-10, 11-15, 16-20, 21-25).
+///
+/// WebXR's `XRHand` has the same joints without the palm (25, wrist first). A WebXR producer
+/// sends its joints at indices 1-25 and the palm with `flags` 0: OpenXR's own way of saying
+/// that a joint's location is unknown. No separate "WebXR" mode is needed, because the server
+/// uses no palm (the hand's root comes from the wrist and the fingers from their own joints);
+/// a producer that has a palm simply sends it.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
+#[type_name("vas::input::HandJointsSample::v1")]
+#[repr(C)]
+pub struct HandJointsSample {
+    /// Sender's sequence number, from 1, increasing by one per sample.
+    pub seq: u64,
+    /// When the sample was taken, in nanoseconds since the Unix epoch.
+    pub timestamp_ns: u64,
+    /// The joints, in OpenXR order.
+    pub joints: [JointLocation; HAND_JOINT_COUNT],
+    /// Which hand, a [`HandSide`](crate::HandSide) code.
+    pub side: u32,
+}
+
+impl HandJointsSample {
+    /// The stamp an output frame carries when it answers this sample.
+    pub fn stamp(&self) -> InputStamp {
+        InputStamp {
+            seq: self.seq,
+            timestamp_ns: self.timestamp_ns,
+        }
+    }
+
+    /// Whether every position, rotation and radius is finite.
+    pub fn is_finite(&self) -> bool {
+        self.joints
+            .iter()
+            .all(|joint| joint.pose().is_finite() && joint.radius.is_finite())
+    }
 }
 
 /// Why an input sample was rejected.

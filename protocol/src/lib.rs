@@ -64,8 +64,10 @@ pub use geometry::{
     GeometryDecodeError, GeometryHeader, HandGeometry, MAX_MESH_NAME_BYTES, MeshData, SceneGeometry,
 };
 pub use input::{
-    FLEX_COUNT, FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, GloveSample, GloveTarget, InputRejection,
-    MAX_POSITION_M, TrackerSample, TrackerTarget, UNIT_QUATERNION_TOLERANCE,
+    FLEX_COUNT, FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, GloveSample, GloveTarget, HAND_JOINT_COUNT,
+    HandJointsSample, InputRejection, JOINT_ORIENTATION_TRACKED, JOINT_ORIENTATION_VALID,
+    JOINT_POSITION_TRACKED, JOINT_POSITION_VALID, JointLocation, MAX_POSITION_M, TrackerSample,
+    TrackerTarget, UNIT_QUATERNION_TOLERANCE,
 };
 pub use output::{
     EventKind, ForceFrame, GraspType, HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame, HandSegment,

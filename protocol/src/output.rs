@@ -1,8 +1,8 @@
 //! Output frames: parts, hand, events and force.
 //!
-//! Every output names the input it answers with an [`InputStamp`] per input stream (tracker and
-//! glove number their samples independently), so that latency can be traced end to end and a
-//! lockstep replay can wait for the frame answering the sample it sent.
+//! Every output names the input it answers with an [`InputStamp`] per input stream (tracker,
+//! glove and hand joints number their samples independently), so that latency can be traced end
+//! to end and a lockstep replay can wait for the frame answering the sample it sent.
 
 use iceoryx2::prelude::ZeroCopySend;
 use serde::{Deserialize, Serialize};
@@ -22,7 +22,7 @@ pub struct InputStamp {
 
 /// User header of a `vas/output/parts` sample; the payload is a slice of [`PartState`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::PartsFrameHeader::v1")]
+#[type_name("vas::output::PartsFrameHeader::v2")]
 #[repr(C)]
 pub struct PartsFrameHeader {
     /// Frame number of the parts stream, from 1.
@@ -31,6 +31,8 @@ pub struct PartsFrameHeader {
     pub tracker: InputStamp,
     /// The latest glove sample taken into account.
     pub glove: InputStamp,
+    /// The latest hand-joints sample taken into account.
+    pub joints: InputStamp,
     /// When the frame was published, in nanoseconds since the Unix epoch.
     pub timestamp_ns: u64,
     /// Number of parts in the payload slice.
@@ -97,15 +99,20 @@ pub const HAND_SEGMENT_COUNT: usize = 16;
 /// One hand as the collision loop verified it: root pose, flex vector, each segment's pose,
 /// touching segments and grasp type.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::HandFrame::v2")]
+#[type_name("vas::output::HandFrame::v3")]
 #[repr(C)]
 pub struct HandFrame {
     /// Frame number of the hand stream, from 1.
     pub frame: u64,
-    /// The tracker sample this frame answers (or the latest one, when it answers a glove sample).
+    /// The tracker sample this frame answers (or the latest one, when it answers another
+    /// stream's sample).
     pub tracker: InputStamp,
-    /// The glove sample this frame answers (or the latest one, when it answers a tracker sample).
+    /// The glove sample this frame answers (or the latest one, when it answers another
+    /// stream's sample).
     pub glove: InputStamp,
+    /// The hand-joints sample of this hand this frame answers (or the latest one, when it
+    /// answers another stream's sample).
+    pub joints: InputStamp,
     /// When the frame was published, in nanoseconds since the Unix epoch.
     pub timestamp_ns: u64,
     /// Pose of the hand root in the world (the tracker's cart pose times its hand pose).
@@ -137,6 +144,7 @@ impl Default for HandFrame {
             frame: 0,
             tracker: InputStamp::default(),
             glove: InputStamp::default(),
+            joints: InputStamp::default(),
             timestamp_ns: 0,
             root: WirePose::IDENTITY,
             flex: [0.0; FLEX_COUNT],
@@ -325,7 +333,7 @@ impl EventKind {
 
 /// A discrete simulation event on `vas/output/events`.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::SimEvent::v2")]
+#[type_name("vas::output::SimEvent::v3")]
 #[repr(C)]
 pub struct SimEvent {
     /// Number of the hand frame during which the event happened.
@@ -334,6 +342,8 @@ pub struct SimEvent {
     pub tracker: InputStamp,
     /// The glove sample that led to the event.
     pub glove: InputStamp,
+    /// The hand-joints sample that led to the event.
+    pub joints: InputStamp,
     /// When the event was published, in nanoseconds since the Unix epoch.
     pub timestamp_ns: u64,
     /// An [`EventKind`] code.
@@ -358,7 +368,7 @@ pub struct SimEvent {
 
 /// Force and torque a force-feedback device should render, on `vas/output/force`.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::ForceFrame::v1")]
+#[type_name("vas::output::ForceFrame::v2")]
 #[repr(C)]
 pub struct ForceFrame {
     /// Number of the hand frame the force belongs to.
@@ -367,6 +377,8 @@ pub struct ForceFrame {
     pub tracker: InputStamp,
     /// The glove sample the force answers.
     pub glove: InputStamp,
+    /// The hand-joints sample the force answers.
+    pub joints: InputStamp,
     /// When the frame was published, in nanoseconds since the Unix epoch.
     pub timestamp_ns: u64,
     /// Force on the hand root in newtons, world frame.

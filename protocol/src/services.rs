@@ -16,14 +16,16 @@ use iceoryx2::service::Service;
 use iceoryx2::service::port_factory::{event, publish_subscribe, request_response};
 
 use crate::{
-    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame, PartState,
-    PartsFrameHeader, SimEvent, TrackerSample,
+    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame,
+    HandJointsSample, PartState, PartsFrameHeader, SimEvent, TrackerSample,
 };
 
 /// Tracker samples ([`crate::TrackerSample`]), clients to server.
 pub const TRACKER: &str = "vas/input/tracker";
 /// Glove samples ([`crate::GloveSample`]), clients to server.
 pub const GLOVE: &str = "vas/input/glove";
+/// Hand-joint samples ([`crate::HandJointsSample`]), clients to server.
+pub const HAND_JOINTS: &str = "vas/input/hand_joints";
 /// Parts frames: a [`crate::PartsFrameHeader`] user header over a slice of [`crate::PartState`].
 pub const PARTS: &str = "vas/output/parts";
 /// Hand frames ([`crate::HandFrame`]).
@@ -38,9 +40,9 @@ pub const GEOMETRY: &str = "vas/scene/geometry";
 /// Control requests and responses ([`crate::ControlRequest`], [`crate::ControlResponse`]).
 pub const CONTROL: &str = "vas/control";
 
-/// Settings of an input service (tracker, glove).
+/// Settings of an input service (tracker, glove, hand joints).
 pub mod input {
-    /// Every client publishes on both input streams (renderers, device bridges, replays,
+    /// Every client publishes on every input stream (renderers, device bridges, replays,
     /// scripts), so as many as the control service takes clients: with fewer, the input streams
     /// would refuse clients that the outputs and control still take.
     pub const MAX_PUBLISHERS: usize = super::control::MAX_CLIENTS;
@@ -163,6 +165,8 @@ pub unsafe fn remove_prefix_segment(prefix: &str) -> Result<bool, PrefixError> {
 pub type TrackerService<S> = publish_subscribe::PortFactory<S, TrackerSample, ()>;
 /// The glove input service.
 pub type GloveService<S> = publish_subscribe::PortFactory<S, GloveSample, ()>;
+/// The hand-joints input service.
+pub type HandJointsService<S> = publish_subscribe::PortFactory<S, HandJointsSample, ()>;
 /// The parts output service: a frame header over a slice of part states.
 pub type PartsService<S> = publish_subscribe::PortFactory<S, [PartState], PartsFrameHeader>;
 /// The hand output service.
@@ -238,6 +242,13 @@ pub fn open_tracker<S: Service>(node: &Node<S>) -> Result<TrackerService<S>, Ser
 /// Opens (or creates) the glove input service.
 pub fn open_glove<S: Service>(node: &Node<S>) -> Result<GloveService<S>, ServiceOpenError> {
     open_input(node, GLOVE)
+}
+
+/// Opens (or creates) the hand-joints input service.
+pub fn open_hand_joints<S: Service>(
+    node: &Node<S>,
+) -> Result<HandJointsService<S>, ServiceOpenError> {
+    open_input(node, HAND_JOINTS)
 }
 
 /// Opens (or creates) the parts output service.

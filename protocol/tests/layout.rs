@@ -16,29 +16,35 @@ fn input_types_keep_their_layout() {
     assert_layout::<WirePose>(56, 8);
     assert_layout::<TrackerSample>(136, 8);
     assert_layout::<GloveSample>(104, 8);
+    assert_layout::<JointLocation>(64, 8);
+    assert_layout::<HandJointsSample>(1688, 8);
     assert_eq!(offset_of!(TrackerSample, hand), 16);
     assert_eq!(offset_of!(TrackerSample, cart), 72);
     assert_eq!(offset_of!(TrackerSample, sensor_id), 128);
     assert_eq!(offset_of!(GloveSample, flex), 16);
+    assert_eq!(offset_of!(JointLocation, radius), 56);
+    assert_eq!(offset_of!(HandJointsSample, joints), 16);
+    assert_eq!(offset_of!(HandJointsSample, side), 1680);
+    assert_eq!(HAND_JOINT_COUNT, 26);
 }
 
 #[test]
 fn output_types_keep_their_layout() {
     assert_layout::<InputStamp>(16, 8);
-    assert_layout::<PartsFrameHeader>(56, 8);
+    assert_layout::<PartsFrameHeader>(72, 8);
     assert_layout::<PartState>(64, 8);
-    assert_layout::<HandFrame>(1112, 8);
-    assert_layout::<SimEvent>(120, 8);
+    assert_layout::<HandFrame>(1128, 8);
+    assert_layout::<SimEvent>(136, 8);
     assert_layout::<GeometryHeader>(24, 8);
-    assert_layout::<ForceFrame>(96, 8);
-    assert_eq!(offset_of!(PartsFrameHeader, part_count), 48);
+    assert_layout::<ForceFrame>(112, 8);
+    assert_eq!(offset_of!(PartsFrameHeader, part_count), 64);
     assert_eq!(offset_of!(PartState, position), 8);
-    assert_eq!(offset_of!(HandFrame, root), 48);
-    assert_eq!(offset_of!(HandFrame, flex), 104);
-    assert_eq!(offset_of!(HandFrame, grasp_type), 196);
-    assert_eq!(offset_of!(HandFrame, segments), 216);
-    assert_eq!(offset_of!(SimEvent, point), 72);
-    assert_eq!(offset_of!(ForceFrame, torque), 72);
+    assert_eq!(offset_of!(HandFrame, root), 64);
+    assert_eq!(offset_of!(HandFrame, flex), 120);
+    assert_eq!(offset_of!(HandFrame, grasp_type), 212);
+    assert_eq!(offset_of!(HandFrame, segments), 232);
+    assert_eq!(offset_of!(SimEvent, point), 88);
+    assert_eq!(offset_of!(ForceFrame, torque), 88);
 }
 
 #[test]
@@ -47,14 +53,14 @@ fn control_types_keep_their_layout() {
     assert_layout::<WireText<MAX_PATH_BYTES>>(516, 4);
     assert_layout::<WireText<MAX_STATUS_MESSAGE_BYTES>>(260, 4);
     assert_layout::<ControlRequest>(524, 4);
-    assert_layout::<InputStats>(64, 8);
+    assert_layout::<InputStats>(120, 8);
     assert_layout::<PartDescription>(728, 8);
     assert_layout::<HandDescription>(72, 4);
-    assert_layout::<ControlResponse>(1920, 8);
+    assert_layout::<ControlResponse>(1976, 8);
     assert_eq!(offset_of!(ControlResponse, part), 600);
     assert_eq!(offset_of!(ControlResponse, stats), 1328);
-    assert_eq!(offset_of!(ControlResponse, hands), 1696);
-    assert_eq!(offset_of!(ControlResponse, generation), 1912);
+    assert_eq!(offset_of!(ControlResponse, hands), 1752);
+    assert_eq!(offset_of!(ControlResponse, generation), 1968);
 }
 
 #[test]
@@ -74,6 +80,7 @@ fn payload_type_names_are_versioned() {
         [
             <TrackerSample as ZeroCopySend>::type_name(),
             <GloveSample as ZeroCopySend>::type_name(),
+            <HandJointsSample as ZeroCopySend>::type_name(),
             <PartsFrameHeader as ZeroCopySend>::type_name(),
             <PartState as ZeroCopySend>::type_name(),
             <HandFrame as ZeroCopySend>::type_name(),
@@ -89,14 +96,15 @@ fn payload_type_names_are_versioned() {
         [
             "vas::input::TrackerSample::v1",
             "vas::input::GloveSample::v1",
-            "vas::output::PartsFrameHeader::v1",
+            "vas::input::HandJointsSample::v1",
+            "vas::output::PartsFrameHeader::v2",
             "vas::output::PartState::v1",
-            "vas::output::HandFrame::v2",
-            "vas::output::SimEvent::v2",
-            "vas::output::ForceFrame::v1",
+            "vas::output::HandFrame::v3",
+            "vas::output::SimEvent::v3",
+            "vas::output::ForceFrame::v2",
             "vas::scene::GeometryHeader::v1",
             "vas::control::ControlRequest::v1",
-            "vas::control::ControlResponse::v4",
+            "vas::control::ControlResponse::v5",
         ]
     );
 }

@@ -325,6 +325,7 @@ pub fn fixtures_dir() -> PathBuf {
 
 pub mod browser;
 pub mod fixtures;
+pub mod hands;
 pub mod http;
 pub mod offline;
 pub mod scenarios;

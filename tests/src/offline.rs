@@ -2,11 +2,12 @@
 //! scene's parts ([`Interaction`]), without threads or IPC, checked frame by frame for
 //! penetrations by parry, an oracle independent of the DOP-trees.
 //!
-//! The inputs reach the interaction as the server hands them over: every valid sample updates
-//! the latest tracker or glove target, and after each sample the interaction steps once with the
-//! latest tracker (hand and cart) and the latest glove values (a flat hand before the first glove
-//! sample). The hand starts parked at the first tracker sample's pose with a flat hand; invalid
-//! samples are counted and skipped.
+//! The inputs reach the interaction as the server hands them over (through its own input state):
+//! every valid sample updates the latest tracker, glove or hand-joints target, and after each
+//! sample the interaction steps once with the latest targets: the tracker's cart, and the hand's
+//! root and flex values from its joints once it has had a tracked hand-joints sample, else from
+//! the tracker and the glove (a flat hand before the first glove sample). The hand starts parked
+//! at the first placed pose with a flat hand; invalid samples are counted and skipped.
 
 use std::sync::Arc;
 
@@ -18,6 +19,7 @@ use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
 use vas_server::collision::parry_mesh::{ORACLE_SCALE, millimetre_pose, millimetre_trimesh};
 use vas_server::grasping::{GraspEvent, GraspingHand, HandInput, HandModel, HandPose};
 use vas_server::runtime::frames::wire_grasp;
+use vas_server::runtime::inputs::Inputs;
 use vas_server::runtime::interaction::Interaction;
 use vas_server::runtime::verify::HandBodies;
 use vas_server::scene::Scene;
@@ -35,9 +37,9 @@ pub enum OfflineError {
     /// The hand model cannot be loaded or its collision geometry built.
     #[error("hand model: {0}")]
     Hand(String),
-    /// The recording has no valid tracker sample to place the hand.
-    #[error("the recording has no valid tracker sample")]
-    NoTracker,
+    /// The recording has no valid sample that places the hand.
+    #[error("the recording has no valid tracker or hand-joints sample")]
+    Unplaced,
 }
 
 /// A grasp or release during the replay.
@@ -81,29 +83,28 @@ impl OfflineRun {
     }
 }
 
-/// The hand input the server steps with after each sample: the latest valid tracker and glove
-/// samples of `samples` (`None` until the first valid tracker sample), and how many were
+/// The hand input the server steps with after each sample: the server's own input state
+/// ([`Inputs`], for the scene's hand `model`) after each valid sample of `samples`, from the
+/// first one that places the hand (a tracker sample, or a hand-joints sample), and how many were
 /// refused.
-pub fn hand_inputs(samples: impl IntoIterator<Item = InputSample>) -> (Vec<HandInput>, usize) {
-    let mut tracker: Option<(Isometry3<f64>, Isometry3<f64>)> = None;
-    let mut flex = [0.0f32; FLEX_COUNT];
+pub fn hand_inputs(
+    model: Option<&HandModel>,
+    samples: impl IntoIterator<Item = InputSample>,
+) -> (Vec<HandInput>, usize) {
+    let mut state = Inputs::for_hand(model);
     let mut inputs = Vec::new();
     let mut rejected = 0;
     for sample in samples {
         let valid = match sample {
-            InputSample::Tracker(s) => s
-                .validate()
-                .map(|target| tracker = Some((target.cart, target.hand)))
-                .is_ok(),
-            InputSample::Glove(s) => s.validate().map(|target| flex = target.flex).is_ok(),
+            InputSample::Tracker(s) => state.apply_tracker(&s).is_ok(),
+            InputSample::Glove(s) => state.apply_glove(&s).is_ok(),
+            InputSample::HandJoints(s) => state.apply_hand_joints(&s).is_ok(),
         };
-        match (valid, tracker) {
-            (true, Some((cart, hand))) => inputs.push(HandInput {
-                cart,
-                tracker: hand,
-                flex,
-            }),
-            (true, None) => {}
+        let frame = state.frame();
+        let placed = frame.stamps.tracker.seq != 0 || frame.stamps.joints.seq != 0;
+        match (valid, placed) {
+            (true, true) => inputs.push(frame.input),
+            (true, false) => {}
             (false, _) => rejected += 1,
         }
     }
@@ -222,7 +223,8 @@ impl Oracle {
 
 /// Replays `recording` in `scene` as described in the module documentation.
 pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, OfflineError> {
-    let (inputs, rejected) = hand_inputs(recording.samples.iter().map(|s| s.input));
+    let model = scene.hand.as_ref().map(|hand| hand.model.as_ref());
+    let (inputs, rejected) = hand_inputs(model, recording.samples.iter().map(|s| s.input));
     replay_inputs(scene, &inputs, rejected)
 }
 
@@ -238,7 +240,7 @@ fn replay_inputs(
             .ok_or_else(|| OfflineError::NoHand(scene.name.clone()))?
             .model,
     );
-    let first = inputs.first().ok_or(OfflineError::NoTracker)?;
+    let first = inputs.first().ok_or(OfflineError::Unplaced)?;
     let params = scene.params.grasp();
     let hand = GraspingHand::new(
         Arc::clone(&model),

@@ -26,7 +26,7 @@ pub struct RecordArgs {
 /// How long one wait lasts before the loop checks again; samples wake it earlier.
 const IDLE_WAIT: Duration = Duration::from_secs(1);
 
-/// Writes every tracker and glove sample sent on the prefix until `count` samples or a
+/// Writes every tracker, glove and hand-joints sample sent on the prefix until `count` samples or a
 /// termination signal. Samples with NaN or infinite values cannot be written as JSON; they are
 /// skipped and counted.
 pub fn run(prefix: Option<&str>, args: &RecordArgs) -> anyhow::Result<()> {

@@ -1,11 +1,15 @@
-//! `vas-client send-tracker` and `send-glove`: single samples for scripts.
+//! `vas-client send-tracker`, `send-glove` and `send-hand-joints`: single samples for scripts.
 
-use std::io::Write;
+use std::io::{Read, Write};
+use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, bail};
+use vas_client::recording::InputSample;
 use vas_client::{Client, Frame};
-use vas_protocol::{FLEX_COUNT, GloveSample, HandFrame, TrackerSample, WirePose, wall_clock_ns};
+use vas_protocol::{
+    FLEX_COUNT, GloveSample, HandFrame, HandJointsSample, TrackerSample, WirePose, wall_clock_ns,
+};
 
 /// Arguments of `vas-client send-tracker`.
 #[derive(Debug, clap::Args)]
@@ -70,6 +74,20 @@ pub struct GloveArgs {
     answer: AnswerArgs,
 }
 
+/// Arguments of `vas-client send-hand-joints`.
+#[derive(Debug, clap::Args)]
+pub struct HandJointsArgs {
+    /// The sample as JSON, as a recording's `hand_joints` lines hold it (`seq`, `timestamp_ns`,
+    /// `joints`: 26 objects with `position`, `rotation`, `radius`, `flags`, and `side`: 0 right,
+    /// 1 left); `-` reads it from stdin.
+    sample: PathBuf,
+    /// Sequence number of the sample (replaces the file's).
+    #[arg(long, default_value_t = 1)]
+    seq: u64,
+    #[command(flatten)]
+    answer: AnswerArgs,
+}
+
 /// Waiting for the hand frame that answers the sample.
 #[derive(Debug, clap::Args)]
 struct AnswerArgs {
@@ -113,6 +131,33 @@ pub fn glove(prefix: Option<&str>, args: &GloveArgs) -> anyhow::Result<()> {
     client.flush_inputs(super::CONTROL_TIMEOUT)?;
     let stamp = sample.stamp();
     report_answer(&mut client, &args.answer, |frame| frame.glove == stamp)
+}
+
+/// Sends one hand-joints sample read from JSON, numbered `--seq` and stamped now.
+pub fn hand_joints(prefix: Option<&str>, args: &HandJointsArgs) -> anyhow::Result<()> {
+    let text = if args.sample.as_os_str() == "-" {
+        let mut text = String::new();
+        std::io::stdin()
+            .read_to_string(&mut text)
+            .context("cannot read the sample from stdin")?;
+        text
+    } else {
+        std::fs::read_to_string(&args.sample)
+            .with_context(|| format!("cannot read {}", args.sample.display()))?
+    };
+    let read: HandJointsSample = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a hand-joints sample", args.sample.display()))?;
+    let sample = InputSample::HandJoints(HandJointsSample {
+        seq: args.seq,
+        ..read
+    })
+    .with_timestamp(wall_clock_ns());
+    let mut client = super::connect(prefix)?;
+    client.send_input(&sample)?;
+    client.flush_inputs(super::CONTROL_TIMEOUT)?;
+    report_answer(&mut client, &args.answer, |frame| {
+        sample.is_answered_by(frame)
+    })
 }
 
 fn pose(position: &[f64], rotation: &[f64]) -> anyhow::Result<WirePose> {

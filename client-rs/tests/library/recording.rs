@@ -5,7 +5,10 @@ use std::io::Write;
 use vas_client::recording::{
     FORMAT, InputSample, Recording, RecordingError, RecordingHeader, RecordingWriter, VERSION,
 };
-use vas_protocol::{FLEX_COUNT, GloveSample, TrackerSample, WirePose};
+use vas_protocol::{
+    FLEX_COUNT, GloveSample, HandJointsSample, HandSide, JOINT_ORIENTATION_VALID,
+    JOINT_POSITION_VALID, JointLocation, TrackerSample, WirePose,
+};
 
 fn tracker(seq: u64, timestamp_ns: u64) -> InputSample {
     InputSample::Tracker(TrackerSample {
@@ -30,6 +33,21 @@ fn glove(seq: u64, timestamp_ns: u64) -> InputSample {
     })
 }
 
+fn hand_joints(seq: u64, timestamp_ns: u64) -> InputSample {
+    let joint = |i: usize| JointLocation {
+        position: [0.01 * i as f64, 0.0, -0.02 * seq as f64],
+        rotation: [0.0, 0.0, 0.6, 0.8],
+        radius: 0.008,
+        flags: JOINT_POSITION_VALID | JOINT_ORIENTATION_VALID,
+    };
+    InputSample::HandJoints(HandJointsSample {
+        seq,
+        timestamp_ns,
+        joints: std::array::from_fn(joint),
+        side: HandSide::Left as u32,
+    })
+}
+
 #[test]
 fn written_recordings_load_back_with_times_from_the_timestamps() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -41,6 +59,7 @@ fn written_recordings_load_back_with_times_from_the_timestamps() {
         tracker(2, 5_020_000_000),
         // The sender's clock steps back: the time holds instead of going back.
         glove(2, 5_015_000_000),
+        hand_joints(1, 5_030_000_000),
     ];
     let mut writer = RecordingWriter::create(&path, &header).expect("create");
     for input in &inputs {
@@ -55,7 +74,7 @@ fn written_recordings_load_back_with_times_from_the_timestamps() {
     let loaded: Vec<_> = recording.samples.iter().map(|s| s.input).collect();
     assert_eq!(loaded, inputs);
     let times: Vec<_> = recording.samples.iter().map(|s| s.time).collect();
-    let expected = [0.0, 0.01, 0.02, 0.02];
+    let expected = [0.0, 0.01, 0.02, 0.02, 0.03];
     for (time, expected) in times.iter().zip(expected) {
         assert!((time - expected).abs() < 1e-9, "{times:?}");
     }
@@ -73,7 +92,7 @@ fn sample_lines_name_their_stream() {
     let lines: Vec<_> = text.lines().collect();
     assert_eq!(lines.len(), 2);
     assert!(
-        lines[0].starts_with(r#"{"format":"vas-recording","version":1"#),
+        lines[0].starts_with(r#"{"format":"vas-recording","version":2"#),
         "{}",
         lines[0]
     );
@@ -138,9 +157,21 @@ fn invalid_recordings_are_refused_naming_file_and_line() {
             .contains(":1:")
     );
     assert!(
-        load_error(&[r#"{"format":"vas-recording","version":2,"scene":"s","description":""}"#])
-            .contains("version 2")
+        load_error(&[r#"{"format":"vas-recording","version":3,"scene":"s","description":""}"#])
+            .contains("version 3")
     );
+    // Hand-joints samples came with version 2.
+    let InputSample::HandJoints(sample) = hand_joints(1, 0) else {
+        unreachable!("built as a hand-joints sample")
+    };
+    let joints_line = format!(
+        r#"{{"time":0.0,"hand_joints":{}}}"#,
+        serde_json::to_string(&sample).expect("serialises")
+    );
+    assert!(load_error(&[header, &joints_line]).contains(":2: a hand-joints sample"));
+    let version_2 = r#"{"format":"vas-recording","version":2,"scene":"s","description":""}"#;
+    let (_dir, path) = write_file(&[version_2, &joints_line, &glove_line("0.0")]);
+    assert_eq!(Recording::load(&path).expect("valid").samples.len(), 2);
     assert!(load_error(&[header, r#"{"time":0.0,"mouse":{}}"#]).contains(":2:"));
     let (late, early) = (glove_line("0.5"), glove_line("0.25"));
     assert!(load_error(&[header, &late, &early]).contains(":3:"));

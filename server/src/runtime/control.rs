@@ -87,8 +87,8 @@ impl Session {
         let scene = Arc::new(scene);
         let restart = Restart::new(Arc::clone(&scene), 1)?;
         let session = Session {
+            inputs: Inputs::for_hand(scene.hand.as_ref().map(|hand| hand.model.as_ref())),
             scene,
-            inputs: Inputs::default(),
             epoch: 1,
             catalogue,
         };
@@ -100,8 +100,9 @@ impl Session {
         let restart = Restart::new(Arc::clone(&scene), self.epoch + 1)
             .map_err(|error| (ControlStatus::SceneLoadFailed, error.to_string()))?;
         self.epoch += 1;
+        self.inputs
+            .restart(scene.hand.as_ref().map(|hand| hand.model.as_ref()));
         self.scene = scene;
-        self.inputs.forget_targets();
         Ok(restart.into_change())
     }
 }

@@ -15,22 +15,28 @@ use crate::grasping::{
 use crate::scene::Scene;
 use crate::sliding::{Metaphor, Wrench};
 
-/// The input samples a frame answers: the latest tracker and glove sample when it was made.
+/// The input samples a frame answers: the latest tracker, glove and hand-joints sample when it
+/// was made.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Stamps {
     /// The latest accepted tracker sample.
     pub tracker: InputStamp,
     /// The latest accepted glove sample.
     pub glove: InputStamp,
+    /// The latest accepted hand-joints sample.
+    pub joints: InputStamp,
 }
 
 /// The I/O thread's hand target, for the grasping loop.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InputFrame {
     /// The samples it comes from.
     pub stamps: Stamps,
     /// Cart, tracked hand root and clamped flex values.
     pub input: HandInput,
+    /// Whether the input tracks the hand (false: its hand-joints samples say it is not tracked,
+    /// and `input` holds the last tracked target).
+    pub tracked: bool,
 }
 
 impl Coalesce for InputFrame {
@@ -45,6 +51,8 @@ pub struct GraspedFrame {
     pub stamps: Stamps,
     /// The target it was stepped towards.
     pub input: HandInput,
+    /// Whether the input tracks the hand.
+    pub tracked: bool,
     /// The grasping hand's frame; `None` in a scene without a hand model, where the hand is
     /// published where the tracker puts it.
     pub hand: Option<HandFrame>,
@@ -71,6 +79,8 @@ pub struct ProposedHand {
     pub touching: Vec<Vec<SegmentContact>>,
     /// The grasp the hand has or would have.
     pub grasp: WireGraspType,
+    /// Whether the input tracks the hand.
+    pub tracked: bool,
 }
 
 /// The sliding loop's frame, for the collision loop to verify.
@@ -150,6 +160,8 @@ pub struct VerifiedFrame {
     pub touching: u32,
     /// The grasp.
     pub grasp: WireGraspType,
+    /// Whether the input tracks the hand.
+    pub tracked: bool,
     /// Every part, by id.
     pub parts: Vec<VerifiedPart>,
     /// Grasps, releases, contact begins and ends of this frame.

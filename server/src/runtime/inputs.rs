@@ -1,24 +1,43 @@
-//! The I/O thread's input state: validation and counters of tracker and glove samples, and the
-//! latest accepted target of each, as the hand input of the next frame.
+//! The I/O thread's input state: validation and counters of tracker, glove and hand-joints
+//! samples, and the latest accepted target of each, as the hand input of the next frame.
+//!
+//! A hand that has had a hand-joints sample follows its joints: its root (in the cart's frame)
+//! and flex values come from its latest tracked joints sample, and tracker samples go on placing
+//! the cart. Before that, the tracker's hand pose and the glove's flex values drive it. Joints
+//! take the hand over for good rather than whichever stream spoke last, so that a tracker that
+//! only navigates the cart never snaps a joints-driven hand to its own hand pose.
 
 use nalgebra::Isometry3;
 use vas_protocol::{
-    FLEX_COUNT, GloveSample, GloveTarget, InputRejection, InputStamp, InputStats, TrackerSample,
-    TrackerTarget,
+    FLEX_COUNT, GloveSample, GloveTarget, HandJointsSample, HandSide, InputRejection, InputStamp,
+    InputStats, TrackerSample, TrackerTarget,
 };
 
 use super::frames::{InputFrame, Stamps};
-use crate::grasping::HandInput;
+use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection};
+use crate::grasping::retarget::JointsError;
+use crate::grasping::{HandInput, HandModel};
 
 /// The latest validated targets and the input counters.
 #[derive(Debug, Default)]
 pub struct Inputs {
     tracker: Option<TrackerTarget>,
     glove: Option<GloveTarget>,
+    /// The scene's hand as hand-joints samples drive it; `None` without a hand model (or with
+    /// one the retargeting cannot take).
+    joints: Option<JointsHand>,
     stats: InputStats,
 }
 
 impl Inputs {
+    /// The input state of a scene with the hand `model` (or none).
+    pub fn for_hand(model: Option<&HandModel>) -> Inputs {
+        Inputs {
+            joints: model.and_then(JointsHand::new),
+            ..Inputs::default()
+        }
+    }
+
     /// Input counters since the server started.
     pub fn stats(&self) -> InputStats {
         self.stats
@@ -68,31 +87,76 @@ impl Inputs {
         }
     }
 
+    /// Validates a hand-joints sample and, if it is a hand of the scene, retargets it into the
+    /// hand's target (or notes that the hand is untracked); counts it either way.
+    pub fn apply_hand_joints(
+        &mut self,
+        sample: &HandJointsSample,
+    ) -> Result<JointsOutcome, JointsRejection> {
+        let side = HandSide::try_from(sample.side).ok();
+        let outcome = match self
+            .joints
+            .as_mut()
+            .filter(|hand| Some(hand.side()) == side)
+        {
+            Some(hand) => hand.apply(sample),
+            None => Err(JointsRejection::NoSuchHand { side: sample.side }),
+        };
+        let stats = &mut self.stats;
+        let counter = match &outcome {
+            Ok(JointsOutcome::Tracked) => &mut stats.joints_accepted,
+            Ok(JointsOutcome::Untracked) => &mut stats.joints_untracked,
+            Err(JointsRejection::NoSuchHand { .. }) => &mut stats.joints_rejected_no_such_hand,
+            Err(JointsRejection::Joints(error)) => match error {
+                JointsError::NonFinite { .. } => &mut stats.joints_rejected_non_finite,
+                JointsError::NotUnit { .. } => &mut stats.joints_rejected_quaternion,
+                JointsError::OutOfRange { .. } => &mut stats.joints_rejected_out_of_range,
+                // A joint not valid makes the hand untracked, never a rejection.
+                JointsError::OutOfOrder { .. }
+                | JointsError::BoneLength { .. }
+                | JointsError::NotValid { .. } => &mut stats.joints_rejected_anatomy,
+            },
+        };
+        *counter += 1;
+        outcome
+    }
+
     /// The next frame's input: the latest targets (the identity cart and root and a flat hand
     /// before the first sample of a stream), stamped with the samples they come from.
     pub fn frame(&self) -> InputFrame {
-        let (cart, tracker) = self
+        let cart = self
             .tracker
-            .map_or((Isometry3::identity(), Isometry3::identity()), |target| {
-                (target.cart, target.hand)
-            });
+            .map_or_else(Isometry3::identity, |target| target.cart);
+        let joints = self.joints.as_ref().and_then(JointsHand::target);
+        let (tracker, flex) = joints.and_then(|target| target.pose).unwrap_or_else(|| {
+            (
+                self.tracker
+                    .map_or_else(Isometry3::identity, |target| target.hand),
+                self.glove.map_or([0.0; FLEX_COUNT], |target| target.flex),
+            )
+        });
         InputFrame {
             stamps: Stamps {
                 tracker: self.tracker.map_or_else(InputStamp::default, |t| t.stamp),
                 glove: self.glove.map_or_else(InputStamp::default, |g| g.stamp),
+                joints: joints.map_or_else(InputStamp::default, |j| j.stamp),
             },
             input: HandInput {
                 cart,
                 tracker,
-                flex: self.glove.map_or([0.0; FLEX_COUNT], |target| target.flex),
+                flex,
             },
+            tracked: joints.is_none_or(|target| target.tracked),
         }
     }
 
-    /// Forgets the targets (a reset); the counters go on.
-    pub fn forget_targets(&mut self) {
-        self.tracker = None;
-        self.glove = None;
+    /// Forgets the targets (a reset, or another scene) and takes the hand `model` (or none);
+    /// the counters go on.
+    pub fn restart(&mut self, model: Option<&HandModel>) {
+        *self = Inputs {
+            stats: self.stats,
+            ..Inputs::for_hand(model)
+        };
     }
 }
 
@@ -102,6 +166,11 @@ mod tests {
     use vas_protocol::{FLEX_LIMITS_RAD, WirePose};
 
     use super::*;
+    use crate::grasping::Side;
+    use crate::grasping::model::tests::right_hand;
+    use crate::grasping::retarget::{Joint, Retargeter};
+    use crate::runtime::hand_joints::tests::captured;
+    use crate::runtime::hand_joints::wire_joints;
 
     fn tracker(seq: u64, hand: WirePose, cart: WirePose) -> TrackerSample {
         TrackerSample {
@@ -241,10 +310,154 @@ mod tests {
         inputs
             .apply_tracker(&tracker(8, at(1.0, 2.0, 3.0), WirePose::IDENTITY))
             .expect("valid");
-        inputs.forget_targets();
+        inputs.restart(None);
         let frame = inputs.frame();
         assert_eq!(frame.stamps, Stamps::default());
         assert_eq!(frame.input.tracker, Isometry3::identity());
         assert_eq!(inputs.stats().tracker_accepted, 1);
+    }
+
+    /// A right hand's pinch, as a wire sample numbered `seq`.
+    fn pinch(seq: u64) -> HandJointsSample {
+        wire_joints(&captured("webxr_pinch.json", Side::Right), seq, 100 + seq)
+    }
+
+    #[test]
+    fn hand_joints_drive_the_hand_and_the_tracker_keeps_the_cart() {
+        let model = right_hand();
+        let mut inputs = Inputs::for_hand(Some(&model));
+        assert_eq!(
+            inputs.apply_hand_joints(&pinch(1)),
+            Ok(JointsOutcome::Tracked)
+        );
+        let fit = Retargeter::new(model)
+            .expect("the right hand retargets")
+            .fit(&captured("webxr_pinch.json", Side::Right))
+            .expect("the pinch fits");
+        let frame = inputs.frame();
+        assert_eq!(
+            frame.stamps.joints,
+            InputStamp {
+                seq: 1,
+                timestamp_ns: 101
+            }
+        );
+        assert!(frame.tracked);
+        assert_eq!(frame.input.tracker, fit.root);
+        assert_eq!(frame.input.flex, fit.flex.map(|v| v as f32));
+
+        // A tracker sample moves the cart; the hand stays with its joints.
+        let cart = at(1.0, 2.0, 0.0);
+        inputs
+            .apply_tracker(&tracker(1, at(0.5, 0.5, 0.5), cart))
+            .expect("valid");
+        let frame = inputs.frame();
+        assert_eq!(frame.input.cart, cart.to_isometry());
+        assert_eq!(frame.input.tracker, fit.root);
+        assert_eq!(frame.stamps.tracker.seq, 1);
+        let stats = inputs.stats();
+        assert_eq!((stats.joints_accepted, stats.rejected()), (1, 0));
+    }
+
+    #[test]
+    fn impossible_hand_joints_are_rejected_counted_and_keep_the_target() {
+        let mut inputs = Inputs::for_hand(Some(&right_hand()));
+        inputs.apply_hand_joints(&pinch(1)).expect("a hand");
+        let before = inputs.frame();
+        let at = |joint: Joint| joint.index();
+        type Edit<'a> = (&'a str, &'a dyn Fn(&mut HandJointsSample));
+        let edits: [Edit; 7] = [
+            ("NaN", &|s| {
+                s.joints[at(Joint::RingDistal)].position[1] = f64::NAN
+            }),
+            ("radius", &|s| {
+                s.joints[at(Joint::IndexTip)].radius = f32::INFINITY
+            }),
+            ("stretched quaternion", &|s| {
+                s.joints[at(Joint::ThumbDistal)].rotation[3] *= 1.5;
+            }),
+            ("far away", &|s| {
+                s.joints[at(Joint::Wrist)].position[0] = 2e6
+            }),
+            ("tip behind its joint", &|s| {
+                s.joints.swap(at(Joint::IndexDistal), at(Joint::IndexTip));
+            }),
+            ("long bone", &|s| {
+                s.joints[at(Joint::MiddleTip)].position[2] += 0.3;
+            }),
+            ("left side", &|s| s.side = HandSide::Left as u32),
+        ];
+        for (seq, (what, edit)) in (2..).zip(edits) {
+            let mut sample = pinch(seq);
+            edit(&mut sample);
+            assert!(inputs.apply_hand_joints(&sample).is_err(), "{what}");
+        }
+        let mut no_side = pinch(9);
+        no_side.side = 7;
+        assert_eq!(
+            inputs.apply_hand_joints(&no_side),
+            Err(JointsRejection::NoSuchHand { side: 7 })
+        );
+        let stats = inputs.stats();
+        assert_eq!(
+            [
+                stats.joints_rejected_non_finite,
+                stats.joints_rejected_quaternion,
+                stats.joints_rejected_out_of_range,
+                stats.joints_rejected_anatomy,
+                stats.joints_rejected_no_such_hand,
+            ],
+            [2, 1, 1, 2, 2]
+        );
+        assert_eq!(stats.rejected(), 8);
+        assert_eq!(stats.joints_accepted, 1);
+        assert_eq!(inputs.frame(), before);
+    }
+
+    #[test]
+    fn a_scene_without_a_hand_takes_no_hand_joints() {
+        let mut inputs = Inputs::default();
+        assert_eq!(
+            inputs.apply_hand_joints(&pinch(1)),
+            Err(JointsRejection::NoSuchHand { side: 0 })
+        );
+        assert_eq!(inputs.stats().joints_rejected_no_such_hand, 1);
+        assert_eq!(inputs.frame().stamps, Stamps::default());
+    }
+
+    #[test]
+    fn an_untracked_hand_keeps_its_target_and_says_so() {
+        let mut inputs = Inputs::for_hand(Some(&right_hand()));
+        inputs.apply_hand_joints(&pinch(1)).expect("a hand");
+        let tracked = inputs.frame();
+        let mut lost = pinch(2);
+        for joint in &mut lost.joints {
+            joint.flags = 0;
+        }
+        assert_eq!(
+            inputs.apply_hand_joints(&lost),
+            Ok(JointsOutcome::Untracked)
+        );
+        let frame = inputs.frame();
+        assert!(!frame.tracked);
+        assert_eq!(frame.stamps.joints.seq, 2);
+        assert_eq!(frame.input, tracked.input);
+        let stats = inputs.stats();
+        assert_eq!((stats.joints_untracked, stats.rejected()), (1, 0));
+        // Tracked again.
+        inputs.apply_hand_joints(&pinch(3)).expect("a hand");
+        assert!(inputs.frame().tracked);
+    }
+
+    #[test]
+    fn a_restart_forgets_the_joints_and_keeps_the_counters() {
+        let model = right_hand();
+        let mut inputs = Inputs::for_hand(Some(&model));
+        inputs.apply_hand_joints(&pinch(1)).expect("a hand");
+        inputs.restart(Some(&model));
+        let frame = inputs.frame();
+        assert_eq!(frame.stamps, Stamps::default());
+        assert_eq!(frame.input.tracker, Isometry3::identity());
+        assert_eq!(inputs.stats().joints_accepted, 1);
     }
 }

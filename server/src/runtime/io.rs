@@ -14,11 +14,12 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::Receiver;
+use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use vas_protocol::{
     ControlResponse, ControlStatus, ForceFrame, HAND_SEGMENT_COUNT, HandFrame, HandSide,
-    InputRejection, InputStats, PartState, PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
+    InputStats, PartState, PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
 };
 
 use super::control::{self, Session};
@@ -196,7 +197,7 @@ impl InteractionManager {
             }
             // `Interrupt` means a signal cut the wait short; if it was SIGINT or SIGTERM, the
             // next wait reports the termination request.
-            let input_due = fired[Wakeups::TRACKER] || fired[Wakeups::GLOVE];
+            let input_due = fired[..Wakeups::INPUTS].contains(&true);
             if input_due && !(io.lockstep.enabled && io.lockstep.in_flight) {
                 // The grasping loop wakes while the samples are taken in.
                 io.inputs.announce();
@@ -205,8 +206,7 @@ impl InteractionManager {
             if woken && let Err(error) = self.internal.drain() {
                 tracing::error!(%error, "cannot take the internal wake-ups");
             }
-            io.process_tracker_samples();
-            io.process_glove_samples();
+            io.process_input_samples();
             io.answer_control_requests();
             io.publish_verified_frames();
             let scene_hz = io.session.scene.rates.publish_hz;
@@ -265,16 +265,35 @@ impl Io {
         self.inputs.send(work);
     }
 
+    /// Takes in the waiting samples of every input stream: each accepted one is a frame.
+    fn process_input_samples(&mut self) {
+        self.process_tracker_samples();
+        self.process_glove_samples();
+        self.process_hand_joints_samples();
+    }
+
+    /// The next waiting sample of the input stream `port` picks, copied out; `None` when there
+    /// is none (or receiving failed, which is logged).
+    fn next_sample<T>(
+        &self,
+        port: impl Fn(&Ports) -> &Subscriber<ipc::Service, T, ()>,
+        action: &'static str,
+    ) -> Option<T>
+    where
+        T: Copy + std::fmt::Debug + ZeroCopySend + 'static,
+    {
+        match port(&self.ports).receive() {
+            Ok(sample) => sample.map(|sample| *sample.payload()),
+            Err(error) => {
+                self.log_failure(Err(RuntimeError::ipc(action, error)));
+                None
+            }
+        }
+    }
+
     fn process_tracker_samples(&mut self) {
-        loop {
-            let sample = match self.ports.tracker.receive() {
-                Ok(Some(sample)) => *sample.payload(),
-                Ok(None) => return,
-                Err(error) => {
-                    return self
-                        .log_failure(Err(RuntimeError::ipc("receive tracker samples", error)));
-                }
-            };
+        while let Some(sample) = self.next_sample(|ports| &ports.tracker, "receive tracker samples")
+        {
             match self.session.inputs.apply_tracker(&sample) {
                 Ok(()) => {
                     let frame = self.session.inputs.frame();
@@ -286,15 +305,7 @@ impl Io {
     }
 
     fn process_glove_samples(&mut self) {
-        loop {
-            let sample = match self.ports.glove.receive() {
-                Ok(Some(sample)) => *sample.payload(),
-                Ok(None) => return,
-                Err(error) => {
-                    return self
-                        .log_failure(Err(RuntimeError::ipc("receive glove samples", error)));
-                }
-            };
+        while let Some(sample) = self.next_sample(|ports| &ports.glove, "receive glove samples") {
             match self.session.inputs.apply_glove(&sample) {
                 Ok(clamped) => {
                     if clamped != 0 {
@@ -308,6 +319,22 @@ impl Io {
                     self.submit(Work::Frame(frame));
                 }
                 Err(rejection) => self.log_rejection("glove", sample.seq, &rejection),
+            }
+        }
+    }
+
+    /// An untracked hand's sample is a frame too: it answers the sample, says the hand is
+    /// untracked, and in lockstep each sample gets its frame.
+    fn process_hand_joints_samples(&mut self) {
+        while let Some(sample) =
+            self.next_sample(|ports| &ports.hand_joints, "receive hand-joints samples")
+        {
+            match self.session.inputs.apply_hand_joints(&sample) {
+                Ok(_) => {
+                    let frame = self.session.inputs.frame();
+                    self.submit(Work::Frame(frame));
+                }
+                Err(rejection) => self.log_rejection("hand_joints", sample.seq, &rejection),
             }
         }
     }
@@ -331,8 +358,7 @@ impl Io {
                     break;
                 }
             };
-            self.process_tracker_samples();
-            self.process_glove_samples();
+            self.process_input_samples();
             let loading = self.loader.is_loading();
             match control::answer(&mut self.session, request.payload(), loading) {
                 control::Reply::Now(response, change) => {
@@ -448,6 +474,7 @@ impl Io {
                 frame: self.hand_frames,
                 tracker: stamps.tracker,
                 glove: stamps.glove,
+                joints: stamps.joints,
                 timestamp_ns: now,
                 kind: event.kind as u32,
                 grasp_type: event.grasp as u32,
@@ -465,6 +492,7 @@ impl Io {
                 frame: self.hand_frames,
                 tracker: stamps.tracker,
                 glove: stamps.glove,
+                joints: stamps.joints,
                 timestamp_ns: now,
                 force: wrench.force.into(),
                 torque: wrench.torque.into(),
@@ -490,13 +518,14 @@ impl Io {
             frame: self.hand_frames,
             tracker: stamps.tracker,
             glove: stamps.glove,
+            joints: stamps.joints,
             timestamp_ns: wall_clock_ns(),
             root: WirePose::from_isometry(&frame.hand_root),
             flex: frame.flex,
             touching: frame.touching,
             grasp_type: frame.grasp as u32,
             hand: self.hand_side as u32,
-            tracked: 1,
+            tracked: u32::from(frame.tracked),
             segment_count: u32::try_from(frame.segments.len().min(HAND_SEGMENT_COUNT))
                 .expect("at most 16"),
             reserved: 0,
@@ -518,6 +547,7 @@ impl Io {
             frame: self.parts_frames,
             tracker: stamps.tracker,
             glove: stamps.glove,
+            joints: stamps.joints,
             timestamp_ns: wall_clock_ns(),
             part_count: u32::try_from(self.parts.len()).unwrap_or(u32::MAX),
         };
@@ -526,7 +556,7 @@ impl Io {
 
     /// The first rejected sample is a warning; later ones are counted and show in the periodic
     /// summary (a broken sender must not flood the log).
-    fn log_rejection(&self, stream: &str, seq: u64, rejection: &InputRejection) {
+    fn log_rejection(&self, stream: &str, seq: u64, rejection: &dyn std::fmt::Display) {
         if self.session.inputs.stats().rejected() == 1 {
             tracing::warn!(stream, seq, %rejection, "input rejected; further rejections are counted");
         } else {
@@ -539,11 +569,15 @@ impl Io {
         if stats != self.logged_stats && self.stats_logged_at.elapsed() >= STATS_LOG_PERIOD {
             tracing::info!(
                 tracker_accepted = stats.tracker_accepted,
-                tracker_rejected =
-                    stats.tracker_rejected_non_finite + stats.tracker_rejected_quaternion,
+                tracker_rejected = stats.tracker_rejected_non_finite
+                    + stats.tracker_rejected_quaternion
+                    + stats.tracker_rejected_out_of_range,
                 glove_accepted = stats.glove_accepted,
                 glove_rejected = stats.glove_rejected_non_finite,
                 glove_values_clamped = stats.glove_values_clamped,
+                joints_accepted = stats.joints_accepted,
+                joints_untracked = stats.joints_untracked,
+                joints_rejected = stats.joints_rejected(),
                 frames_merged = self.inputs.merged(),
                 "input counters"
             );

@@ -325,6 +325,7 @@ impl GraspingLoop {
         self.outbox.send(Work::Frame(GraspedFrame {
             stamps: input.stamps,
             input: input.input,
+            tracked: input.tracked,
             hand,
         }));
     }
@@ -431,6 +432,7 @@ impl SlidingLoop {
                     flex: hand_frame.pose.flex.map(|v| v as f32),
                     touching,
                     grasp: wire_grasp(hand_frame.grasp),
+                    tracked: frame.tracked,
                 };
                 (hand, held, hand_frame.events.clone())
             }
@@ -440,6 +442,7 @@ impl SlidingLoop {
                     flex: frame.input.flex,
                     touching: Vec::new(),
                     grasp: wire_grasp(None),
+                    tracked: frame.tracked,
                 },
                 None,
                 Vec::new(),
@@ -660,8 +663,10 @@ mod tests {
                 stamps: Stamps {
                     tracker: stamp,
                     glove: stamp,
+                    joints: InputStamp::default(),
                 },
                 input: *input,
+                tracked: true,
             }));
             let frame = verified_out
                 .recv_timeout(Duration::from_secs(60))

@@ -6,6 +6,10 @@
 //! sliding and collision loops ([`loops`]) each run on their own thread and meet only at the
 //! hand-offs of [`rendezvous`].
 //!
+//! Input services: `vas/input/tracker`, `vas/input/glove` and `vas/input/hand_joints`, each
+//! validated and counted on the I/O thread ([`inputs`]); hand-joints samples are retargeted
+//! there onto the scene's hand ([`hand_joints`]), so that the loops see one kind of hand input.
+//!
 //! Output services: every verified frame publishes `vas/output/hand` (answering the input sample
 //! it carries the stamp of), `vas/output/parts` when a part changed (and at the scene's
 //! `rates.publish_hz` regardless), `vas/output/events` and, while a part is held,
@@ -15,6 +19,7 @@
 pub mod control;
 pub mod frames;
 mod geometry;
+pub mod hand_joints;
 pub mod inputs;
 pub mod interaction;
 mod io;

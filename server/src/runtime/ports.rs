@@ -9,8 +9,8 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use vas_protocol::services::{self, output};
 use vas_protocol::{
-    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame, PartState,
-    PartsFrameHeader, SimEvent, TrackerSample,
+    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame,
+    HandJointsSample, PartState, PartsFrameHeader, SimEvent, TrackerSample,
 };
 
 use super::RuntimeError;
@@ -22,21 +22,21 @@ pub(super) struct Wakeups {
     pub(super) tracker: Listener<ipc::Service>,
     /// Glove samples were sent.
     pub(super) glove: Listener<ipc::Service>,
+    /// Hand-joints samples were sent.
+    pub(super) hand_joints: Listener<ipc::Service>,
     /// Control requests were sent.
     pub(super) control: Listener<ipc::Service>,
 }
 
 impl Wakeups {
     /// How many listeners there are.
-    pub(super) const COUNT: usize = 3;
-    /// The tracker listener's place in [`Wakeups::listeners`].
-    pub(super) const TRACKER: usize = 0;
-    /// The glove listener's place in [`Wakeups::listeners`].
-    pub(super) const GLOVE: usize = 1;
+    pub(super) const COUNT: usize = 4;
+    /// How many of them, first in [`Wakeups::listeners`], announce input samples.
+    pub(super) const INPUTS: usize = 3;
 
-    /// Every listener, in a fixed order.
+    /// Every listener, in a fixed order: the input streams', then the control service's.
     pub(super) fn listeners(&self) -> [&Listener<ipc::Service>; Self::COUNT] {
-        [&self.tracker, &self.glove, &self.control]
+        [&self.tracker, &self.glove, &self.hand_joints, &self.control]
     }
 
     /// Clears the pending notifications of the listeners that `fired` (in the order of
@@ -61,6 +61,8 @@ pub(super) struct Ports {
     pub(super) tracker: Subscriber<ipc::Service, TrackerSample, ()>,
     /// Glove samples from the clients.
     pub(super) glove: Subscriber<ipc::Service, GloveSample, ()>,
+    /// Hand-joints samples from the clients.
+    pub(super) hand_joints: Subscriber<ipc::Service, HandJointsSample, ()>,
     parts: Publisher<ipc::Service, [PartState], PartsFrameHeader>,
     parts_notifier: Notifier<ipc::Service>,
     geometry: Publisher<ipc::Service, [u8], GeometryHeader>,
@@ -97,13 +99,16 @@ impl Ports {
         part_count: usize,
         geometry_bytes: usize,
     ) -> Result<(Self, Wakeups), RuntimeError> {
-        use services::{CONTROL, EVENTS, FORCE, GEOMETRY, GLOVE, HAND, PARTS, TRACKER};
+        use services::{
+            CONTROL, EVENTS, FORCE, GEOMETRY, GLOVE, HAND, HAND_JOINTS, PARTS, TRACKER,
+        };
         let wakeup = |name| services::open_wakeup(node, name);
         let listener = |name| port(name, wakeup(name)?.listener_builder().create());
         let notifier = |name| port(name, wakeup(name)?.notifier_builder().create());
         let wakeups = Wakeups {
             tracker: listener(TRACKER)?,
             glove: listener(GLOVE)?,
+            hand_joints: listener(HAND_JOINTS)?,
             control: listener(CONTROL)?,
         };
         // The parts service allows one publisher: the first to fail when another server serves
@@ -128,6 +133,12 @@ impl Ports {
             glove: port(
                 GLOVE,
                 services::open_glove(node)?.subscriber_builder().create(),
+            )?,
+            hand_joints: port(
+                HAND_JOINTS,
+                services::open_hand_joints(node)?
+                    .subscriber_builder()
+                    .create(),
             )?,
             parts,
             parts_notifier: notifier(PARTS)?,

@@ -411,6 +411,7 @@ impl Verifier {
             segments: self.segment_poses(),
             touching: self.touching,
             grasp: candidate.hand.grasp,
+            tracked: candidate.hand.tracked,
             parts: self.verified.clone(),
             events,
             force: match (&candidate.held, released) {
@@ -485,6 +486,7 @@ mod tests {
                 flex: [0.0; vas_protocol::FLEX_COUNT],
                 touching: Vec::new(),
                 grasp: WireGraspType::None,
+                tracked: true,
             },
             part_poses: poses,
             held: None,

@@ -167,7 +167,8 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
     let push = &EXPECTED[3];
     let mut scene = Scene::load(&push.scene_path()).expect("loads");
     let recording = Recording::load(&push.fixture_path()).expect("loads");
-    let (inputs, _) = offline::hand_inputs(recording.samples.iter().map(|s| s.input));
+    let model = scene.hand.as_ref().map(|hand| hand.model.as_ref());
+    let (inputs, _) = offline::hand_inputs(model, recording.samples.iter().map(|s| s.input));
     scene.parts[0].pose.translation.vector = inputs[0].tracker.translation.vector;
     let run = offline::replay(&scene, &recording).expect("replays");
     assert!(

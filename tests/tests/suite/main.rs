@@ -7,5 +7,6 @@ mod end_to_end;
 mod examples;
 mod faults;
 mod fixtures;
+mod hand_joints;
 mod replays;
 mod retarget;

@@ -153,6 +153,15 @@ impl Capture {
             joints: self.joints.mirrored(),
         }
     }
+
+    /// The captured joints as a hand of `side`: as captured, or mirrored.
+    pub fn joints_of(&self, side: Side) -> HandJoints {
+        if self.joints.side == side {
+            self.joints.clone()
+        } else {
+            self.joints.mirrored()
+        }
+    }
 }
 
 /// A joint from its column-major 4x4 matrix: a rigid transform (rotation and translation, last

@@ -6,8 +6,9 @@
 
 use std::fmt;
 
-use nalgebra::{Point3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 use thiserror::Error;
+use vas_protocol::MAX_POSITION_M;
 
 use crate::grasping::Side;
 
@@ -234,6 +235,12 @@ pub enum JointsError {
         /// The joint.
         joint: Joint,
     },
+    /// A position is finite but beyond [`MAX_POSITION_M`], farther than any workspace.
+    #[error("{joint}: position beyond {MAX_POSITION_M} m")]
+    OutOfRange {
+        /// The joint.
+        joint: Joint,
+    },
     /// An orientation is not a unit quaternion.
     #[error("{joint}: orientation is not a unit quaternion (norm {norm})")]
     NotUnit {
@@ -304,8 +311,22 @@ impl HandJoints {
         }
     }
 
-    /// Checks what the retargeting relies on: every joint but the palm valid, finite, with a
-    /// unit orientation; each digit's bones of a possible length and pointing from joint to
+    /// The same hand moved rigidly: every joint's pose `J` becomes `pose · J`.
+    pub fn transformed(&self, pose: &Isometry3<f64>) -> HandJoints {
+        let joints = self.joints.map(|j| JointPose {
+            position: pose * j.position,
+            orientation: pose.rotation.quaternion() * j.orientation,
+            ..j
+        });
+        HandJoints {
+            side: self.side,
+            joints,
+        }
+    }
+
+    /// Checks what the retargeting relies on: every joint but the palm valid, finite within
+    /// [`MAX_POSITION_M`] (so that poses made from it stay finite), with a unit orientation;
+    /// each digit's bones of a possible length and pointing from joint to
     /// joint toward the tip (a joint's `-Z` toward the next); the knuckles across the hand in
     /// the order of the side (index on the thumb's side of the little finger).
     pub fn validate(&self) -> Result<(), JointsError> {
@@ -319,6 +340,9 @@ impl HandJoints {
                 && pose.radius >= 0.0;
             if !finite {
                 return Err(JointsError::NonFinite { joint: *joint });
+            }
+            if pose.position.iter().any(|c| c.abs() > MAX_POSITION_M) {
+                return Err(JointsError::OutOfRange { joint: *joint });
             }
             let norm = pose.orientation.norm();
             let unit = (norm - 1.0).abs() <= UNIT_TOLERANCE; // false for NaN

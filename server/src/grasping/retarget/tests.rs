@@ -186,6 +186,24 @@ fn calibration_takes_the_measured_bone_lengths() {
 }
 
 #[test]
+fn a_hand_moved_rigidly_retargets_to_the_moved_root_and_the_same_angles() {
+    let joints = capture("webxr_pinch.json").joints;
+    let retargeter = retargeter(Side::Left);
+    let pose = Isometry3::from_parts(
+        Translation3::new(0.3, -0.2, 1.1),
+        UnitQuaternion::from_euler_angles(0.4, -1.1, 2.0),
+    );
+    let fit = retargeter.fit(&joints).unwrap();
+    let moved = retargeter.fit(&joints.transformed(&pose)).unwrap();
+    let expected = pose * fit.root;
+    assert!((moved.root.translation.vector - expected.translation.vector).norm() < 1e-12);
+    assert!(moved.root.rotation.angle_to(&expected.rotation) < 1e-12);
+    for (moved, fitted) in moved.flex.iter().zip(&fit.flex) {
+        assert!((moved - fitted).abs() < 1e-6, "{moved} {fitted}");
+    }
+}
+
+#[test]
 fn impossible_samples_are_rejected() {
     let good = capture("webxr_pinch.json").joints;
     let retargeter = retargeter(Side::Left);
@@ -199,6 +217,12 @@ fn impossible_samples_are_rejected() {
         reject(&|j| j.joints[at(Joint::RingDistal)].position.y = f64::NAN),
         RetargetError::Joints(JointsError::NonFinite {
             joint: Joint::RingDistal
+        })
+    );
+    assert_eq!(
+        reject(&|j| j.joints[at(Joint::Wrist)].position.x = 2e6),
+        RetargetError::Joints(JointsError::OutOfRange {
+            joint: Joint::Wrist
         })
     );
     assert!(matches!(
