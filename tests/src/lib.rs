@@ -324,6 +324,7 @@ pub fn fixtures_dir() -> PathBuf {
 }
 
 pub mod browser;
+pub mod captured;
 pub mod fixtures;
 pub mod hands;
 pub mod http;

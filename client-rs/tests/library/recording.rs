@@ -81,6 +81,31 @@ fn written_recordings_load_back_with_times_from_the_timestamps() {
 }
 
 #[test]
+fn every_number_reads_back_exactly_as_written() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("exact.jsonl");
+    let InputSample::HandJoints(mut sample) = hand_joints(1, 0) else {
+        unreachable!("built as a hand-joints sample")
+    };
+    // Values whose shortest decimal form the default float parser reads an ulp off.
+    sample.joints[0].rotation = [
+        0.028114062452158094,
+        -0.13945532529925805,
+        0.9263732154469696,
+        0.18353810463444512,
+    ];
+    let written = [InputSample::HandJoints(sample)];
+    let mut writer =
+        RecordingWriter::create(&path, &RecordingHeader::new("s", "")).expect("create");
+    writer.write(&written[0]).expect("write");
+    drop(writer);
+    let read: Vec<_> = (Recording::load(&path).expect("load").samples.iter())
+        .map(|s| s.input)
+        .collect();
+    assert_eq!(read, written);
+}
+
+#[test]
 fn sample_lines_name_their_stream() {
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("one.jsonl");

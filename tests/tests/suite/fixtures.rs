@@ -7,22 +7,23 @@ use std::fs;
 use vas_client::recording::Recording;
 use vas_server::scene::Scene;
 use vas_server::scene::script::RecordedScenario;
+use vas_tests::captured::CapturedMotion;
 use vas_tests::fixtures::write_fixture;
 use vas_tests::offline::{self, OfflineRun};
-use vas_tests::scenarios::{EXPECTED, Scenario};
+use vas_tests::scenarios::{EXPECTED, Motion, Scenario};
 
 fn replay(scenario: &Scenario) -> (Scene, OfflineRun) {
     let scene = Scene::load(&scenario.scene_path()).expect("the scenario's scene loads");
     let recording =
         Recording::load(&scenario.fixture_path()).expect("the scenario's fixture loads");
-    assert_eq!(recording.header.scene, scene.name, "{}", scenario.script);
+    assert_eq!(recording.header.scene, scene.name, "{}", scenario.motion);
     let run = offline::replay(&scene, &recording).expect("the fixture replays");
     (scene, run)
 }
 
 fn check(scenario: &Scenario) {
     let (scene, run) = replay(scenario);
-    let name = scenario.script;
+    let name = scenario.motion;
     let expected = &scenario.final_pose;
     let pose = run
         .final_pose(&scene, expected.part)
@@ -117,6 +118,16 @@ fn demo_peg_into_block() {
 }
 
 #[test]
+fn captured_pinch_pin() {
+    check(&EXPECTED[6]);
+}
+
+#[test]
+fn captured_relaxed_approach() {
+    check(&EXPECTED[7]);
+}
+
+#[test]
 fn the_fixtures_are_what_the_generator_writes_every_time() {
     let out = tempfile::tempdir().expect("a temporary folder");
     for scenario in &EXPECTED {
@@ -128,12 +139,12 @@ fn the_fixtures_are_what_the_generator_writes_every_time() {
             write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
         )
         .expect("written");
-        assert_eq!(first, second, "{}: two runs differ", scenario.script);
+        assert_eq!(first, second, "{}: two runs differ", scenario.motion);
         let committed = fs::read(scenario.fixture_path()).expect("the fixture is committed");
         assert!(
             first == committed,
             "{}: the committed fixture is stale; regenerate it (tests/fixtures/README.md)",
-            scenario.script
+            scenario.motion
         );
     }
 }
@@ -182,6 +193,9 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
 
 #[test]
 fn every_recorded_scenario_has_one_expected_outcome() {
-    let listed: Vec<_> = EXPECTED.iter().map(|s| s.script).collect();
-    assert_eq!(listed, RecordedScenario::ALL);
+    let listed: Vec<_> = EXPECTED.iter().map(|s| s.motion).collect();
+    let motions: Vec<_> = (RecordedScenario::ALL.into_iter().map(Motion::Script))
+        .chain(CapturedMotion::ALL.into_iter().map(Motion::Captured))
+        .collect();
+    assert_eq!(listed, motions);
 }

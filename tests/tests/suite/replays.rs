@@ -20,8 +20,8 @@ use vas_tests::{PATIENCE, Server};
 /// A hand frame without its frame number and timestamps (which differ between runs).
 #[derive(Debug, PartialEq)]
 struct Answer {
-    /// Sequence numbers of the tracker and glove samples it answers.
-    seqs: [u64; 2],
+    /// Sequence numbers of the tracker, glove and hand-joints samples it answers.
+    seqs: [u64; 3],
     /// Root position and rotation.
     root: [f64; 7],
     /// Flex values, bit for bit.
@@ -86,7 +86,7 @@ fn replay(
         let [x, y, z] = answer.root.position;
         let [qx, qy, qz, qw] = answer.root.rotation;
         out.answers.push(Answer {
-            seqs: [answer.tracker.seq, answer.glove.seq],
+            seqs: [answer.tracker.seq, answer.glove.seq, answer.joints.seq],
             root: [x, y, z, qx, qy, qz, qw],
             flex: answer.flex.iter().map(|v| v.to_bits()).collect(),
             touching: answer.touching,
@@ -159,7 +159,7 @@ impl Seen {
 }
 
 fn check(scenario: &Scenario) {
-    let name = scenario.script;
+    let name = scenario.motion;
     let scene = Arc::new(Scene::load(&scenario.scene_path()).expect("the scene loads"));
     let recording = Recording::load(&scenario.fixture_path()).expect("the fixture loads");
     let bodies = Restart::new(Arc::clone(&scene), 1)
@@ -231,7 +231,7 @@ fn check(scenario: &Scenario) {
 fn scenario(name: &str) -> &'static Scenario {
     EXPECTED
         .iter()
-        .find(|scenario| scenario.script.name() == name)
+        .find(|scenario| scenario.motion.name() == name)
         .expect("a recorded scenario")
 }
 
@@ -258,4 +258,14 @@ fn push() {
 #[test]
 fn navigate_holding() {
     check(scenario("navigate_holding"));
+}
+
+#[test]
+fn captured_pinch_pin() {
+    check(scenario("captured_pinch_pin"));
+}
+
+#[test]
+fn captured_relaxed_approach() {
+    check(scenario("captured_relaxed_approach"));
 }
