@@ -12,21 +12,19 @@
 //! relaxed hand goes on [`PRESS_M`] towards the pin as its index knuckle would, and runs into
 //! it.
 //!
-//! Samples come at [`RATE_HZ`], numbered from 1 and stamped from zero, and their values are
-//! rounded to a micrometre (positions), a millionth (quaternions) and a tenth of a micrometre
-//! (radii), far below what hand tracking resolves, so that the recordings stay small and two
-//! runs write identical files.
+//! Samples come at [`RATE_HZ`], numbered from 1 and stamped from zero, their values
+//! [rounded](crate::hands::rounded); two runs write identical files.
 
 use std::fmt;
 
 use anyhow::{Context, bail};
-use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use vas_client::recording::InputSample;
-use vas_server::grasping::retarget::{HandJoints, Joint, JointPose, Retargeter};
+use vas_server::grasping::retarget::{HandJoints, Joint, Retargeter};
 use vas_server::runtime::hand_joints::wire_joints;
 use vas_server::scene::Scene;
 
-use crate::hands::{PINCH, RELAXED, captured};
+use crate::hands::{PINCH, RELAXED, captured, rounded};
 
 /// Hand-joints samples per second: a headset's hand tracking rate.
 pub const RATE_HZ: f64 = 50.0;
@@ -131,7 +129,7 @@ impl CapturedMotion {
 
     /// The motion's hand-joints samples in `scene` (its hand and its part [`PIN`]).
     pub fn samples(self, scene: &Scene) -> anyhow::Result<Vec<InputSample>> {
-        let hand = scene.hand.as_ref().context("the scene has no hand")?;
+        let hand = scene.hands.first().context("the scene has no hand")?;
         let side = hand.model.side();
         let retargeter = Retargeter::new(hand.model.as_ref().clone())?;
         let pin = scene
@@ -139,8 +137,8 @@ impl CapturedMotion {
             .iter()
             .find(|part| part.name == PIN)
             .with_context(|| format!("the scene has no part {PIN:?}"))?;
-        let pinch = captured(PINCH, side);
-        let relaxed = on_wrist(&captured(RELAXED, side), &pinch);
+        let pinch = captured(PINCH, side)?;
+        let relaxed = on_wrist(&captured(RELAXED, side)?, &pinch);
         let (placement, approach) = placement(&retargeter, &pinch, &pin.pose)?;
         let knuckle = placement * relaxed.get(Joint::IndexProximal).position;
         let press = (pin.pose.translation.vector - knuckle.coords).normalize();
@@ -249,20 +247,4 @@ fn blend(open: &HandJoints, shut: &HandJoints, closed: f64) -> HandJoints {
         joint.radius = a.radius + (b.radius - a.radius) * closed;
     }
     joints
-}
-
-/// The joints with positions rounded to a micrometre, quaternions to a millionth and radii to
-/// a tenth of a micrometre.
-fn rounded(joints: &HandJoints) -> HandJoints {
-    // Divided by an exact power of ten, a rounded value prints as its few decimals.
-    let round = |value: f64, per_unit: f64| (value * per_unit).round() / per_unit;
-    HandJoints {
-        side: joints.side,
-        joints: joints.joints.map(|joint| JointPose {
-            position: joint.position.map(|c| round(c, 1e6)),
-            orientation: Quaternion::from(joint.orientation.coords.map(|c| round(c, 1e6))),
-            radius: round(joint.radius, 1e7),
-            flags: joint.flags,
-        }),
-    }
 }

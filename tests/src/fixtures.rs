@@ -59,6 +59,10 @@ pub fn write_fixture(scenario: &Scenario, configs: &Path, out: &Path) -> anyhow:
             script.description(),
         ),
         Motion::Captured(captured) => (captured.samples(&scene)?, captured.description()),
+        Motion::HandOver => (
+            crate::hand_over::samples(&scene)?,
+            crate::hand_over::DESCRIPTION,
+        ),
     };
     let path = out.join(scenario.fixture_file());
     let header = RecordingHeader::new(scene.name, description);

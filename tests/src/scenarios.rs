@@ -14,10 +14,12 @@ use vas_server::scene::script::RecordedScenario;
 
 use crate::captured::CapturedMotion;
 
-/// A grasp or release the replay must produce.
+/// A grasp, release or hand-over the replay must produce.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ExpectedEvent {
-    /// Grasp or release.
+    /// The hand, by its place in the scene's hands.
+    pub hand: usize,
+    /// Grasp, release or hand-over.
     pub kind: EventKind,
     /// The part's name in the scene.
     pub part: &'static str,
@@ -73,6 +75,8 @@ pub enum Motion {
     Script(RecordedScenario),
     /// The captured hands, as hand-joints samples.
     Captured(CapturedMotion),
+    /// The two-handed hand-over: the right hand by tracker and glove, the left by hand joints.
+    HandOver,
 }
 
 impl Motion {
@@ -81,6 +85,7 @@ impl Motion {
         match self {
             Motion::Script(script) => script.name(),
             Motion::Captured(captured) => captured.name(),
+            Motion::HandOver => "two_hand_handover",
         }
     }
 }
@@ -125,23 +130,24 @@ impl Scenario {
 }
 
 const fn grasp(part: &'static str, grasp: GraspType) -> ExpectedEvent {
+    by(0, EventKind::Grasp, part, grasp)
+}
+
+const fn release(part: &'static str) -> ExpectedEvent {
+    by(0, EventKind::Release, part, GraspType::None)
+}
+
+const fn by(hand: usize, kind: EventKind, part: &'static str, grasp: GraspType) -> ExpectedEvent {
     ExpectedEvent {
-        kind: EventKind::Grasp,
+        hand,
+        kind,
         part,
         grasp,
     }
 }
 
-const fn release(part: &'static str) -> ExpectedEvent {
-    ExpectedEvent {
-        kind: EventKind::Release,
-        part,
-        grasp: GraspType::None,
-    }
-}
-
 /// Every recorded scenario and what its replay must give.
-pub const EXPECTED: [Scenario; 8] = [
+pub const EXPECTED: [Scenario; 9] = [
     Scenario {
         motion: Motion::Script(RecordedScenario::PegInsert),
         scene: "peg_insert.toml",
@@ -255,6 +261,27 @@ pub const EXPECTED: [Scenario; 8] = [
             rpy_degrees: [0.0, 90.0, 0.0],
             position_tolerance: 1e-12,
             angle_tolerance: 1e-12,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::HandOver,
+        scene: "two_hand_handover.toml",
+        events: &[
+            by(0, EventKind::Grasp, "handle", GraspType::Power),
+            // The left hand's fingers and thumb hold the handle before its palm comes down.
+            by(1, EventKind::Grasp, "handle", GraspType::Precision),
+            by(0, EventKind::HandOver, "handle", GraspType::None),
+            by(1, EventKind::Release, "handle", GraspType::None),
+        ],
+        // Lifted 5 cm by the left hand, less the 3 to 5 mm its script presses down after the
+        // grasp (it aims 5 mm into the handle).
+        final_pose: ExpectedPose {
+            part: "handle",
+            position: [0.0, 0.075, -0.0125],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.003,
+            angle_tolerance: 0.05,
         },
         min_held_back: 0.0,
     },

@@ -1,11 +1,13 @@
 //! The I/O thread's input state: validation and counters of tracker, glove and hand-joints
 //! samples, and the latest accepted target of each, as the hand input of the next frame.
 //!
-//! A hand that has had a hand-joints sample follows its joints: its root (in the cart's frame)
-//! and flex values come from its latest tracked joints sample, and tracker samples go on placing
-//! the cart. Before that, the tracker's hand pose and the glove's flex values drive it. Joints
-//! take the hand over for good rather than whichever stream spoke last, so that a tracker that
-//! only navigates the cart never snaps a joints-driven hand to its own hand pose.
+//! Tracker samples place the cart, which carries every hand. Hand-joints samples drive the hand
+//! of their side. The tracker's hand pose and the glove's flex values drive the scene's first
+//! hand until it has had a hand-joints sample; then it follows its joints (its root in the
+//! cart's frame and flex values from its latest tracked joints sample). Joints take the hand
+//! over for good rather than whichever stream spoke last, so that a tracker that only navigates
+//! the cart never snaps a joints-driven hand to its own hand pose. A second hand without joints
+//! yet stays parked at the cart's origin, untracked.
 
 use nalgebra::Isometry3;
 use vas_protocol::{
@@ -13,7 +15,7 @@ use vas_protocol::{
     InputStats, TrackerSample, TrackerTarget,
 };
 
-use super::frames::{InputFrame, Stamps};
+use super::frames::{HandTarget, InputFrame, Stamps};
 use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection};
 use crate::grasping::retarget::JointsError;
 use crate::grasping::{HandInput, HandModel};
@@ -23,17 +25,19 @@ use crate::grasping::{HandInput, HandModel};
 pub struct Inputs {
     tracker: Option<TrackerTarget>,
     glove: Option<GloveTarget>,
-    /// The scene's hand as hand-joints samples drive it; `None` without a hand model (or with
-    /// one the retargeting cannot take).
-    joints: Option<JointsHand>,
+    /// The scene's hands, in its order, as hand-joints samples drive them (`None` for a model
+    /// the retargeting cannot take); empty without hand models.
+    hands: Vec<Option<JointsHand>>,
+    /// The latest accepted hand-joints sample, of any hand.
+    joints: InputStamp,
     stats: InputStats,
 }
 
 impl Inputs {
-    /// The input state of a scene with the hand `model` (or none).
-    pub fn for_hand(model: Option<&HandModel>) -> Inputs {
+    /// The input state of a scene with the hand `models` (in the scene's order).
+    pub fn for_hands<'a>(models: impl IntoIterator<Item = &'a HandModel>) -> Inputs {
         Inputs {
-            joints: model.and_then(JointsHand::new),
+            hands: models.into_iter().map(JointsHand::new).collect(),
             ..Inputs::default()
         }
     }
@@ -94,14 +98,14 @@ impl Inputs {
         sample: &HandJointsSample,
     ) -> Result<JointsOutcome, JointsRejection> {
         let side = HandSide::try_from(sample.side).ok();
-        let outcome = match self
-            .joints
-            .as_mut()
-            .filter(|hand| Some(hand.side()) == side)
-        {
+        let hand = (self.hands.iter_mut().flatten()).find(|hand| Some(hand.side()) == side);
+        let outcome = match hand {
             Some(hand) => hand.apply(sample),
             None => Err(JointsRejection::NoSuchHand { side: sample.side }),
         };
+        if outcome.is_ok() {
+            self.joints = sample.stamp();
+        }
         let stats = &mut self.stats;
         let counter = match &outcome {
             Ok(JointsOutcome::Tracked) => &mut stats.joints_accepted,
@@ -127,35 +131,69 @@ impl Inputs {
         let cart = self
             .tracker
             .map_or_else(Isometry3::identity, |target| target.cart);
-        let joints = self.joints.as_ref().and_then(JointsHand::target);
-        let (tracker, flex) = joints.and_then(|target| target.pose).unwrap_or_else(|| {
-            (
-                self.tracker
-                    .map_or_else(Isometry3::identity, |target| target.hand),
-                self.glove.map_or([0.0; FLEX_COUNT], |target| target.flex),
-            )
-        });
+        let hands = if self.hands.is_empty() {
+            vec![self.glove_driven(cart)]
+        } else {
+            (self.hands.iter().enumerate())
+                .map(|(index, hand)| {
+                    let joints = hand.as_ref().and_then(JointsHand::target);
+                    let stamp = joints.map_or_else(InputStamp::default, |target| target.stamp);
+                    match joints.and_then(|target| target.pose.map(|pose| (target, pose))) {
+                        Some((target, (tracker, flex))) => HandTarget {
+                            input: HandInput {
+                                cart,
+                                tracker,
+                                flex,
+                            },
+                            joints: stamp,
+                            tracked: target.tracked,
+                        },
+                        None if index == 0 => HandTarget {
+                            joints: stamp,
+                            ..self.glove_driven(cart)
+                        },
+                        None => HandTarget {
+                            input: HandInput {
+                                cart,
+                                tracker: Isometry3::identity(),
+                                flex: [0.0; FLEX_COUNT],
+                            },
+                            joints: stamp,
+                            tracked: false,
+                        },
+                    }
+                })
+                .collect()
+        };
         InputFrame {
             stamps: Stamps {
                 tracker: self.tracker.map_or_else(InputStamp::default, |t| t.stamp),
                 glove: self.glove.map_or_else(InputStamp::default, |g| g.stamp),
-                joints: joints.map_or_else(InputStamp::default, |j| j.stamp),
+                joints: self.joints,
             },
-            input: HandInput {
-                cart,
-                tracker,
-                flex,
-            },
-            tracked: joints.is_none_or(|target| target.tracked),
+            hands,
         }
     }
 
-    /// Forgets the targets (a reset, or another scene) and takes the hand `model` (or none);
-    /// the counters go on.
-    pub fn restart(&mut self, model: Option<&HandModel>) {
+    /// The hand as tracker and glove drive it, on `cart`.
+    fn glove_driven(&self, cart: Isometry3<f64>) -> HandTarget {
+        HandTarget {
+            input: HandInput {
+                cart,
+                tracker: (self.tracker).map_or_else(Isometry3::identity, |target| target.hand),
+                flex: self.glove.map_or([0.0; FLEX_COUNT], |target| target.flex),
+            },
+            joints: InputStamp::default(),
+            tracked: true,
+        }
+    }
+
+    /// Forgets the targets (a reset, or another scene) and takes the hand `models`; the
+    /// counters go on.
+    pub fn restart<'a>(&mut self, models: impl IntoIterator<Item = &'a HandModel>) {
         *self = Inputs {
             stats: self.stats,
-            ..Inputs::for_hand(model)
+            ..Inputs::for_hands(models)
         };
     }
 }
@@ -195,7 +233,7 @@ mod tests {
         let before = inputs.frame();
         assert_eq!(before.stamps, Stamps::default());
         assert_eq!(
-            before.input.cart * before.input.tracker,
+            before.hands[0].input.cart * before.hands[0].input.tracker,
             Isometry3::identity()
         );
         inputs
@@ -210,9 +248,9 @@ mod tests {
             }
         );
         assert_eq!(frame.stamps.glove, InputStamp::default());
-        let root = frame.input.cart * frame.input.tracker;
+        let root = frame.hands[0].input.cart * frame.hands[0].input.tracker;
         assert!((root.translation.vector - Vector3::new(0.1, 0.0, 1.0)).norm() < 1e-12);
-        assert_eq!(frame.input.flex, [0.0; FLEX_COUNT]);
+        assert_eq!(frame.hands[0].input.flex, [0.0; FLEX_COUNT]);
     }
 
     #[test]
@@ -241,7 +279,7 @@ mod tests {
         );
         let frame = inputs.frame();
         assert_eq!(frame.stamps.tracker.seq, 1);
-        let root = frame.input.cart * frame.input.tracker;
+        let root = frame.hands[0].input.cart * frame.hands[0].input.tracker;
         assert!((root.translation.vector - turned.translation.vector).norm() < 1e-12);
         assert!(root.rotation.angle_to(&turned.rotation) < 1e-9);
     }
@@ -265,7 +303,7 @@ mod tests {
             (1, 1)
         );
         assert_eq!(stats.rejected(), 1);
-        let root = inputs.frame().input.cart * inputs.frame().input.tracker;
+        let root = inputs.frame().hands[0].input.cart * inputs.frame().hands[0].input.tracker;
         assert!(root.translation.vector.iter().all(|c| c.is_finite()));
         assert!((root.translation.vector - Vector3::new(0.1, 0.0, 1.0)).norm() < 1e-12);
     }
@@ -299,9 +337,9 @@ mod tests {
                 timestamp_ns: 40
             }
         );
-        assert_eq!(frame.input.flex[6], FLEX_LIMITS_RAD[6].1);
-        assert_eq!(frame.input.flex[20], FLEX_LIMITS_RAD[20].0);
-        assert_eq!(frame.input.flex[1], 0.1);
+        assert_eq!(frame.hands[0].input.flex[6], FLEX_LIMITS_RAD[6].1);
+        assert_eq!(frame.hands[0].input.flex[20], FLEX_LIMITS_RAD[20].0);
+        assert_eq!(frame.hands[0].input.flex[1], 0.1);
     }
 
     #[test]
@@ -310,10 +348,10 @@ mod tests {
         inputs
             .apply_tracker(&tracker(8, at(1.0, 2.0, 3.0), WirePose::IDENTITY))
             .expect("valid");
-        inputs.restart(None);
+        inputs.restart([]);
         let frame = inputs.frame();
         assert_eq!(frame.stamps, Stamps::default());
-        assert_eq!(frame.input.tracker, Isometry3::identity());
+        assert_eq!(frame.hands[0].input.tracker, Isometry3::identity());
         assert_eq!(inputs.stats().tracker_accepted, 1);
     }
 
@@ -325,7 +363,7 @@ mod tests {
     #[test]
     fn hand_joints_drive_the_hand_and_the_tracker_keeps_the_cart() {
         let model = right_hand();
-        let mut inputs = Inputs::for_hand(Some(&model));
+        let mut inputs = Inputs::for_hands([&model]);
         assert_eq!(
             inputs.apply_hand_joints(&pinch(1)),
             Ok(JointsOutcome::Tracked)
@@ -342,9 +380,9 @@ mod tests {
                 timestamp_ns: 101
             }
         );
-        assert!(frame.tracked);
-        assert_eq!(frame.input.tracker, fit.root);
-        assert_eq!(frame.input.flex, fit.flex.map(|v| v as f32));
+        assert!(frame.hands[0].tracked);
+        assert_eq!(frame.hands[0].input.tracker, fit.root);
+        assert_eq!(frame.hands[0].input.flex, fit.flex.map(|v| v as f32));
 
         // A tracker sample moves the cart; the hand stays with its joints.
         let cart = at(1.0, 2.0, 0.0);
@@ -352,8 +390,8 @@ mod tests {
             .apply_tracker(&tracker(1, at(0.5, 0.5, 0.5), cart))
             .expect("valid");
         let frame = inputs.frame();
-        assert_eq!(frame.input.cart, cart.to_isometry());
-        assert_eq!(frame.input.tracker, fit.root);
+        assert_eq!(frame.hands[0].input.cart, cart.to_isometry());
+        assert_eq!(frame.hands[0].input.tracker, fit.root);
         assert_eq!(frame.stamps.tracker.seq, 1);
         let stats = inputs.stats();
         assert_eq!((stats.joints_accepted, stats.rejected()), (1, 0));
@@ -361,7 +399,7 @@ mod tests {
 
     #[test]
     fn impossible_hand_joints_are_rejected_counted_and_keep_the_target() {
-        let mut inputs = Inputs::for_hand(Some(&right_hand()));
+        let mut inputs = Inputs::for_hands([&right_hand()]);
         inputs.apply_hand_joints(&pinch(1)).expect("a hand");
         let before = inputs.frame();
         let at = |joint: Joint| joint.index();
@@ -427,7 +465,7 @@ mod tests {
 
     #[test]
     fn an_untracked_hand_keeps_its_target_and_says_so() {
-        let mut inputs = Inputs::for_hand(Some(&right_hand()));
+        let mut inputs = Inputs::for_hands([&right_hand()]);
         inputs.apply_hand_joints(&pinch(1)).expect("a hand");
         let tracked = inputs.frame();
         let mut lost = pinch(2);
@@ -439,25 +477,60 @@ mod tests {
             Ok(JointsOutcome::Untracked)
         );
         let frame = inputs.frame();
-        assert!(!frame.tracked);
+        assert!(!frame.hands[0].tracked);
         assert_eq!(frame.stamps.joints.seq, 2);
-        assert_eq!(frame.input, tracked.input);
+        assert_eq!(frame.hands[0].input, tracked.hands[0].input);
         let stats = inputs.stats();
         assert_eq!((stats.joints_untracked, stats.rejected()), (1, 0));
         // Tracked again.
         inputs.apply_hand_joints(&pinch(3)).expect("a hand");
-        assert!(inputs.frame().tracked);
+        assert!(inputs.frame().hands[0].tracked);
     }
 
     #[test]
     fn a_restart_forgets_the_joints_and_keeps_the_counters() {
         let model = right_hand();
-        let mut inputs = Inputs::for_hand(Some(&model));
+        let mut inputs = Inputs::for_hands([&model]);
         inputs.apply_hand_joints(&pinch(1)).expect("a hand");
-        inputs.restart(Some(&model));
+        inputs.restart([&model]);
         let frame = inputs.frame();
         assert_eq!(frame.stamps, Stamps::default());
-        assert_eq!(frame.input.tracker, Isometry3::identity());
+        assert_eq!(frame.hands[0].input.tracker, Isometry3::identity());
         assert_eq!(inputs.stats().joints_accepted, 1);
+    }
+
+    #[test]
+    fn two_hands_take_the_glove_and_their_own_joints() {
+        let right = right_hand();
+        let left = right.mirrored();
+        let mut inputs = Inputs::for_hands([&right, &left]);
+        let glove = GloveSample {
+            seq: 1,
+            timestamp_ns: 1,
+            flex: [0.2; FLEX_COUNT],
+        };
+        inputs.apply_glove(&glove).expect("valid");
+        let frame = inputs.frame();
+        assert_eq!(frame.hands.len(), 2);
+        assert_eq!(frame.hands[0].input.flex, [0.2; FLEX_COUNT]);
+        assert!(frame.hands[0].tracked);
+        assert!(!frame.hands[1].tracked, "no input for the left hand yet");
+        let sample = wire_joints(&captured("webxr_pinch.json", Side::Left), 1, 5);
+        assert_eq!(
+            inputs.apply_hand_joints(&sample),
+            Ok(JointsOutcome::Tracked)
+        );
+        let frame = inputs.frame();
+        assert_eq!(frame.hands[0].input.flex, [0.2; FLEX_COUNT]);
+        assert!(frame.hands[1].tracked);
+        assert_eq!(frame.hands[1].joints, sample.stamp());
+        assert_eq!(frame.hands[0].joints, InputStamp::default());
+        assert_eq!(frame.stamps.joints, sample.stamp());
+        // A right-hand sample now drives the first hand instead of the glove.
+        assert_eq!(
+            inputs.apply_hand_joints(&pinch(2)),
+            Ok(JointsOutcome::Tracked)
+        );
+        assert_ne!(inputs.frame().hands[0].input.flex, [0.2; FLEX_COUNT]);
     }
 }

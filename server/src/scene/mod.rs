@@ -7,6 +7,8 @@
 //! ```toml
 //! name = "peg in hole"
 //! # hand = "hands/right.toml"          # optional hand model, relative to this file
+//! # hands = ["hands/right.toml", "hands/left.toml"]  # or two, one of each side; the first
+//! #                                    # is the one the tracker and the glove drive
 //!
 //! [params]                             # all optional, with defaults
 //! dop_orientations = 24
@@ -45,6 +47,7 @@
 //! Parts are numbered in the order of `[[parts]]`, then of each assembly's parts.
 
 mod assembly;
+pub mod hand_over;
 mod params;
 pub mod script;
 
@@ -127,8 +130,10 @@ pub struct Scene {
     pub source: PathBuf,
     /// The parts; a part's id is its index here.
     pub parts: Vec<Part>,
-    /// The hand model the scene names, loaded and validated with it.
-    pub hand: Option<SceneHand>,
+    /// The hand models the scene names (`hand`, or `hands`: at most one of each side), loaded
+    /// and validated with it. The first is the hand that tracker and glove samples drive;
+    /// hand-joints samples drive the hand of their side.
+    pub hands: Vec<SceneHand>,
     /// Parameters of the algorithms.
     pub params: AlgorithmParams,
     /// Rates of the runtime loops.
@@ -370,6 +375,7 @@ pub fn default_scene_path() -> PathBuf {
 struct SceneFile {
     name: String,
     hand: Option<PathBuf>,
+    hands: Option<Vec<PathBuf>>,
     #[serde(default)]
     params: AlgorithmParams,
     #[serde(default)]
@@ -583,12 +589,17 @@ impl Scene {
             "rates: publish {} Hz, collision {} Hz, sliding {} Hz, grasping {} Hz",
             r.publish_hz, r.collision_hz, r.sliding_hz, r.grasping_hz
         );
+        let hands: Vec<String> = (self.hands.iter())
+            .map(|hand| hand.path.display().to_string())
+            .collect();
         let _ = write!(
             s,
-            "hand: {}",
-            self.hand
-                .as_ref()
-                .map_or("none".to_owned(), |h| h.path.display().to_string())
+            "hands: {}",
+            if hands.is_empty() {
+                "none".to_owned()
+            } else {
+                hands.join(", ")
+            }
         );
         s
     }
@@ -703,24 +714,42 @@ impl Loader<'_> {
 
         // Loaded here, so that whatever loads a scene (check-scene, run, a load-scene request)
         // refuses a broken hand model the same way.
-        let hand = match file.hand {
-            Some(hand) => {
-                let path = self.folder.join(&hand);
-                let model = HandModel::load_within(&path, self.limits)
-                    .map_err(|error| self.invalid("hand", error.to_string()))?;
-                Some(SceneHand {
-                    path,
-                    model: Arc::new(model),
-                })
+        let listed = match (file.hand, file.hands) {
+            (Some(_), Some(_)) => {
+                return Err(self.invalid("hands", "give `hand` or `hands`, not both"));
             }
-            None => None,
+            (Some(hand), None) => vec![("hand".to_owned(), hand)],
+            (None, Some(hands)) => (0..)
+                .zip(hands)
+                .map(|(index, hand)| (format!("hands[{index}]"), hand))
+                .collect(),
+            (None, None) => Vec::new(),
         };
+        let mut hands: Vec<SceneHand> = Vec::with_capacity(listed.len());
+        for (key, hand) in listed {
+            let path = self.folder.join(&hand);
+            let model = HandModel::load_within(&path, self.limits)
+                .map_err(|error| self.invalid(&key, error.to_string()))?;
+            if hands.iter().any(|other| other.model.side() == model.side()) {
+                return Err(self.invalid(
+                    key,
+                    format!(
+                        "a second {:?} hand: a scene has at most one of each side",
+                        model.side()
+                    ),
+                ));
+            }
+            hands.push(SceneHand {
+                path,
+                model: Arc::new(model),
+            });
+        }
 
         Ok(Scene {
             name: file.name,
             source: self.path.to_owned(),
             parts,
-            hand,
+            hands,
             params: file.params,
             rates: file.rates,
             groups: Groups {

@@ -469,7 +469,11 @@ fn record_writes_the_samples_clients_send() {
         timestamp_ns: first.timestamp_ns + 2,
         ..tracker(2, [0.2, 0.0, 0.0])
     };
-    let joints = wire_joints(&captured(PINCH, Side::Right), 1, first.timestamp_ns + 3);
+    let joints = wire_joints(
+        &captured(PINCH, Side::Right).expect("the capture reads"),
+        1,
+        first.timestamp_ns + 3,
+    );
     client.send_tracker(&first).expect("send");
     client.send_glove(&glove).expect("send");
     client.send_tracker(&second).expect("send");
@@ -636,7 +640,7 @@ fn the_geometry_follows_every_reset_and_load() {
             );
         }
     }
-    let model = &own.hand.as_ref().expect("the demo has a hand").model;
+    let model = &own.hands.first().expect("the demo has a hand").model;
     assert_eq!(first.hands.len(), 1);
     assert_eq!(first.hands[0].model, model.name());
     assert_eq!(first.hands[0].segments.len(), model.segments().len());

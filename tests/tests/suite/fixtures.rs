@@ -40,7 +40,10 @@ fn check(scenario: &Scenario) {
         run.frames,
         run.events
             .iter()
-            .map(|e| format!("{:?} {} {:?} @{}", e.kind, e.part, e.grasp, e.frame))
+            .map(|e| format!(
+                "{:?} {} {:?} hand {} @{}",
+                e.kind, e.part, e.grasp, e.hand, e.frame
+            ))
             .collect::<Vec<_>>(),
         expected.part,
         position_error,
@@ -59,12 +62,12 @@ fn check(scenario: &Scenario) {
     let events: Vec<_> = run
         .events
         .iter()
-        .map(|e| (e.kind, e.part.as_str(), e.grasp))
+        .map(|e| (e.hand, e.kind, e.part.as_str(), e.grasp))
         .collect();
     let wanted: Vec<_> = scenario
         .events
         .iter()
-        .map(|e| (e.kind, e.part, e.grasp))
+        .map(|e| (e.hand, e.kind, e.part, e.grasp))
         .collect();
     assert_eq!(events, wanted, "{name}");
     assert!(
@@ -128,6 +131,11 @@ fn captured_relaxed_approach() {
 }
 
 #[test]
+fn two_hand_handover() {
+    check(&EXPECTED[8]);
+}
+
+#[test]
 fn the_fixtures_are_what_the_generator_writes_every_time() {
     let out = tempfile::tempdir().expect("a temporary folder");
     for scenario in &EXPECTED {
@@ -178,9 +186,9 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
     let push = &EXPECTED[3];
     let mut scene = Scene::load(&push.scene_path()).expect("loads");
     let recording = Recording::load(&push.fixture_path()).expect("loads");
-    let model = scene.hand.as_ref().map(|hand| hand.model.as_ref());
-    let (inputs, _) = offline::hand_inputs(model, recording.samples.iter().map(|s| s.input));
-    scene.parts[0].pose.translation.vector = inputs[0].tracker.translation.vector;
+    let models = scene.hands.iter().map(|hand| hand.model.as_ref());
+    let (inputs, _) = offline::hand_inputs(models, recording.samples.iter().map(|s| s.input));
+    scene.parts[0].pose.translation.vector = inputs[0][0].tracker.translation.vector;
     let run = offline::replay(&scene, &recording).expect("replays");
     assert!(
         run.penetrations
@@ -196,6 +204,7 @@ fn every_recorded_scenario_has_one_expected_outcome() {
     let listed: Vec<_> = EXPECTED.iter().map(|s| s.motion).collect();
     let motions: Vec<_> = (RecordedScenario::ALL.into_iter().map(Motion::Script))
         .chain(CapturedMotion::ALL.into_iter().map(Motion::Captured))
+        .chain([Motion::HandOver])
         .collect();
     assert_eq!(listed, motions);
 }

@@ -109,8 +109,12 @@ fn captured_hands_drive_the_hand_and_impossible_ones_are_counted() {
     let mut client = server.connect();
     let model = HandModel::load(&configs_dir().join("hands/right.toml")).expect("the right hand");
     let retargeter = Retargeter::new(model).expect("the right hand retargets");
-    let relaxed = captured(RELAXED, Side::Right).transformed(&placement());
-    let pinch = captured(PINCH, Side::Right).transformed(&placement());
+    let relaxed = captured(RELAXED, Side::Right)
+        .expect("the capture reads")
+        .transformed(&placement());
+    let pinch = captured(PINCH, Side::Right)
+        .expect("the capture reads")
+        .transformed(&placement());
     let mut sender = Sender { seq: 0 };
 
     let open = sender.until_reached(&mut client, &retargeter, &relaxed);
