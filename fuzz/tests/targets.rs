@@ -27,7 +27,7 @@ use vas_server::grasping::retarget::{Capture, Retargeter};
 use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
 use vas_server::runtime::inputs::Inputs;
-use vas_server::scene::Scene;
+use vas_server::scene::{Scene, TrackingParams};
 
 /// A mesh file's bytes, as `load_mesh` has them once read; the extension picks the parser.
 fn mesh_file(name: &str, bytes: &[u8]) {
@@ -232,7 +232,7 @@ fn right_hand() -> &'static HandModel {
 #[test]
 fn hand_joints_samples() {
     bolero::check!().for_each(|bytes: &[u8]| {
-        let mut inputs = Inputs::for_hands([right_hand()]);
+        let mut inputs = Inputs::for_hands([right_hand()], TrackingParams::default());
         let samples = values_from_bytes::<HandJointsSample>(bytes);
         for sample in &samples {
             if inputs.apply_hand_joints(sample).is_err() {

@@ -10,7 +10,7 @@
 //! along the line from the wrist to that point and moves in; the pinch then blends in joint by joint (positions linearly,
 //! orientations by slerp), and the closed hand lifts the pin [`LIFT_M`]. Without the pinch the
 //! relaxed hand goes on [`PRESS_M`] towards the pin as its index knuckle would, and runs into
-//! it.
+//! it. With tracking losses, the samples of the lost stretches say so (no valid joint).
 //!
 //! Samples come at [`RATE_HZ`], numbered from 1 and stamped from zero, their values
 //! [rounded](crate::hands::rounded); two runs write identical files.
@@ -20,6 +20,8 @@ use std::fmt;
 use anyhow::{Context, bail};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use vas_client::recording::InputSample;
+use vas_protocol::{HAND_JOINT_COUNT, HandJointsSample, HandSide, JointLocation};
+use vas_server::grasping::Side;
 use vas_server::grasping::retarget::{HandJoints, Joint, Retargeter};
 use vas_server::runtime::hand_joints::wire_joints;
 use vas_server::scene::Scene;
@@ -55,7 +57,19 @@ pub enum CapturedMotion {
     /// The relaxed hand moves in on the pin as for the pinch, stays relaxed and goes on
     /// [`PRESS_M`] towards its index knuckle, running into the pin.
     RelaxedApproach,
+    /// The pinch and lift of [`CapturedMotion::PinchPin`], then the hand's tracking lost for
+    /// [`SHORT_LOSS_S`], back for a while, and lost for [`LONG_LOSS_S`].
+    TrackingLoss,
 }
+
+/// The short loss of tracking while the pin is held (seconds): within the default grace.
+pub const SHORT_LOSS_S: f64 = 0.2;
+
+/// The long loss of tracking while the pin is held (seconds): beyond the default grace.
+pub const LONG_LOSS_S: f64 = 2.0;
+
+/// When the long loss of [`CapturedMotion::TrackingLoss`] begins (seconds from the start).
+pub const LONG_LOSS_FROM_S: f64 = 2.6;
 
 /// A moment of a motion: where the hand is and how far it has closed.
 #[derive(Debug, Clone, Copy)]
@@ -71,18 +85,24 @@ struct Key {
     closed: f64,
     /// How far up (metres).
     up: f64,
+    /// Whether the hand's tracking is lost until the next key (its samples say so).
+    lost: bool,
 }
 
 impl CapturedMotion {
     /// Every captured motion.
-    pub const ALL: [CapturedMotion; 2] =
-        [CapturedMotion::PinchPin, CapturedMotion::RelaxedApproach];
+    pub const ALL: [CapturedMotion; 3] = [
+        CapturedMotion::PinchPin,
+        CapturedMotion::RelaxedApproach,
+        CapturedMotion::TrackingLoss,
+    ];
 
     /// The name, also the fixture's file stem.
     pub fn name(self) -> &'static str {
         match self {
             CapturedMotion::PinchPin => "captured_pinch_pin",
             CapturedMotion::RelaxedApproach => "captured_relaxed_approach",
+            CapturedMotion::TrackingLoss => "captured_tracking_loss",
         }
     }
 
@@ -97,6 +117,10 @@ impl CapturedMotion {
                 "the captured relaxed hand moves in on the pin as for the pinch, stays relaxed \
                  and goes on 7 cm, its index knuckle towards the pin, running into it"
             }
+            CapturedMotion::TrackingLoss => {
+                "the captured pinch lifts the pin 3 cm; the hand's tracking is lost for 0.2 s, \
+                 comes back for 0.4 s and is lost for 2 s"
+            }
         }
     }
 
@@ -107,21 +131,36 @@ impl CapturedMotion {
             press,
             closed,
             up,
+            lost: false,
         };
         let mut keys = vec![
             key(0.0, APPROACH_M, 0.0, 0.0, 0.0),
             key(0.6, 0.0, 0.0, 0.0, 0.0),
         ];
+        let lifted = |time| key(time, 0.0, 0.0, 1.0, LIFT_M);
+        let lost = |time| Key {
+            lost: true,
+            ..lifted(time)
+        };
         match self {
             CapturedMotion::PinchPin => keys.extend([
                 key(1.1, 0.0, 0.0, 1.0, 0.0),
                 key(1.4, 0.0, 0.0, 1.0, 0.0),
-                key(1.8, 0.0, 0.0, 1.0, LIFT_M),
-                key(2.0, 0.0, 0.0, 1.0, LIFT_M),
+                lifted(1.8),
+                lifted(2.0),
             ]),
             CapturedMotion::RelaxedApproach => keys.extend([
                 key(1.0, 0.0, PRESS_M, 0.0, 0.0),
                 key(1.3, 0.0, PRESS_M, 0.0, 0.0),
+            ]),
+            CapturedMotion::TrackingLoss => keys.extend([
+                key(1.1, 0.0, 0.0, 1.0, 0.0),
+                key(1.4, 0.0, 0.0, 1.0, 0.0),
+                lifted(1.8),
+                lost(2.0),
+                lifted(2.0 + SHORT_LOSS_S),
+                lost(LONG_LOSS_FROM_S),
+                lost(LONG_LOSS_FROM_S + LONG_LOSS_S),
             ]),
         }
         keys
@@ -144,6 +183,11 @@ impl CapturedMotion {
         let press = (pin.pose.translation.vector - knuckle.coords).normalize();
         let mut samples = Vec::new();
         for (key, seq) in sampled(&self.keys()).into_iter().zip(1u64..) {
+            let timestamp_ns = (seq - 1) * PERIOD_NS;
+            if key.lost {
+                samples.push(InputSample::HandJoints(untracked(side, seq, timestamp_ns)));
+                continue;
+            }
             let shift = Translation3::from(
                 -approach * key.back + press * key.press + Vector3::z() * key.up,
             );
@@ -155,7 +199,7 @@ impl CapturedMotion {
             samples.push(InputSample::HandJoints(wire_joints(
                 &joints,
                 seq,
-                (seq - 1) * PERIOD_NS,
+                timestamp_ns,
             )));
         }
         Ok(samples)
@@ -181,6 +225,7 @@ fn sampled(keys: &[Key]) -> Vec<Key> {
                 time: lerp(a.time, b.time, t),
                 back: lerp(a.back, b.back, t),
                 press: lerp(a.press, b.press, t),
+                lost: a.lost,
                 closed: lerp(a.closed, b.closed, t),
                 up: lerp(a.up, b.up, t),
             }
@@ -188,6 +233,26 @@ fn sampled(keys: &[Key]) -> Vec<Key> {
     }
     out.extend(keys.last());
     out
+}
+
+/// A sample of a hand whose tracking is lost: every joint's flags 0 (neither valid nor tracked),
+/// its pose zero, as a WebXR producer sends a frame without hand poses.
+fn untracked(side: Side, seq: u64, timestamp_ns: u64) -> HandJointsSample {
+    let nowhere = JointLocation {
+        position: [0.0; 3],
+        rotation: [0.0, 0.0, 0.0, 1.0],
+        radius: 0.0,
+        flags: 0,
+    };
+    HandJointsSample {
+        seq,
+        timestamp_ns,
+        joints: [nowhere; HAND_JOINT_COUNT],
+        side: match side {
+            Side::Right => HandSide::Right as u32,
+            Side::Left => HandSide::Left as u32,
+        },
+    }
 }
 
 /// Where the captured hands go: the rigid motion from the captures' frame into the world that

@@ -18,8 +18,8 @@ use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh};
 use vas_client::recording::{InputSample, Recording};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
 use vas_server::collision::parry_mesh::{ORACLE_SCALE, millimetre_pose, millimetre_trimesh};
-use vas_server::grasping::{GraspEvent, GraspingHand, HandInput, HandModel, HandPose};
-use vas_server::runtime::frames::wire_grasp;
+use vas_server::grasping::{GraspEvent, GraspingHand, HandModel, HandPose};
+use vas_server::runtime::frames::{HandTarget, wire_grasp};
 use vas_server::runtime::inputs::Inputs;
 use vas_server::runtime::interaction::Interaction;
 use vas_server::runtime::verify::HandBodies;
@@ -86,15 +86,16 @@ impl OfflineRun {
     }
 }
 
-/// The hand inputs the server steps with after each sample: each hand's target in the server's
-/// own input state ([`Inputs`], for the scene's hand `models`) after each valid sample of
-/// `samples`, from the first one that places a hand (a tracker sample, or a hand-joints sample),
-/// and how many were refused.
-pub fn hand_inputs<'a>(
-    models: impl IntoIterator<Item = &'a HandModel>,
+/// The hand targets the server steps with after each sample: each hand's target in the
+/// server's own input state ([`Inputs`], for `scene`'s hands and tracking parameters) after each
+/// valid sample of `samples`, from the first one that places a hand (a tracker sample, or a
+/// hand-joints sample), and how many were refused.
+pub fn hand_targets(
+    scene: &Scene,
     samples: impl IntoIterator<Item = InputSample>,
-) -> (Vec<Vec<HandInput>>, usize) {
-    let mut state = Inputs::for_hands(models);
+) -> (Vec<Vec<HandTarget>>, usize) {
+    let models = scene.hands.iter().map(|hand| hand.model.as_ref());
+    let mut state = Inputs::for_hands(models, scene.params.tracking);
     let mut inputs = Vec::new();
     let mut rejected = 0;
     for sample in samples {
@@ -106,7 +107,7 @@ pub fn hand_inputs<'a>(
         let frame = state.frame();
         let placed = frame.stamps.tracker.seq != 0 || frame.stamps.joints.seq != 0;
         match (valid, placed) {
-            (true, true) => inputs.push(frame.hands.iter().map(|hand| hand.input).collect()),
+            (true, true) => inputs.push(frame.hands),
             (true, false) => {}
             (false, _) => rejected += 1,
         }
@@ -233,14 +234,13 @@ impl Oracle {
 
 /// Replays `recording` in `scene` as described in the module documentation.
 pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, OfflineError> {
-    let models = scene.hands.iter().map(|hand| hand.model.as_ref());
-    let (inputs, rejected) = hand_inputs(models, recording.samples.iter().map(|s| s.input));
-    replay_inputs(scene, &inputs, rejected)
+    let (targets, rejected) = hand_targets(scene, recording.samples.iter().map(|s| s.input));
+    replay_targets(scene, &targets, rejected)
 }
 
-fn replay_inputs(
+fn replay_targets(
     scene: &Scene,
-    inputs: &[Vec<HandInput>],
+    inputs: &[Vec<HandTarget>],
     rejected: usize,
 ) -> Result<OfflineRun, OfflineError> {
     if scene.hands.is_empty() {
@@ -255,7 +255,7 @@ fn replay_inputs(
                 Arc::clone(&scene_hand.model),
                 params,
                 HandPose {
-                    root: first.cart * first.tracker,
+                    root: first.input.cart * first.input.tracker,
                     flex: [0.0; FLEX_COUNT],
                 },
             )

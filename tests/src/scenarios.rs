@@ -147,7 +147,7 @@ const fn by(hand: usize, kind: EventKind, part: &'static str, grasp: GraspType) 
 }
 
 /// Every recorded scenario and what its replay must give.
-pub const EXPECTED: [Scenario; 9] = [
+pub const EXPECTED: [Scenario; 10] = [
     Scenario {
         motion: Motion::Script(RecordedScenario::PegInsert),
         scene: "peg_insert.toml",
@@ -261,6 +261,21 @@ pub const EXPECTED: [Scenario; 9] = [
             rpy_degrees: [0.0, 90.0, 0.0],
             position_tolerance: 1e-12,
             angle_tolerance: 1e-12,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Captured(CapturedMotion::TrackingLoss),
+        scene: "precision_pinch.toml",
+        // Held through the short loss; let go half a second into the long one.
+        events: &[grasp("pin", GraspType::TipPinch), release("pin")],
+        // Released where it was held, 3 cm up.
+        final_pose: ExpectedPose {
+            part: "pin",
+            position: [0.0, 0.0, 0.13],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.003,
+            angle_tolerance: 0.05,
         },
         min_held_back: 0.0,
     },

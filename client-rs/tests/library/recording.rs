@@ -3,7 +3,8 @@
 use std::io::Write;
 
 use vas_client::recording::{
-    FORMAT, InputSample, Recording, RecordingError, RecordingHeader, RecordingWriter, VERSION,
+    FORMAT, InputSample, RecordedSample, Recording, RecordingError, RecordingHeader,
+    RecordingWriter, VERSION,
 };
 use vas_protocol::{
     FLEX_COUNT, GloveSample, HandJointsSample, HandSide, JOINT_ORIENTATION_VALID,
@@ -103,6 +104,22 @@ fn every_number_reads_back_exactly_as_written() {
         .map(|s| s.input)
         .collect();
     assert_eq!(read, written);
+}
+
+#[test]
+fn a_replay_stamps_samples_at_their_recorded_times() {
+    let sample = RecordedSample {
+        time: 0.25,
+        input: glove(3, 77),
+    };
+    let sent = sample.stamped(1_000);
+    assert_eq!(sent.timestamp_ns(), 250_001_000);
+    assert_eq!(sent.seq(), 3);
+    let recording = Recording {
+        header: RecordingHeader::new("s", ""),
+        samples: vec![sample],
+    };
+    assert_eq!(recording.duration_ns(), 250_000_000);
 }
 
 #[test]

@@ -254,8 +254,8 @@ impl GraspingHand {
             .map(|h| (h.part, self.visible.root * h.hand_to_part))
     }
 
-    /// Lets go of the held part now, whatever the analysis says (the other hand took it); the
-    /// release event, `None` when nothing is held. As after any release, the part is not grasped
+    /// Lets go of the held part now, whatever the analysis says (the other hand took it, or the
+    /// hand's tracking was lost for too long); the release event, `None` when nothing is held. As after any release, the part is not grasped
     /// again while a segment still touches it.
     pub fn let_go(&mut self) -> Option<GraspEvent> {
         let mut events = Vec::new();

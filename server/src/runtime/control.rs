@@ -87,7 +87,10 @@ impl Session {
         let scene = Arc::new(scene);
         let restart = Restart::new(Arc::clone(&scene), 1)?;
         let session = Session {
-            inputs: Inputs::for_hands(scene.hands.iter().map(|hand| hand.model.as_ref())),
+            inputs: Inputs::for_hands(
+                scene.hands.iter().map(|hand| hand.model.as_ref()),
+                scene.params.tracking,
+            ),
             scene,
             epoch: 1,
             catalogue,
@@ -100,8 +103,10 @@ impl Session {
         let restart = Restart::new(Arc::clone(&scene), self.epoch + 1)
             .map_err(|error| (ControlStatus::SceneLoadFailed, error.to_string()))?;
         self.epoch += 1;
-        self.inputs
-            .restart(scene.hands.iter().map(|hand| hand.model.as_ref()));
+        self.inputs.restart(
+            scene.hands.iter().map(|hand| hand.model.as_ref()),
+            scene.params.tracking,
+        );
         self.scene = scene;
         Ok(restart.into_change())
     }

@@ -34,9 +34,24 @@ pub struct HandTarget {
     pub input: HandInput,
     /// The hand's latest hand-joints sample (zero before one came).
     pub joints: InputStamp,
-    /// Whether the input tracks the hand (false: its hand-joints samples say it is not tracked,
-    /// or it has no input yet; `input` holds the last tracked target).
+    /// Whether the input tracks the hand (false: its hand-joints samples say it is not tracked
+    /// or have stopped coming, or it has no input yet; `input` holds the last tracked target).
     pub tracked: bool,
+    /// The hand has been untracked for longer than the scene's grace period: it lets go of the
+    /// part it holds.
+    pub let_go: bool,
+}
+
+impl HandTarget {
+    /// A tracked hand's target, from a tracker and a glove.
+    pub fn tracking(input: HandInput) -> HandTarget {
+        HandTarget {
+            input,
+            joints: InputStamp::default(),
+            tracked: true,
+            let_go: false,
+        }
+    }
 }
 
 /// The I/O thread's hand targets, for the grasping loop.

@@ -51,13 +51,16 @@ pub enum JointsOutcome {
 /// The latest hand target that hand-joints samples gave.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointsTarget {
-    /// The latest accepted sample.
+    /// The latest accepted sample (its timestamp is the time it was taken).
     pub stamp: InputStamp,
     /// The hand root in tracking space and the flex values of the latest tracked sample;
     /// `None` until one came.
     pub pose: Option<(Isometry3<f64>, [f32; FLEX_COUNT])>,
     /// Whether the latest sample tracked the hand.
     pub tracked: bool,
+    /// When the latest tracked sample was taken (ns since the Unix epoch); `None` until one
+    /// came.
+    pub tracked_ns: Option<u64>,
 }
 
 /// A hand that hand-joints samples can drive: its retargeter and latest target.
@@ -112,6 +115,7 @@ impl JointsHand {
                     stamp,
                     pose: Some((fit.root, fit.flex.map(|v| v as f32))),
                     tracked: true,
+                    tracked_ns: Some(stamp.timestamp_ns),
                 });
                 Ok(JointsOutcome::Tracked)
             }
@@ -120,6 +124,7 @@ impl JointsHand {
                     stamp,
                     pose: self.target.and_then(|target| target.pose),
                     tracked: false,
+                    tracked_ns: self.target.and_then(|target| target.tracked_ns),
                 });
                 Ok(JointsOutcome::Untracked)
             }

@@ -8,6 +8,14 @@
 //! over for good rather than whichever stream spoke last, so that a tracker that only navigates
 //! the cart never snaps a joints-driven hand to its own hand pose. A second hand without joints
 //! yet stays parked at the cart's origin, untracked.
+//!
+//! Times are sample times: "now" is the newest timestamp among the accepted samples of every
+//! stream. A joints-driven hand is untracked when its latest sample says so, or when that sample
+//! is older than the scene's `params.tracking.lost_after`; it keeps its last tracked target, and
+//! once untracked for `params.tracking.grace` after its last tracked sample, it lets go of what
+//! it holds.
+
+use std::time::Duration;
 
 use nalgebra::Isometry3;
 use vas_protocol::{
@@ -16,9 +24,10 @@ use vas_protocol::{
 };
 
 use super::frames::{HandTarget, InputFrame, Stamps};
-use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection};
+use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection, JointsTarget};
 use crate::grasping::retarget::JointsError;
 use crate::grasping::{HandInput, HandModel};
+use crate::scene::TrackingParams;
 
 /// The latest validated targets and the input counters.
 #[derive(Debug, Default)]
@@ -30,16 +39,29 @@ pub struct Inputs {
     hands: Vec<Option<JointsHand>>,
     /// The latest accepted hand-joints sample, of any hand.
     joints: InputStamp,
+    /// The newest timestamp of an accepted sample, of any stream: now, in sample time.
+    now_ns: u64,
+    tracking: TrackingParams,
     stats: InputStats,
 }
 
 impl Inputs {
-    /// The input state of a scene with the hand `models` (in the scene's order).
-    pub fn for_hands<'a>(models: impl IntoIterator<Item = &'a HandModel>) -> Inputs {
+    /// The input state of a scene with the hand `models` (in the scene's order) and the
+    /// `tracking` parameters.
+    pub fn for_hands<'a>(
+        models: impl IntoIterator<Item = &'a HandModel>,
+        tracking: TrackingParams,
+    ) -> Inputs {
         Inputs {
             hands: models.into_iter().map(JointsHand::new).collect(),
+            tracking,
             ..Inputs::default()
         }
+    }
+
+    /// Moves now on to `timestamp_ns`, the time an accepted sample was taken.
+    fn taken_at(&mut self, timestamp_ns: u64) {
+        self.now_ns = self.now_ns.max(timestamp_ns);
     }
 
     /// Input counters since the server started.
@@ -54,6 +76,7 @@ impl Inputs {
             Ok(target) => {
                 self.stats.tracker_accepted += 1;
                 self.tracker = Some(target);
+                self.taken_at(sample.timestamp_ns);
                 Ok(())
             }
             Err(rejection) => {
@@ -82,6 +105,7 @@ impl Inputs {
                     self.stats.glove_values_clamped += u64::from(target.clamped_count());
                 }
                 self.glove = Some(target);
+                self.taken_at(sample.timestamp_ns);
                 Ok(target.clamped)
             }
             Err(rejection) => {
@@ -105,6 +129,7 @@ impl Inputs {
         };
         if outcome.is_ok() {
             self.joints = sample.stamp();
+            self.taken_at(sample.timestamp_ns);
         }
         let stats = &mut self.stats;
         let counter = match &outcome {
@@ -139,17 +164,24 @@ impl Inputs {
                     let joints = hand.as_ref().and_then(JointsHand::target);
                     let stamp = joints.map_or_else(InputStamp::default, |target| target.stamp);
                     match joints.and_then(|target| target.pose.map(|pose| (target, pose))) {
-                        Some((target, (tracker, flex))) => HandTarget {
-                            input: HandInput {
-                                cart,
-                                tracker,
-                                flex,
-                            },
-                            joints: stamp,
-                            tracked: target.tracked,
-                        },
+                        Some((target, (tracker, flex))) => {
+                            let (tracked, let_go) = self.tracking_of(target);
+                            HandTarget {
+                                input: HandInput {
+                                    cart,
+                                    tracker,
+                                    flex,
+                                },
+                                joints: stamp,
+                                tracked,
+                                let_go,
+                            }
+                        }
+                        // Until its first tracked joints, the first hand is the glove's; a
+                        // hand whose joints so far all said "not tracked" is not tracked.
                         None if index == 0 => HandTarget {
                             joints: stamp,
+                            tracked: joints.is_none(),
                             ..self.glove_driven(cart)
                         },
                         None => HandTarget {
@@ -160,6 +192,7 @@ impl Inputs {
                             },
                             joints: stamp,
                             tracked: false,
+                            let_go: false,
                         },
                     }
                 })
@@ -177,23 +210,36 @@ impl Inputs {
 
     /// The hand as tracker and glove drive it, on `cart`.
     fn glove_driven(&self, cart: Isometry3<f64>) -> HandTarget {
-        HandTarget {
-            input: HandInput {
-                cart,
-                tracker: (self.tracker).map_or_else(Isometry3::identity, |target| target.hand),
-                flex: self.glove.map_or([0.0; FLEX_COUNT], |target| target.flex),
-            },
-            joints: InputStamp::default(),
-            tracked: true,
-        }
+        HandTarget::tracking(HandInput {
+            cart,
+            tracker: (self.tracker).map_or_else(Isometry3::identity, |target| target.hand),
+            flex: self.glove.map_or([0.0; FLEX_COUNT], |target| target.flex),
+        })
     }
 
-    /// Forgets the targets (a reset, or another scene) and takes the hand `models`; the
-    /// counters go on.
-    pub fn restart<'a>(&mut self, models: impl IntoIterator<Item = &'a HandModel>) {
+    /// Whether a joints-driven hand with `target` is tracked now, and whether it has been
+    /// untracked long enough to let go.
+    fn tracking_of(&self, target: &JointsTarget) -> (bool, bool) {
+        let seconds = |ns: u64| Duration::from_nanos(self.now_ns.saturating_sub(ns)).as_secs_f64();
+        let tracked =
+            target.tracked && seconds(target.stamp.timestamp_ns) <= self.tracking.lost_after;
+        let let_go = !tracked
+            && target
+                .tracked_ns
+                .is_none_or(|ns| seconds(ns) >= self.tracking.grace);
+        (tracked, let_go)
+    }
+
+    /// Forgets the targets (a reset, or another scene) and takes the hand `models` and the
+    /// `tracking` parameters; the counters go on.
+    pub fn restart<'a>(
+        &mut self,
+        models: impl IntoIterator<Item = &'a HandModel>,
+        tracking: TrackingParams,
+    ) {
         *self = Inputs {
             stats: self.stats,
-            ..Inputs::for_hands(models)
+            ..Inputs::for_hands(models, tracking)
         };
     }
 }
@@ -348,7 +394,7 @@ mod tests {
         inputs
             .apply_tracker(&tracker(8, at(1.0, 2.0, 3.0), WirePose::IDENTITY))
             .expect("valid");
-        inputs.restart([]);
+        inputs.restart([], TrackingParams::default());
         let frame = inputs.frame();
         assert_eq!(frame.stamps, Stamps::default());
         assert_eq!(frame.hands[0].input.tracker, Isometry3::identity());
@@ -363,7 +409,7 @@ mod tests {
     #[test]
     fn hand_joints_drive_the_hand_and_the_tracker_keeps_the_cart() {
         let model = right_hand();
-        let mut inputs = Inputs::for_hands([&model]);
+        let mut inputs = Inputs::for_hands([&model], TrackingParams::default());
         assert_eq!(
             inputs.apply_hand_joints(&pinch(1)),
             Ok(JointsOutcome::Tracked)
@@ -399,7 +445,7 @@ mod tests {
 
     #[test]
     fn impossible_hand_joints_are_rejected_counted_and_keep_the_target() {
-        let mut inputs = Inputs::for_hands([&right_hand()]);
+        let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
         inputs.apply_hand_joints(&pinch(1)).expect("a hand");
         let before = inputs.frame();
         let at = |joint: Joint| joint.index();
@@ -465,7 +511,14 @@ mod tests {
 
     #[test]
     fn an_untracked_hand_keeps_its_target_and_says_so() {
-        let mut inputs = Inputs::for_hands([&right_hand()]);
+        let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+        let mut never = pinch(1);
+        never.joints.iter_mut().for_each(|joint| joint.flags = 0);
+        assert_eq!(
+            inputs.apply_hand_joints(&never),
+            Ok(JointsOutcome::Untracked)
+        );
+        assert!(!inputs.frame().hands[0].tracked, "never tracked yet");
         inputs.apply_hand_joints(&pinch(1)).expect("a hand");
         let tracked = inputs.frame();
         let mut lost = pinch(2);
@@ -481,7 +534,7 @@ mod tests {
         assert_eq!(frame.stamps.joints.seq, 2);
         assert_eq!(frame.hands[0].input, tracked.hands[0].input);
         let stats = inputs.stats();
-        assert_eq!((stats.joints_untracked, stats.rejected()), (1, 0));
+        assert_eq!((stats.joints_untracked, stats.rejected()), (2, 0));
         // Tracked again.
         inputs.apply_hand_joints(&pinch(3)).expect("a hand");
         assert!(inputs.frame().hands[0].tracked);
@@ -490,9 +543,9 @@ mod tests {
     #[test]
     fn a_restart_forgets_the_joints_and_keeps_the_counters() {
         let model = right_hand();
-        let mut inputs = Inputs::for_hands([&model]);
+        let mut inputs = Inputs::for_hands([&model], TrackingParams::default());
         inputs.apply_hand_joints(&pinch(1)).expect("a hand");
-        inputs.restart([&model]);
+        inputs.restart([&model], TrackingParams::default());
         let frame = inputs.frame();
         assert_eq!(frame.stamps, Stamps::default());
         assert_eq!(frame.hands[0].input.tracker, Isometry3::identity());
@@ -503,7 +556,7 @@ mod tests {
     fn two_hands_take_the_glove_and_their_own_joints() {
         let right = right_hand();
         let left = right.mirrored();
-        let mut inputs = Inputs::for_hands([&right, &left]);
+        let mut inputs = Inputs::for_hands([&right, &left], TrackingParams::default());
         let glove = GloveSample {
             seq: 1,
             timestamp_ns: 1,
@@ -532,5 +585,55 @@ mod tests {
             Ok(JointsOutcome::Tracked)
         );
         assert_ne!(inputs.frame().hands[0].input.flex, [0.2; FLEX_COUNT]);
+    }
+
+    #[test]
+    fn a_joints_hand_untracked_or_silent_is_lost_and_lets_go_after_the_grace() {
+        let tracking = TrackingParams {
+            lost_after: 0.1,
+            grace: 0.5,
+        };
+        let mut inputs = Inputs::for_hands([&right_hand()], tracking);
+        const MS: u64 = 1_000_000;
+        let joints = |seq: u64, ms: u64, tracked: bool| {
+            let mut sample = pinch(seq);
+            sample.timestamp_ns = ms * MS;
+            if !tracked {
+                sample.joints.iter_mut().for_each(|joint| joint.flags = 0);
+            }
+            sample
+        };
+        let state = |inputs: &Inputs| {
+            let hand = inputs.frame().hands[0];
+            (hand.tracked, hand.let_go)
+        };
+        inputs
+            .apply_hand_joints(&joints(1, 0, true))
+            .expect("a hand");
+        assert_eq!(state(&inputs), (true, false));
+        let pose = inputs.frame().hands[0].input;
+        // Untracked samples: lost at once, letting go 0.5 s after the last tracked one.
+        for (seq, ms, let_go) in [(2, 200, false), (3, 499, false), (4, 500, true)] {
+            inputs
+                .apply_hand_joints(&joints(seq, ms, false))
+                .expect("untracked");
+            assert_eq!(state(&inputs), (false, let_go), "at {ms} ms");
+            assert_eq!(inputs.frame().hands[0].input, pose, "the hand stays");
+        }
+        inputs
+            .apply_hand_joints(&joints(5, 600, true))
+            .expect("a hand");
+        assert_eq!(state(&inputs), (true, false), "tracked again");
+        // Silence: other samples move time on.
+        for (seq, ms, expected) in [
+            (1, 690, (true, false)),
+            (2, 750, (false, false)),
+            (3, 1100, (false, true)),
+        ] {
+            let mut sample = tracker(seq, at(0.0, 0.0, 0.0), WirePose::IDENTITY);
+            sample.timestamp_ns = ms * MS;
+            inputs.apply_tracker(&sample).expect("valid");
+            assert_eq!(state(&inputs), expected, "at {ms} ms");
+        }
     }
 }

@@ -26,16 +26,19 @@
 //! other part where it was when the grasp began. The hands are the user's own and are not tested
 //! against each other.
 //!
+//! A hand whose tracking is lost keeps what it holds (its target stays where tracking left it)
+//! until its target says to let go; then it releases the part where the part is.
+//!
 //! This is plain state, no threads and no ports: the runtime's loops drive it.
 
 use std::sync::Arc;
 
 use nalgebra::Isometry3;
 
-use super::frames::ContactAt;
+use super::frames::{ContactAt, HandTarget};
 use crate::collision::DopTree;
 use crate::grasping::{
-    GraspEvent, GraspingHand, HandFrame, HandInput, Obstacle as HandObstacle, PartGeometry, PartId,
+    GraspEvent, GraspingHand, HandFrame, Obstacle as HandObstacle, PartGeometry, PartId,
 };
 use crate::scene::Part;
 use crate::sliding::force::{ForceModel, Wrench};
@@ -83,9 +86,11 @@ impl GraspStage {
         }
     }
 
-    /// Steps each hand towards its input (`inputs` in the hands' order) against every part at
-    /// its visible pose; a hand that grasps the part another holds takes it over.
-    pub fn step(&mut self, inputs: &[HandInput]) -> Vec<SteppedHand> {
+    /// Steps each hand towards its target (`targets` in the hands' order) against every part at
+    /// its visible pose: a hand whose target says to let go (its tracking lost beyond the grace
+    /// period) first releases what it holds, and a hand that grasps the part another holds takes
+    /// it over.
+    pub fn step(&mut self, targets: &[HandTarget]) -> Vec<SteppedHand> {
         let obstacles: Vec<HandObstacle> = self
             .parts
             .iter()
@@ -100,10 +105,15 @@ impl GraspStage {
         let mut stepped: Vec<SteppedHand> = self
             .hands
             .iter_mut()
-            .zip(inputs)
-            .map(|(hand, input)| SteppedHand {
-                frame: hand.step(input, &obstacles),
-                handed_over: Vec::new(),
+            .zip(targets)
+            .map(|(hand, target)| {
+                let released = target.let_go.then(|| hand.let_go()).flatten();
+                let mut frame = hand.step(&target.input, &obstacles);
+                frame.events.splice(0..0, released);
+                SteppedHand {
+                    frame,
+                    handed_over: Vec::new(),
+                }
             })
             .collect();
         for taker in 0..stepped.len() {
@@ -447,12 +457,12 @@ impl Interaction {
         self.slide.slide_machine(hand)
     }
 
-    /// Processes one input sample (`inputs`: each hand's, in the hands' order): steps the
+    /// Processes one input sample (`targets`: each hand's, in the hands' order): steps the
     /// hands, hands grasped parts over to sliding and back, and slides each held part one frame
     /// towards where its hand holds it.
-    pub fn step(&mut self, inputs: &[HandInput]) -> Vec<InteractionFrame> {
+    pub fn step(&mut self, targets: &[HandTarget]) -> Vec<InteractionFrame> {
         self.grasp.set_part_poses(self.slide.part_poses());
-        let stepped = self.grasp.step(inputs);
+        let stepped = self.grasp.step(targets);
         let frames: Vec<&HandFrame> = stepped.iter().map(|hand| &hand.frame).collect();
         let held = self.slide.apply(&frames);
         stepped
@@ -590,7 +600,9 @@ mod tests {
 
         fn play(&mut self, keys: &[Keyframe]) {
             for key in sample(keys, RATE) {
-                let frame = self.interaction.step(&[key.input()]).remove(0);
+                let frame = (self.interaction)
+                    .step(&[HandTarget::tracking(key.input())])
+                    .remove(0);
                 self.handle_poses
                     .push(self.interaction.part_pose(HANDLE).expect("the handle"));
                 self.frames.push(frame);
@@ -836,7 +848,10 @@ mod tests {
         let mut interaction = Interaction::new(hands, &parts, SlideParams::default(), 1.0 / RATE);
         let mut events = Vec::new();
         for (frame, (right, left)) in right.iter().zip(&left).enumerate() {
-            let stepped = interaction.step(&[right.input(), left.input()]);
+            let stepped = interaction.step(&[
+                HandTarget::tracking(right.input()),
+                HandTarget::tracking(left.input()),
+            ]);
             for (hand, stepped) in stepped.iter().enumerate() {
                 events.extend(stepped.hand.events.iter().map(|event| {
                     let kind = match *event {

@@ -312,8 +312,7 @@ impl GraspingLoop {
                 if let Some(poses) = self.feedback.read(self.epoch) {
                     stage.set_part_poses(&poses);
                 }
-                let inputs: Vec<HandInput> = input.hands.iter().map(|hand| hand.input).collect();
-                stage.step(&inputs)
+                stage.step(&input.hands)
             }
             None => Vec::new(),
         }
@@ -664,7 +663,7 @@ mod tests {
         let expected: Vec<(Isometry3<f64>, Isometry3<f64>)> = inputs
             .iter()
             .map(|input| {
-                let frame = offline.step(&[*input]).remove(0);
+                let frame = offline.step(&[HandTarget::tracking(*input)]).remove(0);
                 (
                     frame.hand.pose.root,
                     offline.part_poses().next().expect("a part"),
@@ -690,11 +689,7 @@ mod tests {
                     glove: stamp,
                     joints: InputStamp::default(),
                 },
-                hands: vec![HandTarget {
-                    input: *input,
-                    joints: InputStamp::default(),
-                    tracked: true,
-                }],
+                hands: vec![HandTarget::tracking(*input)],
             }));
             let frame = verified_out
                 .recv_timeout(Duration::from_secs(60))

@@ -13,6 +13,7 @@
 //! [params]                             # all optional, with defaults
 //! dop_orientations = 24
 //! sliding = { metaphor = "rubber-band", contact_tolerance = 1e-4 }
+//! tracking = { lost_after = 0.1, grace = 0.5 }   # seconds of sample time, for hand joints
 //!
 //! [rates]                              # optional, hertz
 //! publish_hz = 60
@@ -72,7 +73,7 @@ use crate::geometry::{
 };
 use crate::grasping::{HandModel, PartGeometry};
 use params::Problem;
-pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates};
+pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates, TrackingParams};
 
 /// How far from 1 a rotation quaternion's norm may be (relative), as a config writes it with a
 /// limited number of digits.
@@ -570,7 +571,8 @@ impl Scene {
             s,
             "params: {}-DOPs; sliding {} (contact tolerance {contact_tolerance}, lift {}, \
              {} iterations, {} stall cycles, cluster angle {} rad, {} slide-in units); \
-             clasp (flex tolerance {} rad, root tolerance {} m, {} steps, max motion {} m)",
+             clasp (flex tolerance {} rad, root tolerance {} m, {} steps, max motion {} m); \
+             tracking (lost after {} s, grace {} s)",
             p.dop_orientations,
             sl.metaphor,
             sl.lift,
@@ -581,7 +583,9 @@ impl Scene {
             cl.flex_tolerance,
             cl.root_tolerance,
             cl.max_steps,
-            cl.max_motion
+            cl.max_motion,
+            p.tracking.lost_after,
+            p.tracking.grace
         );
         let r = &self.rates;
         let _ = writeln!(

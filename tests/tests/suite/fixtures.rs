@@ -132,7 +132,29 @@ fn captured_relaxed_approach() {
 
 #[test]
 fn two_hand_handover() {
+    check(&EXPECTED[9]);
+}
+
+#[test]
+fn captured_tracking_loss() {
     check(&EXPECTED[8]);
+}
+
+/// The tracking-loss recording keeps the pin through the short loss and lets go of it only the
+/// grace period (the scene's default) into the long one.
+#[test]
+fn a_hand_lets_go_only_once_its_tracking_is_lost_longer_than_the_grace() {
+    use vas_tests::captured::{LONG_LOSS_FROM_S, RATE_HZ};
+    let (scene, run) = replay(&EXPECTED[8]);
+    let grace = scene.params.tracking.grace;
+    let release = (run.events.iter())
+        .find(|event| event.kind == vas_protocol::EventKind::Release)
+        .expect("released");
+    let released_at = release.frame as f64 / RATE_HZ;
+    assert!(
+        (released_at - (LONG_LOSS_FROM_S + grace)).abs() <= 1.5 / RATE_HZ,
+        "released at {released_at} s, not {grace} s into the loss at {LONG_LOSS_FROM_S} s"
+    );
 }
 
 #[test]
@@ -186,9 +208,8 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
     let push = &EXPECTED[3];
     let mut scene = Scene::load(&push.scene_path()).expect("loads");
     let recording = Recording::load(&push.fixture_path()).expect("loads");
-    let models = scene.hands.iter().map(|hand| hand.model.as_ref());
-    let (inputs, _) = offline::hand_inputs(models, recording.samples.iter().map(|s| s.input));
-    scene.parts[0].pose.translation.vector = inputs[0][0].tracker.translation.vector;
+    let (targets, _) = offline::hand_targets(&scene, recording.samples.iter().map(|s| s.input));
+    scene.parts[0].pose.translation.vector = targets[0][0].input.tracker.translation.vector;
     let run = offline::replay(&scene, &recording).expect("replays");
     assert!(
         run.penetrations

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Isometry3;
-use vas_client::recording::Recording;
+use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Frame};
 use vas_protocol::{EventKind, GraspType, HandFrame, HandSide, wall_clock_ns};
 use vas_server::grasping::{HandModel, Side};
@@ -72,8 +72,9 @@ fn replay(
         held: BTreeMap::new(),
         hands: BTreeMap::new(),
     };
+    let start_ns = wall_clock_ns();
     for (index, recorded) in recording.samples.iter().enumerate() {
-        let input = recorded.input.with_timestamp(wall_clock_ns());
+        let input = recorded.stamped(start_ns);
         client.send_input(&input).expect("send");
         let deadline = Instant::now() + PATIENCE;
         let mut answered = None;
@@ -215,7 +216,8 @@ impl Seen {
     }
 }
 
-fn check(scenario: &Scenario) {
+/// Replays `scenario` twice and checks it; returns what the first replay published.
+fn check(scenario: &Scenario) -> Replay {
     let name = scenario.motion;
     let scene = Arc::new(Scene::load(&scenario.scene_path()).expect("the scene loads"));
     let recording = Recording::load(&scenario.fixture_path()).expect("the fixture loads");
@@ -290,6 +292,7 @@ fn check(scenario: &Scenario) {
         recording.samples.len(),
         first.events.len()
     );
+    first
 }
 
 /// A hand model's side as the wire codes it.
@@ -345,4 +348,24 @@ fn captured_relaxed_approach() {
 #[test]
 fn two_hand_handover() {
     check(scenario("two_hand_handover"));
+}
+
+/// The hand frames say the hand is untracked exactly while its samples do, and the pin is held
+/// through the short loss and let go in the long one.
+#[test]
+fn captured_tracking_loss() {
+    let scenario = scenario("captured_tracking_loss");
+    let replay = check(scenario);
+    let recording = Recording::load(&scenario.fixture_path()).expect("the fixture loads");
+    let lost: Vec<bool> = (recording.samples.iter())
+        .map(|recorded| match recorded.input {
+            InputSample::HandJoints(sample) => sample.joints.iter().all(|joint| joint.flags == 0),
+            _ => false,
+        })
+        .collect();
+    let untracked: Vec<bool> = (replay.answers.iter())
+        .map(|hands| hands[0].tracked == 0)
+        .collect();
+    assert_eq!(untracked, lost);
+    assert!(lost.iter().filter(|&&lost| lost).count() > 100);
 }
