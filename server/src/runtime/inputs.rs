@@ -9,18 +9,20 @@
 //! the cart never snaps a joints-driven hand to its own hand pose. A second hand without joints
 //! yet stays parked at the cart's origin, untracked.
 //!
-//! Times are sample times: "now" is the newest timestamp among the accepted samples of every
-//! stream. A joints-driven hand is untracked when its latest sample says so, or when that sample
-//! is older than the scene's `params.tracking.lost_after`; it keeps its last tracked target, and
+//! A joints-driven hand is untracked when its latest sample says so, or when that sample is
+//! older than the scene's `params.tracking.lost_after`; it keeps its last tracked target, and
 //! once untracked for `params.tracking.grace` after its last tracked sample, it lets go of what
-//! it holds.
+//! it holds. The [`TrackingClock`] says what "now" and "older" mean: sample time in lockstep and
+//! offline, so that a replay gives the same outcome every time; the system clock in a
+//! free-running server, so that a hand whose samples simply stop (a headset taken off, a browser
+//! closed) is noticed while no other input comes ([`Inputs::tick`]).
 
 use std::time::Duration;
 
 use nalgebra::Isometry3;
 use vas_protocol::{
     FLEX_COUNT, GloveSample, GloveTarget, HandJointsSample, HandSide, InputRejection, InputStamp,
-    InputStats, TrackerSample, TrackerTarget,
+    InputStats, TrackerSample, TrackerTarget, wall_clock_ns,
 };
 
 use super::frames::{HandTarget, InputFrame, Stamps};
@@ -28,6 +30,18 @@ use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection, JointsTarge
 use crate::grasping::retarget::JointsError;
 use crate::grasping::{HandInput, HandModel};
 use crate::scene::TrackingParams;
+
+/// The clock that times a joints-driven hand's tracking.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TrackingClock {
+    /// The samples' own timestamps: now is the newest timestamp among the accepted samples of
+    /// every stream.
+    #[default]
+    SampleTime,
+    /// The system clock when a sample is taken in, moved on by [`Inputs::tick`] while none
+    /// comes.
+    Arrival,
+}
 
 /// The latest validated targets and the input counters.
 #[derive(Debug, Default)]
@@ -39,8 +53,10 @@ pub struct Inputs {
     hands: Vec<Option<JointsHand>>,
     /// The latest accepted hand-joints sample, of any hand.
     joints: InputStamp,
-    /// The newest timestamp of an accepted sample, of any stream: now, in sample time.
+    /// Now on `clock`: the newest time an accepted sample, of any stream, was taken in (or a
+    /// tick).
     now_ns: u64,
+    clock: TrackingClock,
     tracking: TrackingParams,
     stats: InputStats,
 }
@@ -59,9 +75,41 @@ impl Inputs {
         }
     }
 
-    /// Moves now on to `timestamp_ns`, the time an accepted sample was taken.
-    fn taken_at(&mut self, timestamp_ns: u64) {
-        self.now_ns = self.now_ns.max(timestamp_ns);
+    /// Times the hands' tracking by `clock` from now on (sample time until told).
+    pub fn set_clock(&mut self, clock: TrackingClock) {
+        self.clock = clock;
+    }
+
+    /// When a sample stamped `timestamp_ns` is taken in now, on the tracking clock.
+    fn time_of(&self, timestamp_ns: u64) -> u64 {
+        match self.clock {
+            TrackingClock::SampleTime => timestamp_ns,
+            TrackingClock::Arrival => wall_clock_ns(),
+        }
+    }
+
+    /// Moves now on to `at_ns`, when an accepted sample was taken in.
+    fn taken_at(&mut self, at_ns: u64) {
+        self.now_ns = self.now_ns.max(at_ns);
+    }
+
+    /// On the arrival clock, moves now on to `now_ns` (the system clock) while no sample comes;
+    /// whether that changed a hand's tracking (lost, or letting go), so that a frame must say
+    /// so. On sample time only samples move time on: always false.
+    pub fn tick(&mut self, now_ns: u64) -> bool {
+        if self.clock != TrackingClock::Arrival || now_ns <= self.now_ns {
+            return false;
+        }
+        let before = self.tracking_states();
+        self.now_ns = now_ns;
+        self.tracking_states() != before
+    }
+
+    /// Each joints-driven hand's tracking now: whether it is tracked and whether it lets go.
+    fn tracking_states(&self) -> Vec<Option<(bool, bool)>> {
+        (self.hands.iter().flatten())
+            .map(|hand| hand.target().map(|target| self.tracking_of(target)))
+            .collect()
     }
 
     /// Input counters since the server started.
@@ -76,7 +124,7 @@ impl Inputs {
             Ok(target) => {
                 self.stats.tracker_accepted += 1;
                 self.tracker = Some(target);
-                self.taken_at(sample.timestamp_ns);
+                self.taken_at(self.time_of(sample.timestamp_ns));
                 Ok(())
             }
             Err(rejection) => {
@@ -105,7 +153,7 @@ impl Inputs {
                     self.stats.glove_values_clamped += u64::from(target.clamped_count());
                 }
                 self.glove = Some(target);
-                self.taken_at(sample.timestamp_ns);
+                self.taken_at(self.time_of(sample.timestamp_ns));
                 Ok(target.clamped)
             }
             Err(rejection) => {
@@ -122,14 +170,15 @@ impl Inputs {
         sample: &HandJointsSample,
     ) -> Result<JointsOutcome, JointsRejection> {
         let side = HandSide::try_from(sample.side).ok();
+        let at_ns = self.time_of(sample.timestamp_ns);
         let hand = (self.hands.iter_mut().flatten()).find(|hand| Some(hand.side()) == side);
         let outcome = match hand {
-            Some(hand) => hand.apply(sample),
+            Some(hand) => hand.apply(sample, at_ns),
             None => Err(JointsRejection::NoSuchHand { side: sample.side }),
         };
         if outcome.is_ok() {
             self.joints = sample.stamp();
-            self.taken_at(sample.timestamp_ns);
+            self.taken_at(at_ns);
         }
         let stats = &mut self.stats;
         let counter = match &outcome {
@@ -221,8 +270,7 @@ impl Inputs {
     /// untracked long enough to let go.
     fn tracking_of(&self, target: &JointsTarget) -> (bool, bool) {
         let seconds = |ns: u64| Duration::from_nanos(self.now_ns.saturating_sub(ns)).as_secs_f64();
-        let tracked =
-            target.tracked && seconds(target.stamp.timestamp_ns) <= self.tracking.lost_after;
+        let tracked = target.tracked && seconds(target.at_ns) <= self.tracking.lost_after;
         let let_go = !tracked
             && target
                 .tracked_ns
@@ -231,7 +279,7 @@ impl Inputs {
     }
 
     /// Forgets the targets (a reset, or another scene) and takes the hand `models` and the
-    /// `tracking` parameters; the counters go on.
+    /// `tracking` parameters; the counters and the clock go on.
     pub fn restart<'a>(
         &mut self,
         models: impl IntoIterator<Item = &'a HandModel>,
@@ -239,6 +287,7 @@ impl Inputs {
     ) {
         *self = Inputs {
             stats: self.stats,
+            clock: self.clock,
             ..Inputs::for_hands(models, tracking)
         };
     }
@@ -635,5 +684,41 @@ mod tests {
             inputs.apply_tracker(&sample).expect("valid");
             assert_eq!(state(&inputs), expected, "at {ms} ms");
         }
+    }
+
+    #[test]
+    fn on_the_arrival_clock_a_silent_hand_is_lost_by_ticks_alone() {
+        const MS: u64 = 1_000_000;
+        let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+        inputs.set_clock(TrackingClock::Arrival);
+        let start = wall_clock_ns();
+        // Stamped long ago: on the arrival clock only when it came counts.
+        inputs.apply_hand_joints(&pinch(1)).expect("a hand");
+        let state = |inputs: &Inputs| {
+            let hand = inputs.frame().hands[0];
+            (hand.tracked, hand.let_go)
+        };
+        assert_eq!(state(&inputs), (true, false));
+        assert!(!inputs.tick(start + 50 * MS), "still tracked");
+        assert!(inputs.tick(start + 150 * MS), "lost");
+        assert_eq!(state(&inputs), (false, false));
+        assert!(!inputs.tick(start + 300 * MS), "within the grace");
+        assert!(inputs.tick(start + 600 * MS), "the grace is over");
+        assert_eq!(state(&inputs), (false, true));
+        assert!(!inputs.tick(start + 400 * MS), "time never goes back");
+        inputs.restart([&right_hand()], TrackingParams::default());
+        inputs.apply_hand_joints(&pinch(2)).expect("a hand");
+        assert!(
+            inputs.tick(wall_clock_ns() + 150 * MS),
+            "the clock outlives a restart"
+        );
+    }
+
+    #[test]
+    fn on_sample_time_ticks_change_nothing() {
+        let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+        inputs.apply_hand_joints(&pinch(1)).expect("a hand");
+        assert!(!inputs.tick(u64::MAX));
+        assert!(inputs.frame().hands[0].tracked);
     }
 }

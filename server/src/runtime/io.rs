@@ -25,6 +25,7 @@ use vas_protocol::{
 use super::control::{self, Session};
 use super::frames::{Change, InputFrame, LoopWork, Restart, Stamps, VerifiedFrame};
 use super::geometry::{ServedGeometry, wire_side};
+use super::inputs::TrackingClock;
 use super::loader::{Loaded, PendingRequest, SceneLoader};
 use super::loops::{Links, Loops};
 use super::ports::{Ports, Wakeups};
@@ -117,6 +118,14 @@ impl InteractionManager {
         (waker, internal): (Waker, WakeupReceiver),
         options: &RunOptions,
     ) -> Result<Self, RuntimeError> {
+        let mut session = session;
+        // Lockstep replays must give the same frames every time: their hands' tracking is timed
+        // by the samples. A free-running server serves a live user: by the system clock.
+        session.inputs.set_clock(if options.lockstep {
+            TrackingClock::SampleTime
+        } else {
+            TrackingClock::Arrival
+        });
         let geometry = ServedGeometry::of(start);
         let hand_sides = hand_sides(&session.scene);
         let (ports, wakeups) =
@@ -225,6 +234,7 @@ impl InteractionManager {
                 if loops.any_ended() {
                     return Err(RuntimeError::LoopEnded);
                 }
+                io.notice_silent_hands();
                 io.publish_parts(None);
                 io.log_failure(io.ports.update_connections());
                 io.log_stats_if_due();
@@ -264,6 +274,15 @@ impl Io {
             self.answer.awaited = Some((frame.stamps, Instant::now()));
         }
         self.inputs.send(work);
+    }
+
+    /// A frame for a hand whose samples stopped coming (free-running only): it says the hand is
+    /// untracked, and after the grace period lets go of what it holds.
+    fn notice_silent_hands(&mut self) {
+        if self.session.inputs.tick(wall_clock_ns()) {
+            let frame = self.session.inputs.frame();
+            self.submit(Work::Frame(frame));
+        }
     }
 
     /// Takes in the waiting samples of every input stream: each accepted one is a frame.
