@@ -130,6 +130,18 @@ pub struct RecordedSample {
     pub input: InputSample,
 }
 
+impl RecordedSample {
+    /// The sample as a replay that started at `start_ns` (ns since the Unix epoch) sends it:
+    /// stamped `start_ns` plus its time in the recording, so that the samples keep their
+    /// recorded spacing (a server counts sample times, for instance for a hand's tracking
+    /// grace).
+    pub fn stamped(&self, start_ns: u64) -> InputSample {
+        let offset_ns = (self.time * 1e9).round() as u64;
+        self.input
+            .with_timestamp(start_ns.saturating_add(offset_ns))
+    }
+}
+
 /// A recording that cannot be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
@@ -172,6 +184,13 @@ pub struct Recording {
 }
 
 impl Recording {
+    /// The time from the first sample to the last, in nanoseconds (0 without samples).
+    pub fn duration_ns(&self) -> u64 {
+        self.samples
+            .last()
+            .map_or(0, |last| (last.time * 1e9).round() as u64)
+    }
+
     /// Reads and checks a recording file: header format and version, one valid sample (every
     /// value finite) per line, times finite and non-decreasing. Blank lines are skipped.
     pub fn load(path: &Path) -> Result<Self, RecordingError> {

@@ -47,6 +47,9 @@ impl SceneWords {
         let what = match EventKind::try_from(event.kind) {
             Ok(EventKind::Grasp) => format!("grasp {part} ({})", grasp_name(event.grasp_type)),
             Ok(EventKind::Release) => format!("release {part}"),
+            Ok(EventKind::HandOver) => {
+                format!("hand over {part} from the {} hand", hand_name(event.hand))
+            }
             Ok(kind @ (EventKind::ContactBegin | EventKind::ContactEnd)) => {
                 let verb = kind.name().replace('_', " ");
                 format!("{verb} {part} – {}", self.part(event.other))
@@ -146,6 +149,12 @@ mod tests {
             timestamp_ns: 10,
         };
         assert_eq!(words.event(&release), "release peg at sample 12");
+        let mut hand_over = event(EventKind::HandOver, GraspType::None, 1, HAND_PART_ID);
+        hand_over.hand = HandSide::Left as u32;
+        assert_eq!(
+            words.event(&hand_over),
+            "hand over peg from the left hand at sample 44"
+        );
         assert_eq!(words.part(HAND_PART_ID), "hand");
         assert_eq!(words.part(5), "part 5");
         assert_eq!(

@@ -27,7 +27,7 @@ use vas_server::grasping::retarget::{Capture, Retargeter};
 use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
 use vas_server::runtime::inputs::Inputs;
-use vas_server::scene::Scene;
+use vas_server::scene::{Scene, TrackingParams};
 
 /// A mesh file's bytes, as `load_mesh` has them once read; the extension picks the parser.
 fn mesh_file(name: &str, bytes: &[u8]) {
@@ -134,7 +134,7 @@ fn scene_toml() {
         for pair in &scene.groups.parts_not_of_interest {
             assert!(pair[0] < pair[1] && pair[1] < scene.parts.len(), "{pair:?}");
         }
-        if let Some(hand) = &scene.hand {
+        for hand in &scene.hands {
             check_hand(&hand.model);
         }
         let _ = scene.summary();
@@ -185,7 +185,7 @@ fn tracker_samples() {
             if inputs.apply_tracker(&sample).is_err() {
                 continue;
             }
-            let input = inputs.frame().input;
+            let input = inputs.frame().hands[0].input;
             for pose in [input.cart, input.tracker, input.cart * input.tracker] {
                 assert!(is_finite(&pose), "{sample:?} gave {pose}");
                 assert!((pose.rotation.norm() - 1.0).abs() < 1e-9, "{sample:?}");
@@ -209,7 +209,7 @@ fn glove_samples() {
             if inputs.apply_glove(&sample).is_err() {
                 continue;
             }
-            let flex = inputs.frame().input.flex;
+            let flex = inputs.frame().hands[0].input.flex;
             for (value, (low, high)) in flex.iter().zip(FLEX_LIMITS_RAD) {
                 assert!((low..=high).contains(value), "{sample:?} gave {flex:?}");
             }
@@ -232,13 +232,13 @@ fn right_hand() -> &'static HandModel {
 #[test]
 fn hand_joints_samples() {
     bolero::check!().for_each(|bytes: &[u8]| {
-        let mut inputs = Inputs::for_hand(Some(right_hand()));
+        let mut inputs = Inputs::for_hands([right_hand()], TrackingParams::default());
         let samples = values_from_bytes::<HandJointsSample>(bytes);
         for sample in &samples {
             if inputs.apply_hand_joints(sample).is_err() {
                 continue;
             }
-            let input = inputs.frame().input;
+            let input = inputs.frame().hands[0].input;
             let root = input.cart * input.tracker;
             assert!(is_finite(&root), "{sample:?} gave {root}");
             assert!((root.rotation.norm() - 1.0).abs() < 1e-9, "{sample:?}");

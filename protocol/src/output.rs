@@ -298,6 +298,9 @@ wire_code_enum! {
         ContactBegin = 3,
         /// `part` and `other` stopped touching.
         ContactEnd = 4,
+        /// The hand let go of `part` because the other hand grasped it (the other hand's grasp
+        /// event comes in the same frame): a part is held by one hand at a time.
+        HandOver = 5,
     }
 }
 
@@ -327,6 +330,7 @@ impl EventKind {
             Self::Release => "release",
             Self::ContactBegin => "contact_begin",
             Self::ContactEnd => "contact_end",
+            Self::HandOver => "hand_over",
         }
     }
 }
@@ -354,8 +358,8 @@ pub struct SimEvent {
     pub part: u32,
     /// The other part of a contact, or [`HAND_PART_ID`].
     pub other: u32,
-    /// The hand the event is about (grasp, release, a contact with the hand) or whose held part
-    /// touched, a [`HandSide`] code.
+    /// The hand the event is about (grasp, release, hand-over, a contact with the hand) or whose
+    /// held part touched, a [`HandSide`] code.
     pub hand: u32,
     /// The hand segment of a contact with the hand, a [`HandSegment`] code; 0 otherwise.
     pub segment: u32,
@@ -385,4 +389,6 @@ pub struct ForceFrame {
     pub force: [f64; 3],
     /// Torque about the hand root in newton metres, world frame.
     pub torque: [f64; 3],
+    /// The hand whose held part pulls, a [`HandSide`] code.
+    pub hand: u32,
 }

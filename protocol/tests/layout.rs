@@ -36,7 +36,7 @@ fn output_types_keep_their_layout() {
     assert_layout::<HandFrame>(1128, 8);
     assert_layout::<SimEvent>(136, 8);
     assert_layout::<GeometryHeader>(24, 8);
-    assert_layout::<ForceFrame>(112, 8);
+    assert_layout::<ForceFrame>(120, 8);
     assert_eq!(offset_of!(PartsFrameHeader, part_count), 64);
     assert_eq!(offset_of!(PartState, position), 8);
     assert_eq!(offset_of!(HandFrame, root), 64);
@@ -45,6 +45,7 @@ fn output_types_keep_their_layout() {
     assert_eq!(offset_of!(HandFrame, segments), 232);
     assert_eq!(offset_of!(SimEvent, point), 88);
     assert_eq!(offset_of!(ForceFrame, torque), 88);
+    assert_eq!(offset_of!(ForceFrame, hand), 112);
 }
 
 #[test]

@@ -1,5 +1,6 @@
-//! The fixture generator: each recorded scenario's scripted motion, sampled at a fixed rate into
-//! tracker and glove samples and written as a recording.
+//! The fixture generator: each recorded scenario's motion written as a recording. A scripted
+//! motion is sampled at a fixed rate into tracker and glove samples, as below; the captured hands
+//! make hand-joints samples ([`crate::captured`]).
 //!
 //! Per tick of [`RATE_HZ`] one tracker sample and then one glove sample, both with the tick's
 //! number as their sequence number (from 1); the tracker is stamped at the tick, the glove half a
@@ -14,7 +15,7 @@ use vas_protocol::{GloveSample, TrackerSample};
 use vas_server::scene::Scene;
 use vas_server::scene::script::{Keyframe, sample};
 
-use crate::scenarios::Scenario;
+use crate::scenarios::{Motion, Scenario};
 
 /// Ticks per second of the recordings: one tracker and one glove sample each.
 pub const RATE_HZ: f64 = 100.0;
@@ -52,12 +53,22 @@ pub fn input_samples(keys: &[Keyframe]) -> Vec<InputSample> {
 /// returns the file written.
 pub fn write_fixture(scenario: &Scenario, configs: &Path, out: &Path) -> anyhow::Result<PathBuf> {
     let scene = Scene::load(&configs.join(scenario.scene))?;
-    let keys = scenario.script.keyframes(&scene)?;
+    let (samples, description) = match scenario.motion {
+        Motion::Script(script) => (
+            input_samples(&script.keyframes(&scene)?),
+            script.description(),
+        ),
+        Motion::Captured(captured) => (captured.samples(&scene)?, captured.description()),
+        Motion::HandOver => (
+            crate::hand_over::samples(&scene)?,
+            crate::hand_over::DESCRIPTION,
+        ),
+    };
     let path = out.join(scenario.fixture_file());
-    let header = RecordingHeader::new(scene.name, scenario.script.description());
+    let header = RecordingHeader::new(scene.name, description);
     let mut writer = RecordingWriter::create(&path, &header)?;
-    for input in input_samples(&keys) {
-        writer.write(&input)?;
+    for input in &samples {
+        writer.write(input)?;
     }
     Ok(path)
 }

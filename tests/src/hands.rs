@@ -2,8 +2,9 @@
 
 use std::path::PathBuf;
 
+use nalgebra::Quaternion;
 use vas_server::grasping::Side;
-use vas_server::grasping::retarget::{Capture, HandJoints};
+use vas_server::grasping::retarget::{Capture, CaptureError, HandJoints, JointPose};
 
 /// The captured pinch: thumb and index tips together.
 pub const PINCH: &str = "webxr_pinch.json";
@@ -18,8 +19,23 @@ pub fn capture_path(name: &str) -> PathBuf {
 
 /// The capture `name` as a hand of `side` (the captures are left hands; a right hand is their
 /// mirror image).
-pub fn captured(name: &str, side: Side) -> HandJoints {
-    Capture::read(&capture_path(name))
-        .unwrap_or_else(|error| panic!("{error}"))
-        .joints_of(side)
+pub fn captured(name: &str, side: Side) -> Result<HandJoints, CaptureError> {
+    Ok(Capture::read(&capture_path(name))?.joints_of(side))
+}
+
+/// The joints with positions rounded to a micrometre, quaternions to a millionth and radii to
+/// a tenth of a micrometre: far below what hand tracking resolves, and recordings of them stay
+/// small.
+pub fn rounded(joints: &HandJoints) -> HandJoints {
+    // Divided by an exact power of ten, a rounded value prints as its few decimals.
+    let round = |value: f64, per_unit: f64| (value * per_unit).round() / per_unit;
+    HandJoints {
+        side: joints.side,
+        joints: joints.joints.map(|joint| JointPose {
+            position: joint.position.map(|c| round(c, 1e6)),
+            orientation: Quaternion::from(joint.orientation.coords.map(|c| round(c, 1e6))),
+            radius: round(joint.radius, 1e7),
+            flags: joint.flags,
+        }),
+    }
 }

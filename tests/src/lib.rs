@@ -324,7 +324,9 @@ pub fn fixtures_dir() -> PathBuf {
 }
 
 pub mod browser;
+pub mod captured;
 pub mod fixtures;
+pub mod hand_over;
 pub mod hands;
 pub mod http;
 pub mod offline;

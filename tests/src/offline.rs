@@ -1,13 +1,14 @@
-//! Offline replay: a recording stepped through the server's per-sample model of one hand among a
+//! Offline replay: a recording stepped through the server's per-sample model of the hands among a
 //! scene's parts ([`Interaction`]), without threads or IPC, checked frame by frame for
 //! penetrations by parry, an oracle independent of the DOP-trees.
 //!
-//! The inputs reach the interaction as the server hands them over (through its own input state):
-//! every valid sample updates the latest tracker, glove or hand-joints target, and after each
-//! sample the interaction steps once with the latest targets: the tracker's cart, and the hand's
-//! root and flex values from its joints once it has had a tracked hand-joints sample, else from
-//! the tracker and the glove (a flat hand before the first glove sample). The hand starts parked
-//! at the first placed pose with a flat hand; invalid samples are counted and skipped.
+//! The inputs reach the interaction as the server hands them over (through its own input state,
+//! [`Inputs`]): every valid sample updates the latest tracker, glove or hand-joints target, and
+//! after each sample the interaction steps once with each hand's latest target: the tracker's
+//! cart, and the hand's root and flex values from its joints once it has had a tracked
+//! hand-joints sample, else (the first hand) from the tracker and the glove (a flat hand before
+//! the first glove sample). Each hand starts parked at its first target with a flat hand;
+//! invalid samples are counted and skipped.
 
 use std::sync::Arc;
 
@@ -17,8 +18,8 @@ use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh};
 use vas_client::recording::{InputSample, Recording};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
 use vas_server::collision::parry_mesh::{ORACLE_SCALE, millimetre_pose, millimetre_trimesh};
-use vas_server::grasping::{GraspEvent, GraspingHand, HandInput, HandModel, HandPose};
-use vas_server::runtime::frames::wire_grasp;
+use vas_server::grasping::{GraspEvent, GraspingHand, HandModel, HandPose};
+use vas_server::runtime::frames::{HandTarget, wire_grasp};
 use vas_server::runtime::inputs::Inputs;
 use vas_server::runtime::interaction::Interaction;
 use vas_server::runtime::verify::HandBodies;
@@ -42,12 +43,14 @@ pub enum OfflineError {
     Unplaced,
 }
 
-/// A grasp or release during the replay.
+/// A grasp, release or hand-over during the replay.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReplayEvent {
     /// The frame (input sample index, from 0) it happened in.
     pub frame: usize,
-    /// Grasp or release.
+    /// The hand, by its place in the scene's hands.
+    pub hand: usize,
+    /// Grasp, release or hand-over.
     pub kind: EventKind,
     /// The part's name.
     pub part: String,
@@ -83,15 +86,16 @@ impl OfflineRun {
     }
 }
 
-/// The hand input the server steps with after each sample: the server's own input state
-/// ([`Inputs`], for the scene's hand `model`) after each valid sample of `samples`, from the
-/// first one that places the hand (a tracker sample, or a hand-joints sample), and how many were
-/// refused.
-pub fn hand_inputs(
-    model: Option<&HandModel>,
+/// The hand targets the server steps with after each sample: each hand's target in the
+/// server's own input state ([`Inputs`], for `scene`'s hands and tracking parameters) after each
+/// valid sample of `samples`, from the first one that places a hand (a tracker sample, or a
+/// hand-joints sample), and how many were refused.
+pub fn hand_targets(
+    scene: &Scene,
     samples: impl IntoIterator<Item = InputSample>,
-) -> (Vec<HandInput>, usize) {
-    let mut state = Inputs::for_hand(model);
+) -> (Vec<Vec<HandTarget>>, usize) {
+    let models = scene.hands.iter().map(|hand| hand.model.as_ref());
+    let mut state = Inputs::for_hands(models, scene.params.tracking);
     let mut inputs = Vec::new();
     let mut rejected = 0;
     for sample in samples {
@@ -103,7 +107,7 @@ pub fn hand_inputs(
         let frame = state.frame();
         let placed = frame.stamps.tracker.seq != 0 || frame.stamps.joints.seq != 0;
         match (valid, placed) {
-            (true, true) => inputs.push(frame.input),
+            (true, true) => inputs.push(frame.hands),
             (true, false) => {}
             (false, _) => rejected += 1,
         }
@@ -111,12 +115,12 @@ pub fn hand_inputs(
     (inputs, rejected)
 }
 
-/// parry's copies of the parts and of the hand's segments, in millimetres: the independent
+/// parry's copies of the parts and of the hands' segments, in millimetres: the independent
 /// judge of penetrations, for offline runs and for the live server's frames.
 pub struct Oracle {
     parts: Vec<ParryTriMesh>,
-    segments: Vec<ConvexPolyhedron>,
-    model: Arc<HandModel>,
+    /// Per hand, its model and its segments.
+    hands: Vec<(Arc<HandModel>, Vec<ConvexPolyhedron>)>,
 }
 
 /// The visible hand of a frame, for the [`Oracle`].
@@ -131,30 +135,34 @@ pub struct VisibleHand {
 }
 
 impl Oracle {
-    /// The judge of `scene` with the hand's segments (`bodies`, as the server builds them).
-    pub fn new(scene: &Scene, bodies: &HandBodies) -> Oracle {
+    /// The judge of `scene` with its hands' segments (`bodies`, as the server builds them, in
+    /// the scene's order).
+    pub fn new(scene: &Scene, bodies: &[HandBodies]) -> Oracle {
         let parts = scene
             .parts
             .iter()
             .map(|p| millimetre_trimesh(&p.mesh))
             .collect();
-        let segments = bodies
-            .meshes
+        let hands = bodies
             .iter()
-            .map(|mesh| {
-                let points: Vec<_> = mesh
-                    .vertices()
+            .map(|bodies| {
+                let segments = bodies
+                    .meshes
                     .iter()
-                    .map(|v| (v * ORACLE_SCALE).cast::<f32>())
+                    .map(|mesh| {
+                        let points: Vec<_> = mesh
+                            .vertices()
+                            .iter()
+                            .map(|v| (v * ORACLE_SCALE).cast::<f32>())
+                            .collect();
+                        ConvexPolyhedron::from_convex_hull(&points)
+                            .expect("segment meshes are convex")
+                    })
                     .collect();
-                ConvexPolyhedron::from_convex_hull(&points).expect("segment meshes are convex")
+                (Arc::clone(&bodies.model), segments)
             })
             .collect();
-        Oracle {
-            parts,
-            segments,
-            model: Arc::clone(&bodies.model),
-        }
+        Oracle { parts, hands }
     }
 
     /// How deep two shapes that parry finds intersecting overlap (millimetres).
@@ -174,12 +182,13 @@ impl Oracle {
     }
 
     /// Every penetration of a frame: parts of interest to each other at their visible poses,
-    /// and the visible hand's segments against every part it does not hold.
+    /// and each visible hand's segments (`hands`, in the scene's order) against every part it
+    /// does not hold.
     pub fn penetrations(
         &self,
         scene: &Scene,
         part_poses: &[Isometry3<f64>],
-        hand: &VisibleHand,
+        hands: &[VisibleHand],
         frame: usize,
     ) -> Vec<String> {
         let poses: Vec<Isometry3<f32>> = part_poses.iter().map(millimetre_pose).collect();
@@ -199,21 +208,23 @@ impl Oracle {
                 }
             }
         }
-        let model = &self.model;
-        for (s, local) in model.segment_poses(&hand.flex).iter().enumerate() {
-            let segment_pose = millimetre_pose(&(hand.root * local));
-            for (p, part_pose) in poses.iter().enumerate() {
-                if Some(p) == hand.held {
-                    continue;
-                }
-                if let Some(depth) =
-                    Self::depth(&segment_pose, &self.segments[s], part_pose, &self.parts[p])
-                {
-                    found.push(format!(
-                        "frame {frame}: hand segment {} enters part {} by {depth:.4} mm",
-                        model.segments()[s].name,
-                        scene.parts[p].name
-                    ));
+        for ((model, segments), hand) in self.hands.iter().zip(hands) {
+            for (s, local) in model.segment_poses(&hand.flex).iter().enumerate() {
+                let segment_pose = millimetre_pose(&(hand.root * local));
+                for (p, part_pose) in poses.iter().enumerate() {
+                    if Some(p) == hand.held {
+                        continue;
+                    }
+                    if let Some(depth) =
+                        Self::depth(&segment_pose, &segments[s], part_pose, &self.parts[p])
+                    {
+                        found.push(format!(
+                            "frame {frame}: hand segment {} of {} enters part {} by {depth:.4} mm",
+                            model.segments()[s].name,
+                            model.name(),
+                            scene.parts[p].name
+                        ));
+                    }
                 }
             }
         }
@@ -223,37 +234,41 @@ impl Oracle {
 
 /// Replays `recording` in `scene` as described in the module documentation.
 pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, OfflineError> {
-    let model = scene.hand.as_ref().map(|hand| hand.model.as_ref());
-    let (inputs, rejected) = hand_inputs(model, recording.samples.iter().map(|s| s.input));
-    replay_inputs(scene, &inputs, rejected)
+    let (targets, rejected) = hand_targets(scene, recording.samples.iter().map(|s| s.input));
+    replay_targets(scene, &targets, rejected)
 }
 
-fn replay_inputs(
+fn replay_targets(
     scene: &Scene,
-    inputs: &[HandInput],
+    inputs: &[Vec<HandTarget>],
     rejected: usize,
 ) -> Result<OfflineRun, OfflineError> {
-    let model = Arc::clone(
-        &scene
-            .hand
-            .as_ref()
-            .ok_or_else(|| OfflineError::NoHand(scene.name.clone()))?
-            .model,
-    );
+    if scene.hands.is_empty() {
+        return Err(OfflineError::NoHand(scene.name.clone()));
+    }
     let first = inputs.first().ok_or(OfflineError::Unplaced)?;
     let params = scene.params.grasp();
-    let hand = GraspingHand::new(
-        Arc::clone(&model),
-        params,
-        HandPose {
-            root: first.cart * first.tracker,
-            flex: [0.0; FLEX_COUNT],
-        },
-    )
-    .map_err(|e| OfflineError::Hand(e.to_string()))?;
-    let oracle = Oracle::new(scene, &HandBodies::of(Arc::clone(&model), &hand));
+    let hands = (scene.hands.iter())
+        .zip(first)
+        .map(|(scene_hand, first)| {
+            GraspingHand::new(
+                Arc::clone(&scene_hand.model),
+                params,
+                HandPose {
+                    root: first.input.cart * first.input.tracker,
+                    flex: [0.0; FLEX_COUNT],
+                },
+            )
+            .map_err(|e| OfflineError::Hand(e.to_string()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let bodies: Vec<HandBodies> = (scene.hands.iter())
+        .zip(&hands)
+        .map(|(scene_hand, hand)| HandBodies::of(Arc::clone(&scene_hand.model), hand))
+        .collect();
+    let oracle = Oracle::new(scene, &bodies);
     let mut interaction = Interaction::new(
-        hand,
+        hands,
         &scene.parts,
         scene.params.sliding.clone(),
         1.0 / scene.rates.sliding_hz,
@@ -268,45 +283,58 @@ fn replay_inputs(
         penetrations: Vec::new(),
     };
     for (frame, input) in inputs.iter().enumerate() {
-        let step = interaction.step(input);
-        for event in &step.hand.events {
-            let (kind, part, grasp) = match *event {
-                GraspEvent::Grasp { part, grasp, .. } => {
-                    (EventKind::Grasp, part, wire_grasp(Some(grasp)))
+        let steps = interaction.step(input);
+        let mut touched: Vec<usize> = Vec::new();
+        let mut hand_overs = Vec::new();
+        for (hand, step) in steps.iter().enumerate() {
+            for event in &step.hand.events {
+                let (kind, part, grasp) = match *event {
+                    GraspEvent::Grasp { part, grasp, .. } => {
+                        (EventKind::Grasp, part, wire_grasp(Some(grasp)))
+                    }
+                    GraspEvent::Release { part, .. } if step.handed_over.contains(&part) => {
+                        (EventKind::HandOver, part, WireGrasp::None)
+                    }
+                    GraspEvent::Release { part, .. } => (EventKind::Release, part, WireGrasp::None),
+                };
+                let event = ReplayEvent {
+                    frame,
+                    hand,
+                    kind,
+                    part: scene.parts[part as usize].name.clone(),
+                    grasp,
+                };
+                // As the server publishes them: a hand-over after the grasp that caused it.
+                if kind == EventKind::HandOver {
+                    hand_overs.push(event);
+                } else {
+                    run.events.push(event);
                 }
-                GraspEvent::Release { part, .. } => (EventKind::Release, part, WireGrasp::None),
-            };
-            run.events.push(ReplayEvent {
-                frame,
-                kind,
-                part: scene.parts[part as usize].name.clone(),
-                grasp,
-            });
+            }
+            touched
+                .extend((step.hand.touching.iter().flatten()).map(|contact| contact.part as usize));
+            if let Some(held) = &step.held {
+                let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
+                run.max_held_back = run.max_held_back.max(back);
+            }
         }
-        let mut touched: Vec<usize> = step
-            .hand
-            .touching
-            .iter()
-            .flatten()
-            .map(|contact| contact.part as usize)
-            .collect();
+        run.events.append(&mut hand_overs);
         touched.sort_unstable();
         touched.dedup();
         for p in touched {
             run.touched_frames[p] += 1;
         }
-        if let Some(held) = &step.held {
-            let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
-            run.max_held_back = run.max_held_back.max(back);
-        }
         let poses: Vec<Isometry3<f64>> = interaction.part_poses().collect();
-        let hand = VisibleHand {
-            root: step.hand.pose.root,
-            flex: step.hand.pose.flex,
-            held: step.held.as_ref().map(|held| held.part as usize),
-        };
+        let hands: Vec<VisibleHand> = steps
+            .iter()
+            .map(|step| VisibleHand {
+                root: step.hand.pose.root,
+                flex: step.hand.pose.flex,
+                held: step.held.as_ref().map(|held| held.part as usize),
+            })
+            .collect();
         run.penetrations
-            .extend(oracle.penetrations(scene, &poses, &hand, frame));
+            .extend(oracle.penetrations(scene, &poses, &hands, frame));
     }
     run.frames = inputs.len();
     run.final_poses = interaction.part_poses().collect();

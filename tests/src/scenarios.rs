@@ -5,16 +5,21 @@
 //! (`vas_server::scene::script::RecordedScenario`); `tests/fixtures/README.md` lists the same
 //! table.
 
+use std::fmt;
 use std::path::PathBuf;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use vas_protocol::{EventKind, GraspType};
 use vas_server::scene::script::RecordedScenario;
 
-/// A grasp or release the replay must produce.
+use crate::captured::CapturedMotion;
+
+/// A grasp, release or hand-over the replay must produce.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ExpectedEvent {
-    /// Grasp or release.
+    /// The hand, by its place in the scene's hands.
+    pub hand: usize,
+    /// Grasp, release or hand-over.
     pub kind: EventKind,
     /// The part's name in the scene.
     pub part: &'static str,
@@ -63,11 +68,39 @@ impl ExpectedPose {
     }
 }
 
-/// A recorded scenario: its script, scene, fixture and expected outcome.
+/// Where a recorded scenario's samples come from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Motion {
+    /// A scripted tracker and glove trajectory.
+    Script(RecordedScenario),
+    /// The captured hands, as hand-joints samples.
+    Captured(CapturedMotion),
+    /// The two-handed hand-over: the right hand by tracker and glove, the left by hand joints.
+    HandOver,
+}
+
+impl Motion {
+    /// The name, also the fixture's file stem.
+    pub fn name(self) -> &'static str {
+        match self {
+            Motion::Script(script) => script.name(),
+            Motion::Captured(captured) => captured.name(),
+            Motion::HandOver => "two_hand_handover",
+        }
+    }
+}
+
+impl fmt::Display for Motion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A recorded scenario: its motion, scene, fixture and expected outcome.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Scenario {
-    /// The scripted motion; its name is the fixture's file stem.
-    pub script: RecordedScenario,
+    /// The motion; its name is the fixture's file stem.
+    pub motion: Motion,
     /// The scene file, in `configs/`.
     pub scene: &'static str,
     /// The grasp and release events, in order; no other grasp or release may happen.
@@ -82,7 +115,7 @@ pub struct Scenario {
 impl Scenario {
     /// The fixture's file name, in `tests/fixtures/`.
     pub fn fixture_file(&self) -> String {
-        format!("{}.jsonl", self.script.name())
+        format!("{}.jsonl", self.motion.name())
     }
 
     /// The fixture's path in this repository.
@@ -97,25 +130,26 @@ impl Scenario {
 }
 
 const fn grasp(part: &'static str, grasp: GraspType) -> ExpectedEvent {
+    by(0, EventKind::Grasp, part, grasp)
+}
+
+const fn release(part: &'static str) -> ExpectedEvent {
+    by(0, EventKind::Release, part, GraspType::None)
+}
+
+const fn by(hand: usize, kind: EventKind, part: &'static str, grasp: GraspType) -> ExpectedEvent {
     ExpectedEvent {
-        kind: EventKind::Grasp,
+        hand,
+        kind,
         part,
         grasp,
     }
 }
 
-const fn release(part: &'static str) -> ExpectedEvent {
-    ExpectedEvent {
-        kind: EventKind::Release,
-        part,
-        grasp: GraspType::None,
-    }
-}
-
 /// Every recorded scenario and what its replay must give.
-pub const EXPECTED: [Scenario; 6] = [
+pub const EXPECTED: [Scenario; 10] = [
     Scenario {
-        script: RecordedScenario::PegInsert,
+        motion: Motion::Script(RecordedScenario::PegInsert),
         scene: "peg_insert.toml",
         events: &[grasp("peg", GraspType::Power), release("peg")],
         // On the hole's axis, its lower end 3.5 cm below the block's top (z = 0.05), upright.
@@ -130,7 +164,7 @@ pub const EXPECTED: [Scenario; 6] = [
         min_held_back: 0.0005,
     },
     Scenario {
-        script: RecordedScenario::PipeThroughSheet,
+        motion: Motion::Script(RecordedScenario::PipeThroughSheet),
         scene: "pipe_through_open_sheet.toml",
         events: &[grasp("pipe", GraspType::Power), release("pipe")],
         // 11 cm along x: its leading end 6 cm past the sheet (x = 0), its middle 9 cm before it.
@@ -145,7 +179,7 @@ pub const EXPECTED: [Scenario; 6] = [
         min_held_back: 0.001,
     },
     Scenario {
-        script: RecordedScenario::PrecisionPinch,
+        motion: Motion::Script(RecordedScenario::PrecisionPinch),
         scene: "precision_pinch.toml",
         events: &[grasp("pin", GraspType::TipPinch), release("pin")],
         // Lifted 5 cm and drawn 2 cm towards the fingers (+y).
@@ -159,7 +193,7 @@ pub const EXPECTED: [Scenario; 6] = [
         min_held_back: 0.0,
     },
     Scenario {
-        script: RecordedScenario::Push,
+        motion: Motion::Script(RecordedScenario::Push),
         scene: "push.toml",
         events: &[],
         // Never grasped, so never moved.
@@ -173,7 +207,7 @@ pub const EXPECTED: [Scenario; 6] = [
         min_held_back: 0.0,
     },
     Scenario {
-        script: RecordedScenario::NavigateHolding,
+        motion: Motion::Script(RecordedScenario::NavigateHolding),
         scene: "navigate_holding.toml",
         events: &[grasp("handle", GraspType::Power), release("handle")],
         // Carried by the cart: turned 40 degrees about the world's z axis and driven by
@@ -188,7 +222,7 @@ pub const EXPECTED: [Scenario; 6] = [
         min_held_back: 0.0,
     },
     Scenario {
-        script: RecordedScenario::DemoPegIntoBlock,
+        motion: Motion::Script(RecordedScenario::DemoPegIntoBlock),
         scene: "default.toml",
         events: &[grasp("peg", GraspType::Power), release("peg")],
         // Over the block's hole at (0.25, 0.15), 1 cm into it: its middle 3 cm above the block's
@@ -198,6 +232,70 @@ pub const EXPECTED: [Scenario; 6] = [
             position: [0.25, 0.15, 0.83],
             rpy_degrees: [0.0, 0.0, 0.0],
             position_tolerance: 0.002,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Captured(CapturedMotion::PinchPin),
+        scene: "precision_pinch.toml",
+        events: &[grasp("pin", GraspType::TipPinch)],
+        // Lifted 3 cm and held.
+        final_pose: ExpectedPose {
+            part: "pin",
+            position: [0.0, 0.0, 0.13],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.003,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Captured(CapturedMotion::RelaxedApproach),
+        scene: "precision_pinch.toml",
+        events: &[],
+        // Never grasped, so never moved.
+        final_pose: ExpectedPose {
+            part: "pin",
+            position: [0.0, 0.0, 0.1],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 1e-12,
+            angle_tolerance: 1e-12,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Captured(CapturedMotion::TrackingLoss),
+        scene: "precision_pinch.toml",
+        // Held through the short loss; let go half a second into the long one.
+        events: &[grasp("pin", GraspType::TipPinch), release("pin")],
+        // Released where it was held, 3 cm up.
+        final_pose: ExpectedPose {
+            part: "pin",
+            position: [0.0, 0.0, 0.13],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.003,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::HandOver,
+        scene: "two_hand_handover.toml",
+        events: &[
+            by(0, EventKind::Grasp, "handle", GraspType::Power),
+            // The left hand's fingers and thumb hold the handle before its palm comes down.
+            by(1, EventKind::Grasp, "handle", GraspType::Precision),
+            by(0, EventKind::HandOver, "handle", GraspType::None),
+            by(1, EventKind::Release, "handle", GraspType::None),
+        ],
+        // Lifted 5 cm by the left hand, less the 3 to 5 mm its script presses down after the
+        // grasp (it aims 5 mm into the handle).
+        final_pose: ExpectedPose {
+            part: "handle",
+            position: [0.0, 0.075, -0.0125],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.003,
             angle_tolerance: 0.05,
         },
         min_held_back: 0.0,

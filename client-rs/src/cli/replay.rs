@@ -28,8 +28,9 @@ pub struct ReplayArgs {
     answer_timeout_ms: u64,
 }
 
-/// Plays the recording. Samples keep their sequence numbers and are stamped with the time they
-/// are sent, so that the frames' stamps measure this replay's latency.
+/// Plays the recording. Samples keep their sequence numbers and are stamped with the replay's
+/// start plus their recorded time, so that they keep their recorded spacing in either mode (a
+/// server counts sample times); the latencies are measured from when each was sent.
 pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
     let recording = Recording::load(&args.file)?;
     let mut client = super::connect(prefix)?;
@@ -64,6 +65,7 @@ pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
 
 fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
     let start = Instant::now();
+    let start_ns = wall_clock_ns();
     for (sent, recorded) in recording.samples.iter().enumerate() {
         let due = Duration::try_from_secs_f64(recorded.time)
             .ok()
@@ -73,7 +75,7 @@ fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
             tracing::info!(sent, "replay interrupted");
             return Ok(());
         }
-        client.send_input(&recorded.input.with_timestamp(wall_clock_ns()))?;
+        client.send_input(&recorded.stamped(start_ns))?;
     }
     tracing::info!(sent = recording.samples.len(), "replay finished");
     Ok(())
@@ -89,10 +91,15 @@ fn lockstep(
     let mut server_latencies = Vec::with_capacity(recording.samples.len());
     let mut unanswered = 0usize;
     let mut out = std::io::stdout().lock();
+    // Not in real time: the stamps keep the recorded spacing and end now, so that they lie in
+    // the past whatever pace the replay takes (a latency a renderer takes from them is never
+    // negative; this replay measures its own from when it sends).
+    let start_ns = wall_clock_ns().saturating_sub(recording.duration_ns());
     for recorded in &recording.samples {
-        let input = recorded.input.with_timestamp(wall_clock_ns());
+        let input = recorded.stamped(start_ns);
         let stamp = input.stamp();
         let sent_at = Instant::now();
+        let sent_ns = wall_clock_ns();
         client.send_input(&input)?;
         let mut events = Vec::new();
         let answer = client.wait_for_hand_frame(
@@ -114,7 +121,7 @@ fn lockstep(
                 writeln!(out)?;
                 round_trips.push(sent_at.elapsed());
                 server_latencies.push(Duration::from_nanos(
-                    frame.timestamp_ns.saturating_sub(stamp.timestamp_ns),
+                    frame.timestamp_ns.saturating_sub(sent_ns),
                 ));
             }
             None => {

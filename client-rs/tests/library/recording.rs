@@ -3,7 +3,8 @@
 use std::io::Write;
 
 use vas_client::recording::{
-    FORMAT, InputSample, Recording, RecordingError, RecordingHeader, RecordingWriter, VERSION,
+    FORMAT, InputSample, RecordedSample, Recording, RecordingError, RecordingHeader,
+    RecordingWriter, VERSION,
 };
 use vas_protocol::{
     FLEX_COUNT, GloveSample, HandJointsSample, HandSide, JOINT_ORIENTATION_VALID,
@@ -78,6 +79,47 @@ fn written_recordings_load_back_with_times_from_the_timestamps() {
     for (time, expected) in times.iter().zip(expected) {
         assert!((time - expected).abs() < 1e-9, "{times:?}");
     }
+}
+
+#[test]
+fn every_number_reads_back_exactly_as_written() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("exact.jsonl");
+    let InputSample::HandJoints(mut sample) = hand_joints(1, 0) else {
+        unreachable!("built as a hand-joints sample")
+    };
+    // Values whose shortest decimal form the default float parser reads an ulp off.
+    sample.joints[0].rotation = [
+        0.028114062452158094,
+        -0.13945532529925805,
+        0.9263732154469696,
+        0.18353810463444512,
+    ];
+    let written = [InputSample::HandJoints(sample)];
+    let mut writer =
+        RecordingWriter::create(&path, &RecordingHeader::new("s", "")).expect("create");
+    writer.write(&written[0]).expect("write");
+    drop(writer);
+    let read: Vec<_> = (Recording::load(&path).expect("load").samples.iter())
+        .map(|s| s.input)
+        .collect();
+    assert_eq!(read, written);
+}
+
+#[test]
+fn a_replay_stamps_samples_at_their_recorded_times() {
+    let sample = RecordedSample {
+        time: 0.25,
+        input: glove(3, 77),
+    };
+    let sent = sample.stamped(1_000);
+    assert_eq!(sent.timestamp_ns(), 250_001_000);
+    assert_eq!(sent.seq(), 3);
+    let recording = Recording {
+        header: RecordingHeader::new("s", ""),
+        samples: vec![sample],
+    };
+    assert_eq!(recording.duration_ns(), 250_000_000);
 }
 
 #[test]

@@ -254,6 +254,15 @@ impl GraspingHand {
             .map(|h| (h.part, self.visible.root * h.hand_to_part))
     }
 
+    /// Lets go of the held part now, whatever the analysis says (the other hand took it, or the
+    /// hand's tracking was lost for too long); the release event, `None` when nothing is held. As after any release, the part is not grasped
+    /// again while a segment still touches it.
+    pub fn let_go(&mut self) -> Option<GraspEvent> {
+        let mut events = Vec::new();
+        self.release(&mut events);
+        events.pop()
+    }
+
     /// Totals of cleaned glove values, and tracker samples refused as not finite.
     pub fn input_counts(&self) -> (FlexReport, u64) {
         (self.flex_totals, self.rejected_samples)

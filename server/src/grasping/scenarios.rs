@@ -511,7 +511,7 @@ fn the_grasping_scene_names_a_hand_that_grasps_its_handle() {
     use crate::scene::Scene;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/grasp_table.toml");
     let scene = Scene::load(&path).unwrap();
-    let model = Arc::clone(&scene.hand.as_ref().expect("the scene names a hand").model);
+    let model = Arc::clone(&scene.hands.first().expect("the scene names a hand").model);
     assert_eq!(model.name(), "right hand, 22 DOF");
     // The scripted power grasp, moved to where the scene's handle lies.
     let handle = scene.parts.iter().position(|p| p.name == "handle").unwrap();

@@ -87,7 +87,10 @@ impl Session {
         let scene = Arc::new(scene);
         let restart = Restart::new(Arc::clone(&scene), 1)?;
         let session = Session {
-            inputs: Inputs::for_hand(scene.hand.as_ref().map(|hand| hand.model.as_ref())),
+            inputs: Inputs::for_hands(
+                scene.hands.iter().map(|hand| hand.model.as_ref()),
+                scene.params.tracking,
+            ),
             scene,
             epoch: 1,
             catalogue,
@@ -100,8 +103,10 @@ impl Session {
         let restart = Restart::new(Arc::clone(&scene), self.epoch + 1)
             .map_err(|error| (ControlStatus::SceneLoadFailed, error.to_string()))?;
         self.epoch += 1;
-        self.inputs
-            .restart(scene.hand.as_ref().map(|hand| hand.model.as_ref()));
+        self.inputs.restart(
+            scene.hands.iter().map(|hand| hand.model.as_ref()),
+            scene.params.tracking,
+        );
         self.scene = scene;
         Ok(restart.into_change())
     }
@@ -192,8 +197,9 @@ fn respond(
     let (scene_name, name_cut) = WireText::truncated(&scene.name);
     let (scene_source, source_cut) = WireText::truncated(&scene.source.display().to_string());
     let mut hands = [HandDescription::default(); MAX_HANDS];
-    if let Some(hand) = &scene.hand {
-        hands[0] = HandDescription {
+    // A scene has at most one hand of each side: MAX_HANDS.
+    for (described, hand) in hands.iter_mut().zip(&scene.hands) {
+        *described = HandDescription {
             side: wire_side(hand.model.side()) as u32,
             model: WireText::truncated(hand.model.name()).0,
         };
@@ -210,7 +216,7 @@ fn respond(
         message: WireText::EMPTY,
         up: [0.0, 0.0, 1.0],
         metres_per_unit: 1.0,
-        hand_count: u32::from(scene.hand.is_some()),
+        hand_count: u32::try_from(scene.hands.len().min(MAX_HANDS)).expect("at most two"),
         listed_count: u32::try_from(session.catalogue.names().len()).unwrap_or(u32::MAX),
         hands,
         listed: WireText::EMPTY,

@@ -27,16 +27,41 @@ pub struct Stamps {
     pub joints: InputStamp,
 }
 
-/// The I/O thread's hand target, for the grasping loop.
+/// One hand's target, for the grasping loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandTarget {
+    /// Cart, tracked hand root and flex values.
+    pub input: HandInput,
+    /// The hand's latest hand-joints sample (zero before one came).
+    pub joints: InputStamp,
+    /// Whether the input tracks the hand (false: its hand-joints samples say it is not tracked
+    /// or have stopped coming, or it has no input yet; `input` holds the last tracked target).
+    pub tracked: bool,
+    /// The hand has been untracked for longer than the scene's grace period: it lets go of the
+    /// part it holds.
+    pub let_go: bool,
+}
+
+impl HandTarget {
+    /// A tracked hand's target, from a tracker and a glove.
+    pub fn tracking(input: HandInput) -> HandTarget {
+        HandTarget {
+            input,
+            joints: InputStamp::default(),
+            tracked: true,
+            let_go: false,
+        }
+    }
+}
+
+/// The I/O thread's hand targets, for the grasping loop.
+#[derive(Debug, Clone, PartialEq)]
 pub struct InputFrame {
     /// The samples it comes from.
     pub stamps: Stamps,
-    /// Cart, tracked hand root and clamped flex values.
-    pub input: HandInput,
-    /// Whether the input tracks the hand (false: its hand-joints samples say it is not tracked,
-    /// and `input` holds the last tracked target).
-    pub tracked: bool,
+    /// Per hand of the scene, in the scene's order; in a scene without a hand model, one: where
+    /// the tracker puts the hand.
+    pub hands: Vec<HandTarget>,
 }
 
 impl Coalesce for InputFrame {
@@ -44,31 +69,46 @@ impl Coalesce for InputFrame {
     fn absorb_older(&mut self, _older: Self) {}
 }
 
+/// One hand in the grasping loop's frame.
+#[derive(Debug, Clone)]
+pub struct GraspedHand {
+    /// The target it was stepped towards.
+    pub target: HandTarget,
+    /// The grasping hand's frame; `None` in a scene without a hand model, where the hand is
+    /// published where the tracker puts it.
+    pub frame: Option<HandFrame>,
+    /// The parts this hand let go of because the other hand grasped them; their release events
+    /// are in the frame's.
+    pub handed_over: Vec<PartId>,
+}
+
 /// The grasping loop's frame, for the sliding loop.
 #[derive(Debug, Clone)]
 pub struct GraspedFrame {
     /// The samples it answers.
     pub stamps: Stamps,
-    /// The target it was stepped towards.
-    pub input: HandInput,
-    /// Whether the input tracks the hand.
-    pub tracked: bool,
-    /// The grasping hand's frame; `None` in a scene without a hand model, where the hand is
-    /// published where the tracker puts it.
-    pub hand: Option<HandFrame>,
+    /// Every hand, in the scene's order.
+    pub hands: Vec<GraspedHand>,
 }
 
 impl Coalesce for GraspedFrame {
     fn absorb_older(&mut self, older: Self) {
-        if let (Some(hand), Some(older)) = (&mut self.hand, older.hand) {
-            let mut events = older.events;
-            events.append(&mut hand.events);
-            hand.events = events;
+        for (hand, older) in self.hands.iter_mut().zip(older.hands) {
+            if let (Some(frame), Some(older_frame)) = (&mut hand.frame, older.frame) {
+                frame.events = prepended(older_frame.events, &mut frame.events);
+            }
+            hand.handed_over = prepended(older.handed_over, &mut hand.handed_over);
         }
     }
 }
 
-/// The visible hand as a frame proposes it.
+/// `older` followed by `newer` (emptied).
+fn prepended<T>(mut older: Vec<T>, newer: &mut Vec<T>) -> Vec<T> {
+    older.append(newer);
+    older
+}
+
+/// A hand as a frame proposes it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProposedHand {
     /// The root in the world.
@@ -81,6 +121,14 @@ pub struct ProposedHand {
     pub grasp: WireGraspType,
     /// Whether the input tracks the hand.
     pub tracked: bool,
+    /// The hand's latest hand-joints sample.
+    pub joints: InputStamp,
+    /// The part it holds, if any.
+    pub held: Option<HeldPart>,
+    /// Its grasps and releases since the previous frame.
+    pub events: Vec<GraspEvent>,
+    /// The parts it handed over to the other hand since the previous frame.
+    pub handed_over: Vec<PartId>,
 }
 
 /// The sliding loop's frame, for the collision loop to verify.
@@ -90,21 +138,18 @@ pub struct CandidateFrame {
     pub stamps: Stamps,
     /// The configuration a [`Change::Restart`] started, so that frames of an older one are known.
     pub epoch: u64,
-    /// The hand.
-    pub hand: ProposedHand,
+    /// Every hand, in the scene's order.
+    pub hands: Vec<ProposedHand>,
     /// Every part's proposed pose, by id.
     pub part_poses: Vec<Isometry3<f64>>,
-    /// The held part, if any.
-    pub held: Option<HeldPart>,
-    /// Grasps and releases since the previous frame.
-    pub events: Vec<GraspEvent>,
 }
 
 impl Coalesce for CandidateFrame {
     fn absorb_older(&mut self, older: Self) {
-        let mut events = older.events;
-        events.append(&mut self.events);
-        self.events = events;
+        for (hand, older) in self.hands.iter_mut().zip(older.hands) {
+            hand.events = prepended(older.events, &mut hand.events);
+            hand.handed_over = prepended(older.handed_over, &mut hand.handed_over);
+        }
     }
 }
 
@@ -124,6 +169,8 @@ pub struct ContactAt {
 pub struct Event {
     /// What happened.
     pub kind: EventKind,
+    /// The hand it is about (or whose held part touched), by its place in the scene's hands.
+    pub hand: usize,
     /// The grasp, for grasp events.
     pub grasp: WireGraspType,
     /// The part.
@@ -143,18 +190,14 @@ pub struct VerifiedPart {
     pub flags: u32,
 }
 
-/// A frame the collision loop verified, for the I/O thread to publish.
+/// One hand of a verified frame.
 #[derive(Debug, Clone, PartialEq)]
-pub struct VerifiedFrame {
-    /// The samples it answers.
-    pub stamps: Stamps,
-    /// The restart it belongs to.
-    pub epoch: u64,
-    /// The hand: root, flex values, touching bits, grasp.
-    pub hand_root: Isometry3<f64>,
+pub struct VerifiedHand {
+    /// The root in the world.
+    pub root: Isometry3<f64>,
     /// Joint angles, radians.
     pub flex: [f32; FLEX_COUNT],
-    /// Each hand segment's pose in the world, as verified; empty without a hand model.
+    /// Each segment's pose in the world, as verified; empty without a hand model.
     pub segments: Vec<Isometry3<f64>>,
     /// Bits of the segments touching a part.
     pub touching: u32,
@@ -162,13 +205,26 @@ pub struct VerifiedFrame {
     pub grasp: WireGraspType,
     /// Whether the input tracks the hand.
     pub tracked: bool,
+    /// The hand's latest hand-joints sample.
+    pub joints: InputStamp,
+    /// The wrench for a force-feedback device while the hand holds a part; zero on the frame
+    /// that releases it, `None` otherwise.
+    pub force: Option<Wrench>,
+}
+
+/// A frame the collision loop verified, for the I/O thread to publish.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VerifiedFrame {
+    /// The samples it answers.
+    pub stamps: Stamps,
+    /// The restart it belongs to.
+    pub epoch: u64,
+    /// Every hand, in the scene's order.
+    pub hands: Vec<VerifiedHand>,
     /// Every part, by id.
     pub parts: Vec<VerifiedPart>,
-    /// Grasps, releases, contact begins and ends of this frame.
+    /// Grasps, releases, hand-overs, contact begins and ends of this frame.
     pub events: Vec<Event>,
-    /// The wrench for a force-feedback device while a part is held; zero on the frame that
-    /// releases it, `None` otherwise.
-    pub force: Option<Wrench>,
 }
 
 /// A change of the simulation, sent down the loops between frames.
@@ -184,10 +240,11 @@ pub enum Change {
 pub struct Restart {
     /// The scene.
     pub scene: Arc<Scene>,
-    /// The grasping hand, built and validated by the I/O thread; the grasping loop takes it.
-    pub hand: Option<GraspingHand>,
-    /// The same hand's kinematics and segment meshes, for the collision loop.
-    pub hand_bodies: Option<HandBodies>,
+    /// The grasping hands, in the scene's order, built and validated by the I/O thread; the
+    /// grasping loop takes them.
+    pub hands: Vec<GraspingHand>,
+    /// The same hands' kinematics and segment meshes, for the collision loop.
+    pub hand_bodies: Vec<HandBodies>,
     /// Numbers the restarts, so that feedback from before one is ignored after it.
     pub epoch: u64,
 }
@@ -196,32 +253,31 @@ pub struct Restart {
 #[derive(Debug, thiserror::Error)]
 pub enum HandSetupError {
     /// A segment's collision mesh could not be built.
-    #[error("the hand model's segment meshes cannot be built: {0}")]
+    #[error("a hand model's segment meshes cannot be built: {0}")]
     Segments(String),
 }
 
 impl Restart {
-    /// Everything the loops need to start over on `scene`: the hand model it names (if any,
-    /// loaded and validated with the scene) built, parked flat at the origin.
+    /// Everything the loops need to start over on `scene`: the hand models it names (loaded and
+    /// validated with it) built, parked flat at the origin.
     pub fn new(scene: Arc<Scene>, epoch: u64) -> Result<Restart, HandSetupError> {
-        let (hand, hand_bodies) = match &scene.hand {
-            None => (None, None),
-            Some(scene_hand) => {
-                let model = Arc::clone(&scene_hand.model);
-                let params = scene.params.grasp();
-                let parked = HandPose {
-                    root: Isometry3::identity(),
-                    flex: [0.0; FLEX_COUNT],
-                };
-                let hand = GraspingHand::new(Arc::clone(&model), params, parked)
-                    .map_err(|error| HandSetupError::Segments(error.to_string()))?;
-                let bodies = HandBodies::of(model, &hand);
-                (Some(hand), Some(bodies))
-            }
+        let params = scene.params.grasp();
+        let parked = HandPose {
+            root: Isometry3::identity(),
+            flex: [0.0; FLEX_COUNT],
         };
+        let mut hands = Vec::with_capacity(scene.hands.len());
+        let mut hand_bodies = Vec::with_capacity(scene.hands.len());
+        for scene_hand in &scene.hands {
+            let model = Arc::clone(&scene_hand.model);
+            let hand = GraspingHand::new(Arc::clone(&model), params, parked)
+                .map_err(|error| HandSetupError::Segments(error.to_string()))?;
+            hand_bodies.push(HandBodies::of(model, &hand));
+            hands.push(hand);
+        }
         Ok(Restart {
             scene,
-            hand,
+            hands,
             hand_bodies,
             epoch,
         })
@@ -239,7 +295,7 @@ impl std::fmt::Debug for Change {
             Change::Restart(restart) => f
                 .debug_struct("Restart")
                 .field("scene", &restart.scene.name)
-                .field("hand", &restart.hand.is_some())
+                .field("hands", &restart.hands.len())
                 .field("epoch", &restart.epoch)
                 .finish(),
             Change::Metaphor(metaphor) => f.debug_tuple("Metaphor").field(metaphor).finish(),

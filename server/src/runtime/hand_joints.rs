@@ -53,11 +53,16 @@ pub enum JointsOutcome {
 pub struct JointsTarget {
     /// The latest accepted sample.
     pub stamp: InputStamp,
+    /// When the latest sample was taken in, on the inputs' tracking clock (ns).
+    pub at_ns: u64,
     /// The hand root in tracking space and the flex values of the latest tracked sample;
     /// `None` until one came.
     pub pose: Option<(Isometry3<f64>, [f32; FLEX_COUNT])>,
     /// Whether the latest sample tracked the hand.
     pub tracked: bool,
+    /// When the latest tracked sample was taken in, on the inputs' tracking clock (ns); `None`
+    /// until one came.
+    pub tracked_ns: Option<u64>,
 }
 
 /// A hand that hand-joints samples can drive: its retargeter and latest target.
@@ -102,24 +107,33 @@ impl JointsHand {
         self.target = None;
     }
 
-    /// Retargets a sample of this hand (its side already matched) and makes it the target.
-    pub fn apply(&mut self, sample: &HandJointsSample) -> Result<JointsOutcome, JointsRejection> {
+    /// Retargets a sample of this hand (its side already matched), taken in at `at_ns` on the
+    /// inputs' tracking clock, and makes it the target.
+    pub fn apply(
+        &mut self,
+        sample: &HandJointsSample,
+        at_ns: u64,
+    ) -> Result<JointsOutcome, JointsRejection> {
         let joints = read_joints(sample, self.retargeter.model().side());
         let stamp = sample.stamp();
         match self.retargeter.fit(&joints) {
             Ok(fit) => {
                 self.target = Some(JointsTarget {
                     stamp,
+                    at_ns,
                     pose: Some((fit.root, fit.flex.map(|v| v as f32))),
                     tracked: true,
+                    tracked_ns: Some(at_ns),
                 });
                 Ok(JointsOutcome::Tracked)
             }
             Err(RetargetError::Joints(JointsError::NotValid { .. })) => {
                 self.target = Some(JointsTarget {
                     stamp,
+                    at_ns,
                     pose: self.target.and_then(|target| target.pose),
                     tracked: false,
+                    tracked_ns: self.target.and_then(|target| target.tracked_ns),
                 });
                 Ok(JointsOutcome::Untracked)
             }

@@ -1,22 +1,33 @@
-//! The hand-over from grasping to sliding: one hand and the scene's parts, stepped frame by frame.
+//! The hand-over from grasping to sliding: the scene's hands and parts, stepped frame by frame.
 //!
 //! The work of one input sample is split in two stages, so that the runtime can run them on the
 //! grasping and the sliding loop's threads, and so that [`Interaction`] can run them in sequence
 //! (offline, in tests and for the recording generator) with the same outcome:
 //!
-//! * [`GraspStage`] steps the grasping hand against every part at its visible pose.
-//! * [`SlideStage`] takes the hand's frame: a grasp event starts a [`SlideMachine`] for the grasped
-//!   part at its current visible pose, with the other parts as static obstacles. While the part is
-//!   held its ghost is where the hand holds it (the hand's pose times the grasp's offset, which may
-//!   penetrate), and one sliding frame brings the visible part as close to it as the obstacles
-//!   allow; the visible pose only ever takes poses the machine found free. A release drops the
-//!   machine and leaves the part at its last visible pose (not at the ghost's pose the release
-//!   event carries).
+//! * [`GraspStage`] steps each grasping hand against every part at its visible pose.
+//! * [`SlideStage`] takes the hands' frames: a grasp event starts a [`SlideMachine`] for the
+//!   grasped part at its current visible pose, with the other parts as static obstacles. While
+//!   the part is held its ghost is where the hand holds it (the hand's pose times the grasp's
+//!   offset, which may penetrate), and one sliding frame brings the visible part as close to it
+//!   as the obstacles allow; the visible pose only ever takes poses the machine found free. A
+//!   release drops the machine and leaves the part at its last visible pose (not at the ghost's
+//!   pose the release event carries).
 //!
 //! While a held part lags behind its ghost, the visible hand keeps its grip on the visible part:
 //! its root is moved by the same offset that takes the ghost to the visible part, so the hand is
 //! never drawn sunk into a part it holds (the grasping hand's own state follows the tracker, as
 //! the clasp needs).
+//!
+//! Two hands: each holds at most one part, and a part is held by one hand at a time. A hand that
+//! grasps the part the other holds takes it over: the other hand lets go at once, in the same
+//! frame (a hand-over; its fingers stay on the part, which it does not grasp again until they
+//! leave it), and the part slides with the new hand from where it is. Each hand's clasp sees the
+//! part the other holds as an obstacle at its visible pose; a held part's sliding sees every
+//! other part where it was when the grasp began. The hands are the user's own and are not tested
+//! against each other.
+//!
+//! A hand whose tracking is lost keeps what it holds (its target stays where tracking left it)
+//! until its target says to let go; then it releases the part where the part is.
 //!
 //! This is plain state, no threads and no ports: the runtime's loops drive it.
 
@@ -24,7 +35,7 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Vector3};
 
-use super::frames::ContactAt;
+use super::frames::{ContactAt, HandTarget};
 use crate::collision::DopTree;
 use crate::grasping::collider::MAX_OBJECTS;
 use crate::grasping::{
@@ -35,29 +46,40 @@ use crate::sliding::force::{ForceModel, Wrench};
 use crate::sliding::world::{Obstacle as SlideObstacle, PairwiseWorld, SlideBody};
 use crate::sliding::{Metaphor, RestReason, SlideMachine, SlideParams};
 
-/// The grasping half of a frame: the hand among the parts' collision copies.
+/// One hand's outcome of a grasping step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteppedHand {
+    /// The hand's frame: visible hand, grasp, grasp and release events.
+    pub frame: HandFrame,
+    /// The parts it let go of because the other hand grasped them (their release events are
+    /// in the frame's).
+    pub handed_over: Vec<PartId>,
+}
+
+/// The grasping half of a frame: the hands among the parts' collision copies.
 pub struct GraspStage {
-    hand: GraspingHand,
+    hands: Vec<GraspingHand>,
     parts: Vec<PartGeometry>,
     poses: Vec<Isometry3<f64>>,
 }
 
 impl GraspStage {
-    /// The hand among `parts` (a part's id is its index), which start at their configured poses.
-    pub fn new(hand: GraspingHand, parts: &[Part]) -> GraspStage {
+    /// The `hands` among `parts` (a part's id is its index), which start at their configured
+    /// poses.
+    pub fn new(hands: Vec<GraspingHand>, parts: &[Part]) -> GraspStage {
         GraspStage {
-            hand,
+            hands,
             parts: parts.iter().map(Part::grasp_geometry).collect(),
             poses: parts.iter().map(|part| part.pose).collect(),
         }
     }
 
-    /// The grasping hand.
-    pub fn hand(&self) -> &GraspingHand {
-        &self.hand
+    /// The grasping hands.
+    pub fn hands(&self) -> &[GraspingHand] {
+        &self.hands
     }
 
-    /// Takes the visible part poses the hand is stepped against from now on (the sliding
+    /// Takes the visible part poses the hands are stepped against from now on (the sliding
     /// stage's, once verified); a list of the wrong length is ignored.
     pub fn set_part_poses(&mut self, poses: &[Isometry3<f64>]) {
         if poses.len() == self.poses.len() {
@@ -65,11 +87,50 @@ impl GraspStage {
         }
     }
 
-    /// Steps the hand towards `input` against the parts within its reach, at their visible
-    /// poses.
-    pub fn step(&mut self, input: &HandInput) -> HandFrame {
-        let obstacles = obstacles_within_reach(&self.hand, &self.parts, &self.poses, input);
-        self.hand.step(input, &obstacles)
+    /// Steps each hand towards its target (`targets` in the hands' order) against the parts
+    /// within its reach, at their visible poses: a hand whose target says to let go (its tracking lost beyond the grace
+    /// period) first releases what it holds, and a hand that grasps the part another holds takes
+    /// it over.
+    pub fn step(&mut self, targets: &[HandTarget]) -> Vec<SteppedHand> {
+        let mut stepped: Vec<SteppedHand> = self
+            .hands
+            .iter_mut()
+            .zip(targets)
+            .map(|(hand, target)| {
+                let released = target.let_go.then(|| hand.let_go()).flatten();
+                let obstacles =
+                    obstacles_within_reach(hand, &self.parts, &self.poses, &target.input);
+                let mut frame = hand.step(&target.input, &obstacles);
+                frame.events.splice(0..0, released);
+                SteppedHand {
+                    frame,
+                    handed_over: Vec::new(),
+                }
+            })
+            .collect();
+        for taker in 0..stepped.len() {
+            let grasped: Vec<PartId> = (stepped[taker].frame.events.iter())
+                .filter_map(|event| match *event {
+                    GraspEvent::Grasp { part, .. } => Some(part),
+                    GraspEvent::Release { .. } => None,
+                })
+                .collect();
+            for part in grasped {
+                for giver in (0..self.hands.len()).filter(|&giver| giver != taker) {
+                    if self.hands[giver]
+                        .held()
+                        .is_some_and(|held| held.part == part)
+                        && let Some(release) = self.hands[giver].let_go()
+                    {
+                        let given = &mut stepped[giver];
+                        given.frame.events.push(release);
+                        given.frame.held = None;
+                        given.handed_over.push(part);
+                    }
+                }
+            }
+        }
+        stepped
     }
 }
 
@@ -135,8 +196,8 @@ struct SlidePart {
     body: Arc<SlideBody<DopTree>>,
 }
 
-/// The held part's sliding simulation: its machine and its collision copy against the other
-/// parts, as they were when it was grasped.
+/// A held part's sliding simulation: its machine and its collision copy against the other parts,
+/// as they were when it was grasped.
 struct HeldSlide {
     part: PartId,
     machine: SlideMachine,
@@ -149,7 +210,7 @@ struct HeldSlide {
     rest: RestReason,
 }
 
-/// The held part after a frame: where the hand holds it and where it is seen.
+/// A held part after a frame: where the hand holds it and where it is seen.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeldPart {
     /// The part.
@@ -176,20 +237,21 @@ impl HeldPart {
     }
 }
 
-/// The sliding half of a frame: the visible part poses and the held part's machine.
+/// The sliding half of a frame: the visible part poses and the held parts' machines.
 pub struct SlideStage {
     parts: Vec<SlidePart>,
     poses: Vec<Isometry3<f64>>,
     params: SlideParams,
     /// Seconds between sliding frames, for the force model's damping.
     period: f64,
-    held: Option<HeldSlide>,
+    /// Per hand, the part it holds.
+    held: Vec<Option<HeldSlide>>,
 }
 
 impl SlideStage {
-    /// The `parts` at their configured poses; `params` (validated) drive the sliding of grasped
-    /// parts, whose frames are `period` seconds apart.
-    pub fn new(parts: &[Part], params: SlideParams, period: f64) -> SlideStage {
+    /// The `parts` at their configured poses, for `hands` hands; `params` (validated) drive the
+    /// sliding of grasped parts, whose frames are `period` seconds apart.
+    pub fn new(parts: &[Part], params: SlideParams, period: f64, hands: usize) -> SlideStage {
         SlideStage {
             parts: parts
                 .iter()
@@ -205,7 +267,7 @@ impl SlideStage {
             poses: parts.iter().map(|part| part.pose).collect(),
             params,
             period,
-            held: None,
+            held: (0..hands).map(|_| None).collect(),
         }
     }
 
@@ -214,15 +276,16 @@ impl SlideStage {
         &self.poses
     }
 
-    /// The sliding machine of the held part, if a movable part is held.
-    pub fn slide_machine(&self) -> Option<&SlideMachine> {
-        self.held.as_ref().map(|held| &held.machine)
+    /// The sliding machine of the part `hand` holds, if it holds a movable part.
+    pub fn slide_machine(&self, hand: usize) -> Option<&SlideMachine> {
+        let held = self.held.get(hand)?.as_ref()?;
+        Some(&held.machine)
     }
 
-    /// Selects how grasped parts follow the hand, from the next frame on (the held part too).
+    /// Selects how grasped parts follow the hand, from the next frame on (held parts too).
     pub fn set_metaphor(&mut self, metaphor: Metaphor) {
         self.params.metaphor = metaphor;
-        if let Some(held) = &mut self.held {
+        for held in self.held.iter_mut().flatten() {
             held.machine.set_metaphor(metaphor);
         }
     }
@@ -234,57 +297,77 @@ impl SlideStage {
             return;
         };
         *slot = pose;
-        if let Some(held) = self.held.take_if(|held| held.part == part) {
-            self.start_sliding(part);
-            if let Some(restarted) = &mut self.held {
-                restarted.root = held.root;
-                restarted.ghost = held.ghost;
+        for hand in 0..self.held.len() {
+            if let Some(held) = self.held[hand].take_if(|held| held.part == part) {
+                self.start_sliding(hand, part);
+                if let Some(restarted) = &mut self.held[hand] {
+                    restarted.root = held.root;
+                    restarted.ghost = held.ghost;
+                }
             }
         }
     }
 
-    /// Takes the hand's frame: hands grasped parts over to sliding and back, and slides the held
-    /// part one frame towards where the hand holds it.
-    pub fn apply(&mut self, frame: &HandFrame) -> Option<HeldPart> {
-        for event in &frame.events {
-            match *event {
-                GraspEvent::Release { part, .. } => {
+    /// Takes the hands' frames (in the hands' order): hands grasped parts over to sliding and
+    /// back, and slides each held part one frame towards where its hand holds it.
+    pub fn apply(&mut self, frames: &[&HandFrame]) -> Vec<Option<HeldPart>> {
+        // Releases first: in a hand-over the part leaves one hand before the other takes it.
+        for (hand, frame) in frames.iter().enumerate() {
+            for event in &frame.events {
+                if let GraspEvent::Release { part, .. } = *event
+                    && let Some(slot) = self.held.get_mut(hand)
+                {
                     // The part stays at its last visible pose, which the machine found free.
-                    if self.held.as_ref().is_some_and(|held| held.part == part) {
-                        self.held = None;
+                    slot.take_if(|held| held.part == part);
+                }
+            }
+        }
+        for (hand, frame) in frames.iter().enumerate() {
+            for event in &frame.events {
+                if let GraspEvent::Grasp { part, .. } = *event {
+                    self.start_sliding(hand, part);
+                }
+            }
+        }
+        frames
+            .iter()
+            .enumerate()
+            .map(|(hand, frame)| {
+                let slot = self.held.get_mut(hand)?;
+                match (slot.as_mut(), frame.held) {
+                    (Some(slide), Some((part, ghost))) if slide.part == part => {
+                        slide.root = frame.pose.root;
+                        slide.ghost = ghost;
+                        slide.machine.set_ghost(&ghost);
+                        self.slide_frame(hand)
+                    }
+                    _ => {
+                        *slot = None;
+                        None
                     }
                 }
-                GraspEvent::Grasp { part, .. } => self.start_sliding(part),
-            }
-        }
-        match (&mut self.held, frame.held) {
-            (Some(slide), Some((part, ghost))) if slide.part == part => {
-                slide.root = frame.pose.root;
-                slide.ghost = ghost;
-                slide.machine.set_ghost(&ghost);
-                self.slide_frame()
-            }
-            _ => {
-                self.held = None;
-                None
-            }
-        }
+            })
+            .collect()
     }
 
-    /// One more sliding frame towards the latest ghost, when the last one ran out of cycles
-    /// before reaching it; `None` when nothing is held or the part came to rest (reached,
-    /// blocked or stalled: only a new ghost can move it then).
-    pub fn keep_sliding(&mut self) -> Option<HeldPart> {
-        let held = self.held.as_ref()?;
-        if held.rest == RestReason::CycleLimit {
-            self.slide_frame()
-        } else {
-            None
-        }
+    /// One more sliding frame towards the latest ghost for each hand whose last one ran out of
+    /// cycles before reaching it; `None` for a hand that holds nothing or whose part came to
+    /// rest (reached, blocked or stalled: only a new ghost can move it then).
+    pub fn keep_sliding(&mut self) -> Vec<Option<HeldPart>> {
+        (0..self.held.len())
+            .map(|hand| {
+                let slide = self.held[hand].as_ref()?;
+                if slide.rest == RestReason::CycleLimit {
+                    self.slide_frame(hand)
+                } else {
+                    None
+                }
+            })
+            .collect()
     }
 
-    fn slide_frame(&mut self) -> Option<HeldPart> {
-        let slide = self.held.as_mut()?;
+    fn slide_frame(&mut self, hand: usize) -> Option<HeldPart> {
+        let slide = self.held.get_mut(hand)?.as_mut()?;
         let rest = slide.machine.run_frame(&mut slide.world);
         slide.rest = rest;
         let visible = slide.machine.visible_pose();
@@ -319,11 +402,14 @@ impl SlideStage {
         })
     }
 
-    /// Starts sliding `part` from its visible pose against every other part; static parts are
-    /// never moved.
-    fn start_sliding(&mut self, part: PartId) {
+    /// Starts sliding `part` for `hand` from its visible pose against every other part; static
+    /// parts are never moved.
+    fn start_sliding(&mut self, hand: usize, part: PartId) {
+        let Some(slot) = self.held.get_mut(hand) else {
+            return;
+        };
         let Some(grasped) = self.parts.get(part as usize).filter(|p| p.movable) else {
-            self.held = None;
+            *slot = None;
             return;
         };
         let pose = self.poses[part as usize];
@@ -342,7 +428,7 @@ impl SlideStage {
             })
             .collect();
         let (pivot, radius) = grasped.body.pivot_and_radius();
-        self.held = Some(HeldSlide {
+        *slot = Some(HeldSlide {
             part,
             machine: SlideMachine::new(&pose, pivot.coords, radius, self.params.clone()),
             world: PairwiseWorld::new(grasped.body.clone(), obstacles),
@@ -361,41 +447,46 @@ fn obstacle_part(held: PartId, index: usize) -> PartId {
     if index < held { index } else { index + 1 }
 }
 
-/// The outcome of one frame.
+/// One hand's outcome of one frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InteractionFrame {
     /// The hand's frame: visible hand, grasp, grasp and release events. While a held part lags
     /// behind its ghost, the visible root is [`HeldPart::hand_root`].
     pub hand: HandFrame,
-    /// The held part, if a movable part is held.
+    /// The held part, if the hand holds a movable part.
     pub held: Option<HeldPart>,
+    /// The parts the hand handed over to the other hand this frame.
+    pub handed_over: Vec<PartId>,
 }
 
-/// One grasping hand among the scene's parts, with sliding for the part it holds: the two stages
-/// run in sequence, one frame per input sample, as the server's loops run them in lockstep.
+/// The scene's grasping hands among its parts, with sliding for the parts they hold: the two
+/// stages run in sequence, one frame per input sample, as the server's loops run them in
+/// lockstep.
 pub struct Interaction {
     grasp: GraspStage,
     slide: SlideStage,
 }
 
 impl Interaction {
-    /// The hand among `parts` (a part's id is its index), which start at their configured poses;
-    /// `slide_params` (validated) drive the sliding of grasped parts, `period` seconds apart.
+    /// The `hands` among `parts` (a part's id is its index), which start at their configured
+    /// poses; `slide_params` (validated) drive the sliding of grasped parts, `period` seconds
+    /// apart.
     pub fn new(
-        hand: GraspingHand,
+        hands: Vec<GraspingHand>,
         parts: &[Part],
         slide_params: SlideParams,
         period: f64,
     ) -> Interaction {
+        let count = hands.len();
         Interaction {
-            grasp: GraspStage::new(hand, parts),
-            slide: SlideStage::new(parts, slide_params, period),
+            grasp: GraspStage::new(hands, parts),
+            slide: SlideStage::new(parts, slide_params, period, count),
         }
     }
 
-    /// The grasping hand.
-    pub fn hand(&self) -> &GraspingHand {
-        self.grasp.hand()
+    /// The grasping hands.
+    pub fn hands(&self) -> &[GraspingHand] {
+        self.grasp.hands()
     }
 
     /// The visible pose of every part, by id.
@@ -408,21 +499,41 @@ impl Interaction {
         self.slide.part_poses().get(part as usize).copied()
     }
 
-    /// The sliding machine of the held part, if a movable part is held.
-    pub fn slide_machine(&self) -> Option<&SlideMachine> {
-        self.slide.slide_machine()
+    /// The sliding machine of the part `hand` holds, if it holds a movable part.
+    pub fn slide_machine(&self, hand: usize) -> Option<&SlideMachine> {
+        self.slide.slide_machine(hand)
     }
 
-    /// Processes one input sample: steps the hand, hands grasped parts over to sliding and back,
-    /// and slides the held part one frame towards where the hand holds it.
-    pub fn step(&mut self, input: &HandInput) -> InteractionFrame {
+    /// Processes one input sample (`targets`: each hand's, in the hands' order): steps the
+    /// hands, hands grasped parts over to sliding and back, and slides each held part one frame
+    /// towards where its hand holds it.
+    pub fn step(&mut self, targets: &[HandTarget]) -> Vec<InteractionFrame> {
         self.grasp.set_part_poses(self.slide.part_poses());
-        let mut hand = self.grasp.step(input);
-        let held = self.slide.apply(&hand);
-        if let Some(held) = &held {
-            hand.pose.root = held.hand_root;
-        }
-        InteractionFrame { hand, held }
+        let stepped = self.grasp.step(targets);
+        let frames: Vec<&HandFrame> = stepped.iter().map(|hand| &hand.frame).collect();
+        let held = self.slide.apply(&frames);
+        stepped
+            .into_iter()
+            .zip(held)
+            .map(
+                |(
+                    SteppedHand {
+                        mut frame,
+                        handed_over,
+                    },
+                    held,
+                )| {
+                    if let Some(held) = &held {
+                        frame.pose.root = held.hand_root;
+                    }
+                    InteractionFrame {
+                        hand: frame,
+                        held,
+                        handed_over,
+                    }
+                },
+            )
+            .collect()
     }
 }
 
@@ -525,7 +636,7 @@ mod tests {
                 metaphor: Metaphor::SpiralSpring,
                 ..SlideParams::default()
             };
-            let interaction = Interaction::new(hand, &parts, params, 1.0 / RATE);
+            let interaction = Interaction::new(vec![hand], &parts, params, 1.0 / RATE);
             Run {
                 parts,
                 interaction,
@@ -536,7 +647,9 @@ mod tests {
 
         fn play(&mut self, keys: &[Keyframe]) {
             for key in sample(keys, RATE) {
-                let frame = self.interaction.step(&key.input());
+                let frame = (self.interaction)
+                    .step(&[HandTarget::tracking(key.input())])
+                    .remove(0);
                 self.handle_poses
                     .push(self.interaction.part_pose(HANDLE).expect("the handle"));
                 self.frames.push(frame);
@@ -676,14 +789,14 @@ mod tests {
                 part(&format!("cube {i}"), cube(), at(x), false)
             })
             .collect();
-        let mut stage = GraspStage::new(hand, &parts);
+        let mut stage = GraspStage::new(vec![hand], &parts);
         let moving_to = |x: f64| HandInput {
             cart: Isometry3::identity(),
             tracker: at(x),
             flex: [0.0; FLEX_COUNT],
         };
         let ids = |stage: &GraspStage, input| -> Vec<PartId> {
-            (obstacles_within_reach(&stage.hand, &stage.parts, &stage.poses, &input).iter())
+            (obstacles_within_reach(&stage.hands[0], &stage.parts, &stage.poses, &input).iter())
                 .map(|o| o.part)
                 .collect()
         };
@@ -716,7 +829,10 @@ mod tests {
         assert!(grasped_at as f64 <= milestones.grasped_by * RATE);
         assert!(releases.is_empty(), "released while carried: {releases:?}");
 
-        let machine = run.interaction.slide_machine().expect("the handle is held");
+        let machine = run
+            .interaction
+            .slide_machine(0)
+            .expect("the handle is held");
         let (_, radius) = SlideBody::<DopTree>::new(run.parts[0].mesh.clone()).pivot_and_radius();
         for (i, frame) in run.frames.iter().enumerate().skip(grasped_at) {
             let held = frame.held.as_ref().expect("held from the grasp on");
@@ -760,7 +876,7 @@ mod tests {
             .expect("held");
         assert!(
             run.interaction
-                .slide_machine()
+                .slide_machine(0)
                 .expect("held")
                 .contacts()
                 .next()
@@ -799,5 +915,82 @@ mod tests {
             assert_eq!(*pose, last_valid, "frame {i}");
         }
         assert_visible_handle_never_enters_the_table(&run);
+    }
+
+    /// The scripted hand-over (`scene::hand_over`): the right hand grasps the handle, the left
+    /// takes it over in the frame it grasps it, the right opens and withdraws without another
+    /// event, and the left lifts the handle and lets go.
+    #[test]
+    fn the_left_hand_takes_the_handle_over_from_the_right_and_lifts_it() {
+        use crate::scene::hand_over::{self, MILESTONES};
+        use vas_protocol::EventKind;
+        const RATE: f64 = 200.0;
+        let start = hand_over::handle_pose();
+        let parts = vec![part("handle", hand_over::handle_mesh(3_000), start, true)];
+        let [right, left] = hand_over::keyframes().map(|keys| sample(&keys, RATE));
+        assert_eq!(right.len(), left.len(), "one time line");
+        let right_model = Arc::new(right_hand());
+        let left_model = Arc::new(right_model.mirrored());
+        let hands = [(right_model, &right[0]), (left_model, &left[0])]
+            .map(|(model, first)| {
+                let parked = HandPose {
+                    root: first.tracker,
+                    flex: [0.0; FLEX_COUNT],
+                };
+                GraspingHand::new(model, GraspParams::default(), parked).expect("segments build")
+            })
+            .into();
+        let mut interaction = Interaction::new(hands, &parts, SlideParams::default(), 1.0 / RATE);
+        let mut events = Vec::new();
+        for (frame, (right, left)) in right.iter().zip(&left).enumerate() {
+            let stepped = interaction.step(&[
+                HandTarget::tracking(right.input()),
+                HandTarget::tracking(left.input()),
+            ]);
+            for (hand, stepped) in stepped.iter().enumerate() {
+                events.extend(stepped.hand.events.iter().map(|event| {
+                    let kind = match *event {
+                        GraspEvent::Grasp { .. } => EventKind::Grasp,
+                        GraspEvent::Release { part, .. } if stepped.handed_over.contains(&part) => {
+                            EventKind::HandOver
+                        }
+                        GraspEvent::Release { .. } => EventKind::Release,
+                    };
+                    (frame, hand, kind)
+                }));
+            }
+        }
+        // As the server publishes them: a hand-over after the grasp of its frame.
+        events.sort_by_key(|&(frame, _, kind)| (frame, kind == EventKind::HandOver));
+        let kinds: Vec<(usize, EventKind)> =
+            events.iter().map(|&(_, hand, kind)| (hand, kind)).collect();
+        assert_eq!(
+            kinds,
+            [
+                (0, EventKind::Grasp),
+                (1, EventKind::Grasp),
+                (0, EventKind::HandOver),
+                (1, EventKind::Release)
+            ],
+            "{events:?}"
+        );
+        let at = |index: usize| events[index].0 as f64 / RATE;
+        assert!(at(0) <= MILESTONES.right_grasped_by, "{events:?}");
+        assert!(at(1) <= MILESTONES.left_grasped_by, "{events:?}");
+        assert_eq!(
+            events[1].0, events[2].0,
+            "the hand-over comes with the grasp"
+        );
+        assert!(at(3) > MILESTONES.lifted, "{events:?}");
+        // Lifted 5 cm, less the few millimetres the left hand's script presses down after its
+        // grasp (it aims 5 mm into the handle).
+        let end = interaction.part_pose(HANDLE).expect("the handle");
+        let moved = end.translation.vector - start.translation.vector;
+        assert!(
+            (hand_over::LIFT - 0.006..=hand_over::LIFT).contains(&moved.z)
+                && moved.xy().norm() < 0.003,
+            "the handle moved by {moved:?}"
+        );
+        assert!(end.rotation.angle_to(&start.rotation) < 0.05);
     }
 }

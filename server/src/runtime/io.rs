@@ -25,6 +25,7 @@ use vas_protocol::{
 use super::control::{self, Session};
 use super::frames::{Change, InputFrame, LoopWork, Restart, Stamps, VerifiedFrame};
 use super::geometry::{ServedGeometry, wire_side};
+use super::inputs::TrackingClock;
 use super::loader::{Loaded, PendingRequest, SceneLoader};
 use super::loops::{Links, Loops};
 use super::ports::{Ports, Wakeups};
@@ -58,8 +59,9 @@ struct Io {
     loader: SceneLoader,
     /// The served scene's render meshes.
     geometry: ServedGeometry,
-    /// The side of the served scene's hand.
-    hand_side: HandSide,
+    /// The sides of the served scene's hands, in its order (the right one in a scene without
+    /// hand models, for the hand the tracker places).
+    hand_sides: Vec<HandSide>,
     /// The latest published part states, for the periodic parts frames.
     parts: Vec<PartState>,
     hand_frames: u64,
@@ -116,8 +118,16 @@ impl InteractionManager {
         (waker, internal): (Waker, WakeupReceiver),
         options: &RunOptions,
     ) -> Result<Self, RuntimeError> {
+        let mut session = session;
+        // Lockstep replays must give the same frames every time: their hands' tracking is timed
+        // by the samples. A free-running server serves a live user: by the system clock.
+        session.inputs.set_clock(if options.lockstep {
+            TrackingClock::SampleTime
+        } else {
+            TrackingClock::Arrival
+        });
         let geometry = ServedGeometry::of(start);
-        let hand_side = hand_side(&session.scene);
+        let hand_sides = hand_sides(&session.scene);
         let (ports, wakeups) =
             Ports::open(node, session.scene.parts.len(), geometry.sample().1.len())?;
         let mut io = Io {
@@ -130,7 +140,7 @@ impl InteractionManager {
             answer: Answer::default(),
             loader: SceneLoader::new(waker, options.load.clone()),
             geometry,
-            hand_side,
+            hand_sides,
             lockstep: Lockstep {
                 enabled: options.lockstep,
                 in_flight: false,
@@ -224,6 +234,7 @@ impl InteractionManager {
                 if loops.any_ended() {
                     return Err(RuntimeError::LoopEnded);
                 }
+                io.notice_silent_hands();
                 io.publish_parts(None);
                 io.log_failure(io.ports.update_connections());
                 io.log_stats_if_due();
@@ -263,6 +274,15 @@ impl Io {
             self.answer.awaited = Some((frame.stamps, Instant::now()));
         }
         self.inputs.send(work);
+    }
+
+    /// A frame for a hand whose samples stopped coming (free-running only): it says the hand is
+    /// untracked, and after the grace period lets go of what it holds.
+    fn notice_silent_hands(&mut self) {
+        if self.session.inputs.tick(wall_clock_ns()) {
+            let frame = self.session.inputs.frame();
+            self.submit(Work::Frame(frame));
+        }
     }
 
     /// Takes in the waiting samples of every input stream: each accepted one is a frame.
@@ -406,7 +426,7 @@ impl Io {
         if let Some(change) = change {
             if let Change::Restart(restart) = &change {
                 self.geometry.restart(restart);
-                self.hand_side = hand_side(&restart.scene);
+                self.hand_sides = hand_sides(&restart.scene);
             }
             let restarted = matches!(change, Change::Restart(_));
             self.submit(Work::Control(change));
@@ -467,6 +487,8 @@ impl Io {
         let now = wall_clock_ns();
         self.hand_frames += 1;
         let stamps = frame.stamps;
+        let sides = self.hand_sides.clone();
+        let side = |hand: usize| sides.get(hand).copied().unwrap_or(HandSide::Right);
         let events: Vec<SimEvent> = frame
             .events
             .iter()
@@ -480,23 +502,26 @@ impl Io {
                 grasp_type: event.grasp as u32,
                 part: event.part,
                 other: event.other,
-                hand: self.hand_side as u32,
+                hand: side(event.hand) as u32,
                 segment: event.at.map_or(0, |at| at.segment),
                 point: event.at.map_or([0.0; 3], |at| at.point.into()),
                 normal: event.at.map_or([0.0; 3], |at| at.normal.into()),
             })
             .collect();
         self.log_failure(self.ports.publish_events(&events));
-        if let Some(wrench) = frame.force {
-            self.log_failure(self.ports.publish_force(ForceFrame {
-                frame: self.hand_frames,
-                tracker: stamps.tracker,
-                glove: stamps.glove,
-                joints: stamps.joints,
-                timestamp_ns: now,
-                force: wrench.force.into(),
-                torque: wrench.torque.into(),
-            }));
+        for (index, hand) in frame.hands.iter().enumerate() {
+            if let Some(wrench) = hand.force {
+                self.log_failure(self.ports.publish_force(ForceFrame {
+                    frame: self.hand_frames,
+                    tracker: stamps.tracker,
+                    glove: stamps.glove,
+                    joints: hand.joints,
+                    timestamp_ns: now,
+                    force: wrench.force.into(),
+                    torque: wrench.torque.into(),
+                    hand: side(index) as u32,
+                }));
+            }
         }
         if frame.epoch == self.session.epoch && frame.parts.len() == self.parts.len() {
             let changed = (0u32..)
@@ -512,31 +537,33 @@ impl Io {
                 self.publish_parts(Some(frame));
             }
         }
-        // The hand frame goes last: a client that waits for the answer to its sample has the
+        // The hand frames go last: a client that waits for the answer to its sample has the
         // parts and events of the same frame by then.
-        let hand = HandFrame {
-            frame: self.hand_frames,
-            tracker: stamps.tracker,
-            glove: stamps.glove,
-            joints: stamps.joints,
-            timestamp_ns: wall_clock_ns(),
-            root: WirePose::from_isometry(&frame.hand_root),
-            flex: frame.flex,
-            touching: frame.touching,
-            grasp_type: frame.grasp as u32,
-            hand: self.hand_side as u32,
-            tracked: u32::from(frame.tracked),
-            segment_count: u32::try_from(frame.segments.len().min(HAND_SEGMENT_COUNT))
-                .expect("at most 16"),
-            reserved: 0,
-            segments: std::array::from_fn(|i| {
-                frame
-                    .segments
-                    .get(i)
-                    .map_or(WirePose::IDENTITY, WirePose::from_isometry)
-            }),
-        };
-        self.log_failure(self.ports.publish_hand(hand));
+        for (index, hand) in frame.hands.iter().enumerate() {
+            let segments = &hand.segments;
+            let frame = HandFrame {
+                frame: self.hand_frames,
+                tracker: stamps.tracker,
+                glove: stamps.glove,
+                joints: hand.joints,
+                timestamp_ns: wall_clock_ns(),
+                root: WirePose::from_isometry(&hand.root),
+                flex: hand.flex,
+                touching: hand.touching,
+                grasp_type: hand.grasp as u32,
+                hand: side(index) as u32,
+                tracked: u32::from(hand.tracked),
+                segment_count: u32::try_from(segments.len().min(HAND_SEGMENT_COUNT))
+                    .expect("at most 16"),
+                reserved: 0,
+                segments: std::array::from_fn(|i| {
+                    segments
+                        .get(i)
+                        .map_or(WirePose::IDENTITY, WirePose::from_isometry)
+                }),
+            };
+            self.log_failure(self.ports.publish_hand(frame));
+        }
     }
 
     /// Publishes the latest part states, stamped with `frame`'s inputs (or the latest inputs).
@@ -595,12 +622,15 @@ impl Io {
     }
 }
 
-/// The side of `scene`'s hand; right for a scene without a hand model (its tracked hand).
-fn hand_side(scene: &crate::scene::Scene) -> HandSide {
-    scene
-        .hand
-        .as_ref()
-        .map_or(HandSide::Right, |hand| wire_side(hand.model.side()))
+/// The sides of `scene`'s hands, in its order; the right one for a scene without a hand model
+/// (its tracked hand).
+fn hand_sides(scene: &crate::scene::Scene) -> Vec<HandSide> {
+    if scene.hands.is_empty() {
+        return vec![HandSide::Right];
+    }
+    (scene.hands.iter())
+        .map(|hand| wire_side(hand.model.side()))
+        .collect()
 }
 
 fn part_state(id: u32, pose: &nalgebra::Isometry3<f64>, flags: u32) -> PartState {

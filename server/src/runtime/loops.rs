@@ -21,10 +21,10 @@ use crossbeam_channel::{Receiver, Sender};
 use nalgebra::Isometry3;
 
 use super::frames::{
-    CandidateFrame, Change, GraspedFrame, InputFrame, ProposedHand, Stamps, VerifiedFrame,
-    wire_grasp,
+    CandidateFrame, Change, GraspedFrame, GraspedHand, InputFrame, ProposedHand, Stamps,
+    VerifiedFrame, wire_grasp,
 };
-use super::interaction::{GraspStage, HeldPart, SlideStage};
+use super::interaction::{GraspStage, HeldPart, SlideStage, SteppedHand};
 use super::rendezvous::{AwakeWatch, Handoff, Received, Work};
 use super::verify::Verifier;
 use super::wakeup::Waker;
@@ -255,11 +255,12 @@ struct GraspingLoop {
     outbox: Arc<Handoff<GraspedFrame, Change>>,
     feedback: Arc<PoseFeedback>,
     lockstep: bool,
-    /// The hand among the parts; `None` in a scene without a hand model.
+    /// The hands among the parts (none in a scene without a hand model); `None` before the
+    /// first restart.
     stage: Option<GraspStage>,
     epoch: u64,
     period: Duration,
-    /// The latest target and whether the hand has not reached it yet.
+    /// The latest targets and whether a hand has not reached its target yet.
     last: Option<(InputFrame, bool)>,
     stepped_at: Instant,
 }
@@ -268,7 +269,7 @@ impl GraspingLoop {
     fn run(mut self) {
         let mut meter = LoopMeter::new("grasping");
         loop {
-            let deadline = match self.last {
+            let deadline = match &self.last {
                 Some((_, true)) if !self.lockstep => Some(self.stepped_at + self.period),
                 _ => None,
             };
@@ -284,8 +285,8 @@ impl GraspingLoop {
                     }
                     continue;
                 }
-                Received::Timeout => match self.last {
-                    Some((input, _)) => self.step(input),
+                Received::Timeout => match &self.last {
+                    Some((input, _)) => self.step(input.clone()),
                     None => continue,
                 },
                 Received::Closed => break,
@@ -298,10 +299,8 @@ impl GraspingLoop {
 
     fn apply(&mut self, mut change: Change) {
         if let Change::Restart(restart) = &mut change {
-            self.stage = restart
-                .hand
-                .take()
-                .map(|hand| GraspStage::new(hand, &restart.scene.parts));
+            let hands = std::mem::take(&mut restart.hands);
+            self.stage = Some(GraspStage::new(hands, &restart.scene.parts));
             self.epoch = restart.epoch;
             self.period = period(restart.scene.rates.grasping_hz);
             self.last = None;
@@ -312,22 +311,38 @@ impl GraspingLoop {
     fn step(&mut self, input: InputFrame) {
         self.outbox.announce();
         self.stepped_at = Instant::now();
-        let hand = self.stage.as_mut().map(|stage| {
-            if let Some(poses) = self.feedback.read(self.epoch) {
-                stage.set_part_poses(&poses);
+        let mut stepped = match &mut self.stage {
+            Some(stage) => {
+                if let Some(poses) = self.feedback.read(self.epoch) {
+                    stage.set_part_poses(&poses);
+                }
+                stage.step(&input.hands)
             }
-            stage.step(&input.input)
+            None => Vec::new(),
+        }
+        .into_iter();
+        let hands: Vec<GraspedHand> = (input.hands.iter())
+            .map(|&target| match stepped.next() {
+                Some(SteppedHand { frame, handed_over }) => GraspedHand {
+                    target,
+                    frame: Some(frame),
+                    handed_over,
+                },
+                None => GraspedHand {
+                    target,
+                    frame: None,
+                    handed_over: Vec::new(),
+                },
+            })
+            .collect();
+        let unreached = hands.iter().any(|hand| {
+            (hand.frame.as_ref()).is_some_and(|frame| !reached(&frame.pose, &hand.target.input))
         });
-        let unreached = hand
-            .as_ref()
-            .is_some_and(|frame| !reached(&frame.pose, &input.input));
-        self.last = Some((input, unreached));
         self.outbox.send(Work::Frame(GraspedFrame {
             stamps: input.stamps,
-            input: input.input,
-            tracked: input.tracked,
-            hand,
+            hands,
         }));
+        self.last = Some((input, unreached));
     }
 }
 
@@ -351,8 +366,9 @@ struct SlidingLoop {
     stage: Option<SlideStage>,
     epoch: u64,
     period: Duration,
-    /// The latest frame's stamps and hand, and whether the held part has sliding left to do.
-    last: Option<(Stamps, ProposedHand, bool)>,
+    /// The latest frame's stamps and hands (their roots the tracked ones, their events taken),
+    /// and whether a held part has sliding left to do.
+    last: Option<(Stamps, Vec<ProposedHand>, bool)>,
     slid_at: Instant,
 }
 
@@ -360,7 +376,7 @@ impl SlidingLoop {
     fn run(mut self) {
         let mut meter = LoopMeter::new("sliding");
         loop {
-            let deadline = match self.last {
+            let deadline = match &self.last {
                 Some((_, _, true)) if !self.lockstep => Some(self.slid_at + self.period),
                 _ => None,
             };
@@ -394,6 +410,7 @@ impl SlidingLoop {
                     &scene.parts,
                     scene.params.sliding.clone(),
                     self.period.as_secs_f64(),
+                    scene.hands.len(),
                 ));
                 self.epoch = restart.epoch;
                 self.last = None;
@@ -423,77 +440,105 @@ impl SlidingLoop {
         };
         self.outbox.announce();
         self.slid_at = Instant::now();
-        let (mut hand, held, events) = match &frame.hand {
-            Some(hand_frame) => {
-                let held = stage.apply(hand_frame);
-                let touching = hand_frame.touching.to_vec();
-                let hand = ProposedHand {
-                    root: hand_frame.pose.root,
-                    flex: hand_frame.pose.flex.map(|v| v as f32),
-                    touching,
-                    grasp: wire_grasp(hand_frame.grasp),
-                    tracked: frame.tracked,
-                };
-                (hand, held, hand_frame.events.clone())
-            }
-            None => (
-                ProposedHand {
-                    root: frame.input.cart * frame.input.tracker,
-                    flex: frame.input.flex,
-                    touching: Vec::new(),
-                    grasp: wire_grasp(None),
-                    tracked: frame.tracked,
-                },
-                None,
-                Vec::new(),
-            ),
-        };
-        self.last = Some((
-            frame.stamps,
-            hand.clone(),
-            held.as_ref().is_some_and(HeldPart::has_sliding_left),
-        ));
-        if let Some(held) = &held {
-            hand.root = held.hand_root;
-        }
+        let frames: Vec<&crate::grasping::HandFrame> = frame
+            .hands
+            .iter()
+            .filter_map(|hand| hand.frame.as_ref())
+            .collect();
+        let mut held = stage.apply(&frames).into_iter();
+        let hands: Vec<ProposedHand> = (frame.hands.into_iter())
+            .map(|hand| {
+                let target = hand.target;
+                match hand.frame {
+                    Some(hand_frame) => ProposedHand {
+                        root: hand_frame.pose.root,
+                        flex: hand_frame.pose.flex.map(|v| v as f32),
+                        touching: hand_frame.touching.to_vec(),
+                        grasp: wire_grasp(hand_frame.grasp),
+                        tracked: target.tracked,
+                        joints: target.joints,
+                        held: held.next().flatten(),
+                        events: hand_frame.events,
+                        handed_over: hand.handed_over,
+                    },
+                    None => ProposedHand {
+                        root: target.input.cart * target.input.tracker,
+                        flex: target.input.flex,
+                        touching: Vec::new(),
+                        grasp: wire_grasp(None),
+                        tracked: target.tracked,
+                        joints: target.joints,
+                        held: None,
+                        events: Vec::new(),
+                        handed_over: Vec::new(),
+                    },
+                }
+            })
+            .collect();
+        let part_poses = stage.part_poses().to_vec();
+        self.remember(frame.stamps, &hands);
         let candidate = CandidateFrame {
             stamps: frame.stamps,
             epoch: self.epoch,
-            hand,
-            part_poses: stage.part_poses().to_vec(),
-            held,
-            events,
+            hands: hands.into_iter().map(holding).collect(),
+            part_poses,
         };
         self.outbox.send(Work::Frame(candidate));
     }
 
-    /// Another sliding frame towards the latest ghost, between inputs.
+    /// Keeps the latest hands to go on sliding from: their tracked roots and held parts, their
+    /// events taken (they are sent once).
+    fn remember(&mut self, stamps: Stamps, hands: &[ProposedHand]) {
+        let more = hands
+            .iter()
+            .any(|hand| hand.held.as_ref().is_some_and(HeldPart::has_sliding_left));
+        let hands = hands
+            .iter()
+            .map(|hand| ProposedHand {
+                events: Vec::new(),
+                handed_over: Vec::new(),
+                ..hand.clone()
+            })
+            .collect();
+        self.last = Some((stamps, hands, more));
+    }
+
+    /// Another sliding frame towards the latest ghosts, between inputs; a hand whose part came
+    /// to rest keeps it where it is.
     fn keep_sliding(&mut self) {
         self.take_refusals();
-        let (Some(stage), Some((stamps, hand, _))) = (&mut self.stage, &self.last) else {
+        let (Some(stage), Some((stamps, hands, _))) = (&mut self.stage, &self.last) else {
             return;
         };
         self.outbox.announce();
         self.slid_at = Instant::now();
-        let held = stage.keep_sliding();
-        let mut hand = hand.clone();
-        if let Some(held) = &held {
-            hand.root = held.hand_root;
-        }
+        let mut slid = stage.keep_sliding().into_iter();
+        let hands: Vec<ProposedHand> = hands
+            .iter()
+            .map(|hand| ProposedHand {
+                held: slid.next().flatten().or_else(|| hand.held.clone()),
+                ..hand.clone()
+            })
+            .collect();
         let stamps = *stamps;
-        let more = held.as_ref().is_some_and(HeldPart::has_sliding_left);
-        if let Some(last) = &mut self.last {
-            last.2 = more;
-        }
+        let part_poses = stage.part_poses().to_vec();
+        self.remember(stamps, &hands);
         self.outbox.send(Work::Frame(CandidateFrame {
             stamps,
             epoch: self.epoch,
-            hand,
-            part_poses: stage.part_poses().to_vec(),
-            held,
-            events: Vec::new(),
+            hands: hands.into_iter().map(holding).collect(),
+            part_poses,
         }));
     }
+}
+
+/// The hand as published: while it holds a part, where it keeps its grip on the part's visible
+/// pose.
+fn holding(mut hand: ProposedHand) -> ProposedHand {
+    if let Some(held) = &hand.held {
+        hand.root = held.hand_root;
+    }
+    hand
 }
 
 struct CollisionLoop {
@@ -522,7 +567,7 @@ impl CollisionLoop {
                 }
                 Received::Work(Work::Control(Change::Restart(restart))) => {
                     let bodies = restart.hand_bodies.clone();
-                    self.verifier = Some(Verifier::new(&restart.scene, bodies));
+                    self.verifier = Some(Verifier::new(&restart.scene, &bodies));
                     self.epoch = restart.epoch;
                     meter.log();
                 }
@@ -571,7 +616,7 @@ mod tests {
     use vas_protocol::{EventKind, InputStamp};
 
     use super::*;
-    use crate::runtime::frames::Restart;
+    use crate::runtime::frames::{HandTarget, Restart};
     use crate::runtime::interaction::Interaction;
     use crate::runtime::wakeup;
     use crate::scene::script::{ScriptedGrasp, sample};
@@ -630,7 +675,7 @@ mod tests {
         let mut offline = {
             let restart = Restart::new(Arc::clone(&scene), 1).expect("the hand builds");
             Interaction::new(
-                restart.hand.expect("the scene has a hand"),
+                restart.hands,
                 &scene.parts,
                 scene.params.sliding.clone(),
                 period(scene.rates.sliding_hz).as_secs_f64(),
@@ -639,7 +684,7 @@ mod tests {
         let expected: Vec<(Isometry3<f64>, Isometry3<f64>)> = inputs
             .iter()
             .map(|input| {
-                let frame = offline.step(input);
+                let frame = offline.step(&[HandTarget::tracking(*input)]).remove(0);
                 (
                     frame.hand.pose.root,
                     offline.part_poses().next().expect("a part"),
@@ -665,14 +710,13 @@ mod tests {
                     glove: stamp,
                     joints: InputStamp::default(),
                 },
-                input: *input,
-                tracked: true,
+                hands: vec![HandTarget::tracking(*input)],
             }));
             let frame = verified_out
                 .recv_timeout(Duration::from_secs(60))
                 .expect("every frame comes back verified");
             assert_eq!(frame.stamps.tracker, stamp);
-            assert_eq!(frame.hand_root, *root, "sample {seq}: the hand");
+            assert_eq!(frame.hands[0].root, *root, "sample {seq}: the hand");
             assert_eq!(frame.parts[0].pose, *handle, "sample {seq}: the handle");
             grasps += frame
                 .events

@@ -1,16 +1,18 @@
 //! The collision loop's verification: no frame leaves the server with a part or a hand segment at
 //! a colliding pose.
 //!
-//! The scene's parts and the hand's 16 segments are objects of one [`CollisionPipeline`]; each
-//! candidate frame moves those that moved, and the pipeline's stages (moved-object queue, box
-//! sweep, interest matrix, separating planes, DOP-trees) find what collides. A moved object in a
-//! colliding pair is put back at its last verified pose (the whole hand at once), and the frame
-//! is checked again, until nothing moved collides. Pairs that collided before anything moved (a
-//! scene that starts with parts touching) are left alone: no move of this frame caused them.
+//! The scene's parts and the hands' segments (16 each) are objects of one
+//! [`CollisionPipeline`]; each candidate frame moves those that moved, and the pipeline's stages
+//! (moved-object queue, box sweep, interest matrix, separating planes, DOP-trees) find what
+//! collides. A moved object in a colliding pair is put back at its last verified pose (a whole
+//! hand at once), and the frame is checked again, until nothing moved collides. Pairs that
+//! collided before anything moved (a scene that starts with parts touching) are left alone: no
+//! move of this frame caused them.
 //!
-//! The hand and the part it holds are not checked against each other: the grasp is that contact,
-//! and the clasp already keeps fingers out of the part. Contacts between parts and between the hand
-//! and parts are turned into begin and end events here, where the frame is final.
+//! A hand and the part it holds are not checked against each other: the grasp is that contact,
+//! and the clasp already keeps fingers out of the part. The hands are not checked against each
+//! other either (they are the user's own). Contacts between parts and between the hands and parts
+//! are turned into begin and end events here, where the frame is final.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
@@ -18,7 +20,9 @@ use std::sync::Arc;
 use nalgebra::Isometry3;
 use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOUCHING};
 
-use super::frames::{CandidateFrame, ContactAt, Event, VerifiedFrame, VerifiedPart, wire_grasp};
+use super::frames::{
+    CandidateFrame, ContactAt, Event, VerifiedFrame, VerifiedHand, VerifiedPart, wire_grasp,
+};
 use crate::collision::DopTree;
 use crate::collision::pipeline::{
     CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
@@ -32,7 +36,7 @@ use crate::scene::Scene;
 /// of objects pushed into each other).
 const MAX_PASSES: usize = 3;
 
-/// The hand's kinematics and segment meshes, for the verifier.
+/// A hand's kinematics and segment meshes, for the verifier.
 #[derive(Clone)]
 pub struct HandBodies {
     /// The kinematic model.
@@ -61,32 +65,58 @@ impl HandBodies {
     }
 }
 
-struct VerifiedHand {
+/// A hand's segments in the pipeline.
+struct HandObjects {
     model: Arc<HandModel>,
     segments: Vec<ObjectId>,
+}
+
+/// A hand's last verified state.
+struct CheckedHand {
+    /// Its segments; `None` without a hand model, where the hand is where the tracker puts it.
+    objects: Option<HandObjects>,
+    root: Isometry3<f64>,
+    flex: [f32; vas_protocol::FLEX_COUNT],
+    touching: u32,
+    held: Option<PartId>,
+}
+
+impl CheckedHand {
+    /// Each segment's verified pose in the world; empty without a hand model.
+    fn segment_poses(&self) -> Vec<Isometry3<f64>> {
+        let Some(objects) = &self.objects else {
+            return Vec::new();
+        };
+        let flex: FlexVector = self.flex.map(f64::from);
+        (objects.model.segment_poses(&flex).iter())
+            .map(|local| self.root * local)
+            .collect()
+    }
+
+    fn owns(&self, object: ObjectId) -> bool {
+        (self.objects.as_ref()).is_some_and(|objects| objects.segments.contains(&object))
+    }
 }
 
 /// Verifies candidate frames against the scene and keeps the last verified state.
 pub struct Verifier {
     pipeline: CollisionPipeline<DopTree>,
     parts: Vec<ObjectId>,
-    hand: Option<VerifiedHand>,
+    /// In the scene's order; one without segments in a scene without hand models.
+    hands: Vec<CheckedHand>,
     verified: Vec<VerifiedPart>,
-    hand_root: Isometry3<f64>,
-    flex: [f32; vas_protocol::FLEX_COUNT],
-    touching: u32,
-    /// The contacts of the last frame, by (part, other), each with where it was.
-    contacts: BTreeMap<(PartId, u32), ContactAt>,
-    held: Option<PartId>,
+    /// The contacts of the last frame, by (part, other, hand), each with where it was; the hand
+    /// is the one touching (`other` is [`HAND_PART_ID`]) or holding `part`.
+    contacts: BTreeMap<(PartId, u32, usize), ContactAt>,
     /// The pairs colliding after the last pipeline frame.
     colliding: BTreeSet<(ObjectId, ObjectId)>,
     refused_moves: u64,
 }
 
 impl Verifier {
-    /// The scene's parts at their configured poses and, with a hand model, its segments with the
-    /// flat hand at the identity root.
-    pub fn new(scene: &Scene, hand: Option<HandBodies>) -> Verifier {
+    /// The scene's parts at their configured poses and the `hands`' segments (the scene's, in
+    /// its order) with flat hands at the identity root.
+    pub fn new(scene: &Scene, hands: &[HandBodies]) -> Verifier {
         let mut pipeline = CollisionPipeline::new(PipelineConfig::default());
         // The parts' trees and hulls are the scene's, which the other loops use too (a clone of
         // a tree shares it; a hull is small, its vertices bounded).
@@ -107,35 +137,49 @@ impl Verifier {
                     .expect("a validated scene's poses are valid and its parts fit")
             })
             .collect();
-        // The hand's segments get a group of their own, never tested among themselves
-        // (neighbouring segments touch at their joints by design): the one after the scene's,
-        // so that the interest matrix stays as small as the scene's groups.
+        // The hands' segments get a group of their own, never tested among themselves
+        // (neighbouring segments touch at their joints by design, and the hands are the user's):
+        // the one after the scene's, so that the interest matrix stays as small as the scene's
+        // groups.
         let hand_group = scene.groups.spare_id();
         let mut interest = scene.interest_matrix(&parts);
         interest.disallow_groups(hand_group, hand_group);
-        let hand = hand.map(|bodies| {
-            let poses = bodies.model.segment_poses(&[0.0; vas_protocol::FLEX_COUNT]);
-            let segments = bodies
-                .meshes
-                .iter()
-                .zip(&bodies.trees)
-                .zip(poses)
-                .map(|((mesh, tree), pose)| {
-                    pipeline
-                        .add(ObjectDesc {
-                            model: model(tree, ConvexHull::of(mesh)),
-                            pose,
-                            group: hand_group,
-                            is_static: false,
-                        })
-                        .expect("segment poses of a flat hand are valid")
-                })
-                .collect();
-            VerifiedHand {
-                model: bodies.model,
-                segments,
-            }
-        });
+        let checked = |objects| CheckedHand {
+            objects,
+            root: Isometry3::identity(),
+            flex: [0.0; vas_protocol::FLEX_COUNT],
+            touching: 0,
+            held: None,
+        };
+        let mut checked_hands: Vec<CheckedHand> = hands
+            .iter()
+            .map(|bodies| {
+                let poses = bodies.model.segment_poses(&[0.0; vas_protocol::FLEX_COUNT]);
+                let segments = bodies
+                    .meshes
+                    .iter()
+                    .zip(&bodies.trees)
+                    .zip(poses)
+                    .map(|((mesh, tree), pose)| {
+                        pipeline
+                            .add(ObjectDesc {
+                                model: model(tree, ConvexHull::of(mesh)),
+                                pose,
+                                group: hand_group,
+                                is_static: false,
+                            })
+                            .expect("segment poses of a flat hand are valid")
+                    })
+                    .collect();
+                checked(Some(HandObjects {
+                    model: Arc::clone(&bodies.model),
+                    segments,
+                }))
+            })
+            .collect();
+        if checked_hands.is_empty() {
+            checked_hands.push(checked(None));
+        }
         pipeline.set_interest(interest);
         // Settle the pairs that collide as configured, so that they are not blamed on a move.
         let colliding = pairs(&pipeline.run_frame(Detail::Pairs).colliding);
@@ -148,7 +192,7 @@ impl Verifier {
         Verifier {
             pipeline,
             parts,
-            hand,
+            hands: checked_hands,
             verified: scene
                 .parts
                 .iter()
@@ -157,25 +201,10 @@ impl Verifier {
                     flags: 0,
                 })
                 .collect(),
-            hand_root: Isometry3::identity(),
-            flex: [0.0; vas_protocol::FLEX_COUNT],
-            touching: 0,
             contacts: BTreeMap::new(),
-            held: None,
             colliding,
             refused_moves: 0,
         }
-    }
-
-    /// Each hand segment's verified pose in the world; empty without a hand model.
-    fn segment_poses(&self) -> Vec<Isometry3<f64>> {
-        let Some(hand) = &self.hand else {
-            return Vec::new();
-        };
-        let flex: FlexVector = self.flex.map(f64::from);
-        (hand.model.segment_poses(&flex).iter())
-            .map(|local| self.hand_root * local)
-            .collect()
     }
 
     /// Moves put back because they collided, since the start.
@@ -205,18 +234,28 @@ impl Verifier {
                 moved_parts.push(id as PartId);
             }
         }
-        let hand_moved = candidate.hand.root != self.hand_root || candidate.hand.flex != self.flex;
-        let mut hand_checked =
-            hand_moved && self.move_hand(&candidate.hand.root, &candidate.hand.flex);
-        let held = candidate.held.as_ref().map(|held| held.part);
+        let moved: Vec<bool> = (self.hands.iter())
+            .zip(&candidate.hands)
+            .map(|(checked, proposed)| {
+                proposed.root != checked.root || proposed.flex != checked.flex
+            })
+            .collect();
+        let mut hand_checked: Vec<bool> = (0..self.hands.len())
+            .map(|hand| {
+                let proposed = &candidate.hands[hand];
+                moved[hand] && self.move_hand(hand, &proposed.root, &proposed.flex)
+            })
+            .collect();
+        let held: Vec<Option<PartId>> = (candidate.hands.iter())
+            .map(|hand| hand.held.as_ref().map(|held| held.part))
+            .collect();
         let mut refused: Vec<(PartId, Isometry3<f64>)> = Vec::new();
         for pass in 0.. {
-            let offending = self.offending(&colliding_before, held);
+            let offending = self.offending(&colliding_before, &held);
             if offending.is_empty() {
                 break;
             }
             let last_pass = pass + 1 >= MAX_PASSES;
-            let mut put_back_hand = false;
             moved_parts.retain(|&part| {
                 let blamed = last_pass || offending.contains(&self.parts[part as usize]);
                 if blamed {
@@ -224,33 +263,33 @@ impl Verifier {
                 }
                 !blamed
             });
-            if hand_checked
-                && (last_pass
-                    || self.hand.as_ref().is_some_and(|hand| {
-                        hand.segments
-                            .iter()
-                            .any(|segment| offending.contains(segment))
-                    }))
-            {
-                put_back_hand = true;
-                hand_checked = false;
-            }
             for &(part, pose) in &refused {
                 self.move_object(self.parts[part as usize], &pose);
             }
-            if put_back_hand {
-                let (root, flex) = (self.hand_root, self.flex);
-                self.move_hand(&root, &flex);
+            for (hand, checked) in hand_checked.iter_mut().enumerate() {
+                let blamed = *checked
+                    && (last_pass
+                        || offending
+                            .iter()
+                            .any(|&object| self.hands[hand].owns(object)));
+                if blamed {
+                    let (root, flex) = (self.hands[hand].root, self.hands[hand].flex);
+                    self.move_hand(hand, &root, &flex);
+                    *checked = false;
+                    self.refused_moves += 1;
+                }
             }
-            self.refused_moves += u64::from(put_back_hand) + refused.len() as u64;
+            self.refused_moves += refused.len() as u64;
             if last_pass {
                 self.colliding = pairs(&self.pipeline.run_frame(Detail::Pairs).colliding);
                 break;
             }
         }
-        let hand_accepted = hand_checked || (hand_moved && self.hand.is_none());
-        self.accept(&candidate, &refused, hand_accepted);
-        let frame = self.frame(candidate, hand_accepted);
+        let accepted: Vec<bool> = (0..self.hands.len())
+            .map(|hand| hand_checked[hand] || (moved[hand] && self.hands[hand].objects.is_none()))
+            .collect();
+        self.accept(&candidate, &refused, &accepted);
+        let frame = self.frame(candidate, &accepted);
         (frame, refused)
     }
 
@@ -259,14 +298,19 @@ impl Verifier {
         self.pipeline.queue_move(object, *pose).is_ok()
     }
 
-    /// Queues the hand's segments at `root` with `flex`; false without a hand model.
-    fn move_hand(&mut self, root: &Isometry3<f64>, flex: &[f32; vas_protocol::FLEX_COUNT]) -> bool {
-        let Some(hand) = &self.hand else {
+    /// Queues `hand`'s segments at `root` with `flex`; false without a hand model.
+    fn move_hand(
+        &mut self,
+        hand: usize,
+        root: &Isometry3<f64>,
+        flex: &[f32; vas_protocol::FLEX_COUNT],
+    ) -> bool {
+        let Some(objects) = &self.hands[hand].objects else {
             return false;
         };
         let flex: FlexVector = flex.map(f64::from);
-        let local = hand.model.segment_poses(&flex);
-        let segments = hand.segments.clone();
+        let local = objects.model.segment_poses(&flex);
+        let segments = objects.segments.clone();
         segments
             .iter()
             .zip(local)
@@ -274,29 +318,26 @@ impl Verifier {
     }
 
     /// Runs the pipeline and returns the objects in pairs that collide now but did not before,
-    /// except the hand's segments against the held part.
+    /// except each hand's segments against the part it holds (`held`, by hand).
     fn offending(
         &mut self,
         colliding_before: &BTreeSet<(ObjectId, ObjectId)>,
-        held: Option<PartId>,
+        held: &[Option<PartId>],
     ) -> BTreeSet<ObjectId> {
         let report = self.pipeline.run_frame(Detail::Pairs);
         self.colliding = pairs(&report.colliding);
-        let held = held.map(|part| self.parts[part as usize]);
-        let is_segment = |object: ObjectId| {
-            self.hand
-                .as_ref()
-                .is_some_and(|hand| hand.segments.contains(&object))
+        let held: Vec<Option<ObjectId>> = (held.iter())
+            .map(|part| part.map(|part| self.parts[part as usize]))
+            .collect();
+        let grasp_contact = |segment: ObjectId, part: ObjectId| {
+            (self.hands.iter().zip(&held))
+                .any(|(hand, &held)| held == Some(part) && hand.owns(segment))
         };
         report
             .colliding
             .iter()
             .filter(|pair| !colliding_before.contains(&(pair.a, pair.b)))
-            .filter(|&&CollidingPair { a, b, .. }| {
-                let grasp_contact =
-                    (Some(a) == held && is_segment(b)) || (Some(b) == held && is_segment(a));
-                !grasp_contact
-            })
+            .filter(|&&CollidingPair { a, b, .. }| !grasp_contact(a, b) && !grasp_contact(b, a))
             .flat_map(|pair| [pair.a, pair.b])
             .collect()
     }
@@ -305,7 +346,7 @@ impl Verifier {
         &mut self,
         candidate: &CandidateFrame,
         refused: &[(PartId, Isometry3<f64>)],
-        hand_accepted: bool,
+        accepted: &[bool],
     ) {
         for (id, pose) in candidate.part_poses.iter().enumerate() {
             if pose.translation.vector.iter().all(|v| v.is_finite())
@@ -315,110 +356,147 @@ impl Verifier {
                 verified.pose = *pose;
             }
         }
-        if hand_accepted {
-            self.hand_root = candidate.hand.root;
-            self.flex = candidate.hand.flex;
-            self.touching = candidate
-                .hand
-                .touching
-                .iter()
+        for ((checked, proposed), _) in (self.hands.iter_mut())
+            .zip(&candidate.hands)
+            .zip(accepted)
+            .filter(|(_, accepted)| **accepted)
+        {
+            checked.root = proposed.root;
+            checked.flex = proposed.flex;
+            checked.touching = (proposed.touching.iter())
                 .enumerate()
                 .filter(|(_, parts)| !parts.is_empty())
                 .fold(0, |bits, (segment, _)| bits | 1 << segment);
         }
     }
 
-    /// The frame to publish: verified poses, part flags, grasp and contact events.
-    fn frame(&mut self, candidate: CandidateFrame, hand_accepted: bool) -> VerifiedFrame {
+    /// The frame to publish: verified poses, part flags, grasp, release, hand-over and contact
+    /// events (a hand-over after the other hand's grasp that caused it).
+    fn frame(&mut self, candidate: CandidateFrame, accepted: &[bool]) -> VerifiedFrame {
         let mut events = Vec::new();
-        for event in &candidate.events {
-            events.push(match *event {
-                GraspEvent::Grasp { part, grasp, .. } => Event {
-                    kind: EventKind::Grasp,
-                    grasp: wire_grasp(Some(grasp)),
+        let mut hand_overs = Vec::new();
+        for (hand, proposed) in candidate.hands.iter().enumerate() {
+            for event in &proposed.events {
+                let (kind, grasp, part) = match *event {
+                    GraspEvent::Grasp { part, grasp, .. } => {
+                        (EventKind::Grasp, wire_grasp(Some(grasp)), part)
+                    }
+                    GraspEvent::Release { part, .. } if proposed.handed_over.contains(&part) => {
+                        (EventKind::HandOver, wire_grasp(None), part)
+                    }
+                    GraspEvent::Release { part, .. } => {
+                        (EventKind::Release, wire_grasp(None), part)
+                    }
+                };
+                let event = Event {
+                    kind,
+                    hand,
+                    grasp,
                     part,
                     other: HAND_PART_ID,
                     at: None,
-                },
-                GraspEvent::Release { part, .. } => Event {
-                    kind: EventKind::Release,
-                    grasp: wire_grasp(None),
-                    part,
-                    other: HAND_PART_ID,
-                    at: None,
-                },
-            });
-        }
-        let mut contacts = BTreeMap::new();
-        if hand_accepted || self.hand.is_none() {
-            for (segment, touches) in (0u32..).zip(&candidate.hand.touching) {
-                for touch in touches {
-                    let at = ContactAt {
-                        segment,
-                        point: touch.point,
-                        normal: touch.normal.into_inner(),
-                    };
-                    contacts.entry((touch.part, HAND_PART_ID)).or_insert(at);
+                };
+                if kind == EventKind::HandOver {
+                    hand_overs.push(event);
+                } else {
+                    events.push(event);
                 }
             }
-        } else {
-            // The hand stays where it was verified: so do its contacts.
-            contacts.extend(
-                self.contacts
-                    .iter()
-                    .filter(|&(&(_, other), _)| other == HAND_PART_ID),
-            );
         }
-        if let Some(held) = &candidate.held {
-            contacts.extend(
-                held.touching
-                    .iter()
-                    .map(|&(other, at)| ((held.part, other), at)),
-            );
-        }
-        for (&(part, other), &at) in &self.contacts {
-            if !contacts.contains_key(&(part, other)) {
-                events.push(contact_event(EventKind::ContactEnd, part, other, at));
+        events.append(&mut hand_overs);
+        let mut contacts = BTreeMap::new();
+        for (hand, proposed) in candidate.hands.iter().enumerate() {
+            if accepted[hand] || self.hands[hand].objects.is_none() {
+                for (segment, touches) in (0u32..).zip(&proposed.touching) {
+                    for touch in touches {
+                        let at = ContactAt {
+                            segment,
+                            point: touch.point,
+                            normal: touch.normal.into_inner(),
+                        };
+                        contacts
+                            .entry((touch.part, HAND_PART_ID, hand))
+                            .or_insert(at);
+                    }
+                }
+            } else {
+                // The hand stays where it was verified: so do its contacts.
+                contacts.extend(
+                    self.contacts
+                        .iter()
+                        .filter(|&(&(_, other, of), _)| other == HAND_PART_ID && of == hand),
+                );
+            }
+            if let Some(held) = &proposed.held {
+                contacts.extend(
+                    (held.touching.iter()).map(|&(other, at)| ((held.part, other, hand), at)),
+                );
             }
         }
-        for (&(part, other), &at) in &contacts {
-            if !self.contacts.contains_key(&(part, other)) {
-                events.push(contact_event(EventKind::ContactBegin, part, other, at));
+        for (&(part, other, hand), &at) in &self.contacts {
+            if !contacts.contains_key(&(part, other, hand)) {
+                events.push(contact_event(EventKind::ContactEnd, hand, part, other, at));
             }
         }
-        let held = candidate.held.as_ref().map(|held| held.part);
-        let released = self.held.is_some() && held.is_none();
-        self.held = held;
+        for (&(part, other, hand), &at) in &contacts {
+            if !self.contacts.contains_key(&(part, other, hand)) {
+                events.push(contact_event(
+                    EventKind::ContactBegin,
+                    hand,
+                    part,
+                    other,
+                    at,
+                ));
+            }
+        }
+        let held: Vec<Option<PartId>> = (candidate.hands.iter())
+            .map(|hand| hand.held.as_ref().map(|held| held.part))
+            .collect();
         for (id, part) in self.verified.iter_mut().enumerate() {
             let id = id as PartId;
             let touching = contacts
                 .keys()
-                .any(|&(a, b)| a == id || (b == id && b != HAND_PART_ID));
-            let sliding = candidate
-                .held
-                .as_ref()
-                .is_some_and(|held| held.part == id && !held.touching.is_empty());
-            part.flags = if held == Some(id) { PART_GRASPED } else { 0 }
-                | if touching { PART_TOUCHING } else { 0 }
+                .any(|&(a, b, _)| a == id || (b == id && b != HAND_PART_ID));
+            let sliding = (candidate.hands.iter()).any(|hand| {
+                (hand.held.as_ref())
+                    .is_some_and(|held| held.part == id && !held.touching.is_empty())
+            });
+            part.flags = if held.contains(&Some(id)) {
+                PART_GRASPED
+            } else {
+                0
+            } | if touching { PART_TOUCHING } else { 0 }
                 | if sliding { PART_SLIDING } else { 0 };
         }
         self.contacts = contacts;
+        let hands = (candidate.hands.into_iter())
+            .zip(&mut self.hands)
+            .map(|(proposed, checked)| {
+                let now = proposed.held.as_ref().map(|held| held.part);
+                let released = checked.held.is_some() && now.is_none();
+                checked.held = now;
+                VerifiedHand {
+                    root: checked.root,
+                    flex: checked.flex,
+                    segments: checked.segment_poses(),
+                    touching: checked.touching,
+                    grasp: proposed.grasp,
+                    tracked: proposed.tracked,
+                    joints: proposed.joints,
+                    force: match (&proposed.held, released) {
+                        (Some(held), _) => Some(held.wrench),
+                        (None, true) => Some(crate::sliding::Wrench::default()),
+                        (None, false) => None,
+                    },
+                }
+            })
+            .collect();
         VerifiedFrame {
             stamps: candidate.stamps,
             epoch: candidate.epoch,
-            hand_root: self.hand_root,
-            flex: self.flex,
-            segments: self.segment_poses(),
-            touching: self.touching,
-            grasp: candidate.hand.grasp,
-            tracked: candidate.hand.tracked,
+            hands,
             parts: self.verified.clone(),
             events,
-            force: match (&candidate.held, released) {
-                (Some(held), _) => Some(held.wrench),
-                (None, true) => Some(crate::sliding::Wrench::default()),
-                (None, false) => None,
-            },
         }
     }
 }
@@ -427,9 +505,10 @@ fn pairs(colliding: &[CollidingPair]) -> BTreeSet<(ObjectId, ObjectId)> {
     colliding.iter().map(|pair| (pair.a, pair.b)).collect()
 }
 
-fn contact_event(kind: EventKind, part: PartId, other: u32, at: ContactAt) -> Event {
+fn contact_event(kind: EventKind, hand: usize, part: PartId, other: u32, at: ContactAt) -> Event {
     Event {
         kind,
+        hand,
         grasp: wire_grasp(None),
         part,
         other,
@@ -481,23 +560,25 @@ mod tests {
         CandidateFrame {
             stamps: Stamps::default(),
             epoch: 1,
-            hand: ProposedHand {
+            hands: vec![ProposedHand {
                 root: Isometry3::identity(),
                 flex: [0.0; vas_protocol::FLEX_COUNT],
                 touching: Vec::new(),
                 grasp: WireGraspType::None,
                 tracked: true,
-            },
+                joints: Default::default(),
+                held: None,
+                events: Vec::new(),
+                handed_over: Vec::new(),
+            }],
             part_poses: poses,
-            held: None,
-            events: Vec::new(),
         }
     }
 
     #[test]
     fn moves_into_free_space_pass_and_moves_into_a_part_are_refused() {
         let scene = peg_in_hole();
-        let mut verifier = Verifier::new(&scene, None);
+        let mut verifier = Verifier::new(&scene, &[]);
         let block = scene.parts[0].pose;
         let start = scene.parts[1].pose;
         let mut checked = [0, 0];
@@ -556,7 +637,7 @@ mod tests {
         let k = scene.params.dop_orientations;
         assert_eq!(hand.geometry().tree(0).orientations().k(), k);
         assert_eq!(scene.parts[0].tree().orientations().k(), k);
-        let mut verifier = Verifier::new(scene, Some(HandBodies::of(model, &hand)));
+        let mut verifier = Verifier::new(scene, &[HandBodies::of(model, &hand)]);
         // One group more than the scene's, for the hand: the matrix stays tiny (a group id near
         // u16::MAX once made it 4 GiB of address space).
         assert_eq!(
@@ -566,14 +647,17 @@ mod tests {
         let poses: Vec<_> = scene.parts.iter().map(|part| part.pose).collect();
         let above = Isometry3::from(Translation3::new(0.0, 0.0, 0.3));
         let mut free = candidate(poses.clone());
-        free.hand.root = above;
+        free.hands[0].root = above;
         let (frame, _) = verifier.verify(free);
-        assert_eq!(frame.hand_root, above, "free space: accepted");
+        assert_eq!(frame.hands[0].root, above, "free space: accepted");
         let mut inside = candidate(poses);
-        inside.hand.root = Isometry3::from(Translation3::from(Vector3::new(0.0, 0.0, 0.025)));
+        inside.hands[0].root = Isometry3::from(Translation3::from(Vector3::new(0.0, 0.0, 0.025)));
         let (frame, refused) = verifier.verify(inside);
         assert!(refused.is_empty(), "no part moved");
-        assert_eq!(frame.hand_root, above, "inside the block: the hand stays");
+        assert_eq!(
+            frame.hands[0].root, above,
+            "inside the block: the hand stays"
+        );
         assert_eq!(verifier.refused_moves(), 1);
     }
 }

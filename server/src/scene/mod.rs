@@ -7,10 +7,13 @@
 //! ```toml
 //! name = "peg in hole"
 //! # hand = "hands/right.toml"          # optional hand model, relative to this file
+//! # hands = ["hands/right.toml", "hands/left.toml"]  # or two, one of each side; the first
+//! #                                    # is the one the tracker and the glove drive
 //!
 //! [params]                             # all optional, with defaults
 //! dop_orientations = 24
 //! sliding = { metaphor = "rubber-band", contact_tolerance = 1e-4 }
+//! tracking = { lost_after = 0.1, grace = 0.5 }   # seconds of sample time, for hand joints
 //!
 //! [rates]                              # optional, hertz
 //! publish_hz = 60
@@ -45,6 +48,7 @@
 //! Parts are numbered in the order of `[[parts]]`, then of each assembly's parts.
 
 mod assembly;
+pub mod hand_over;
 mod params;
 pub mod script;
 
@@ -69,7 +73,7 @@ use crate::geometry::{
 };
 use crate::grasping::{HandModel, PartGeometry};
 use params::Problem;
-pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates};
+pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates, TrackingParams};
 
 /// How far from 1 a rotation quaternion's norm may be (relative), as a config writes it with a
 /// limited number of digits.
@@ -127,8 +131,10 @@ pub struct Scene {
     pub source: PathBuf,
     /// The parts; a part's id is its index here.
     pub parts: Vec<Part>,
-    /// The hand model the scene names, loaded and validated with it.
-    pub hand: Option<SceneHand>,
+    /// The hand models the scene names (`hand`, or `hands`: at most one of each side), loaded
+    /// and validated with it. The first is the hand that tracker and glove samples drive;
+    /// hand-joints samples drive the hand of their side.
+    pub hands: Vec<SceneHand>,
     /// Parameters of the algorithms.
     pub params: AlgorithmParams,
     /// Rates of the runtime loops.
@@ -370,6 +376,7 @@ pub fn default_scene_path() -> PathBuf {
 struct SceneFile {
     name: String,
     hand: Option<PathBuf>,
+    hands: Option<Vec<PathBuf>>,
     #[serde(default)]
     params: AlgorithmParams,
     #[serde(default)]
@@ -564,7 +571,8 @@ impl Scene {
             s,
             "params: {}-DOPs; sliding {} (contact tolerance {contact_tolerance}, lift {}, \
              {} iterations, {} stall cycles, cluster angle {} rad, {} slide-in units); \
-             clasp (flex tolerance {} rad, root tolerance {} m, {} steps, max motion {} m)",
+             clasp (flex tolerance {} rad, root tolerance {} m, {} steps, max motion {} m); \
+             tracking (lost after {} s, grace {} s)",
             p.dop_orientations,
             sl.metaphor,
             sl.lift,
@@ -575,7 +583,9 @@ impl Scene {
             cl.flex_tolerance,
             cl.root_tolerance,
             cl.max_steps,
-            cl.max_motion
+            cl.max_motion,
+            p.tracking.lost_after,
+            p.tracking.grace
         );
         let r = &self.rates;
         let _ = writeln!(
@@ -583,12 +593,17 @@ impl Scene {
             "rates: publish {} Hz, collision {} Hz, sliding {} Hz, grasping {} Hz",
             r.publish_hz, r.collision_hz, r.sliding_hz, r.grasping_hz
         );
+        let hands: Vec<String> = (self.hands.iter())
+            .map(|hand| hand.path.display().to_string())
+            .collect();
         let _ = write!(
             s,
-            "hand: {}",
-            self.hand
-                .as_ref()
-                .map_or("none".to_owned(), |h| h.path.display().to_string())
+            "hands: {}",
+            if hands.is_empty() {
+                "none".to_owned()
+            } else {
+                hands.join(", ")
+            }
         );
         s
     }
@@ -703,24 +718,42 @@ impl Loader<'_> {
 
         // Loaded here, so that whatever loads a scene (check-scene, run, a load-scene request)
         // refuses a broken hand model the same way.
-        let hand = match file.hand {
-            Some(hand) => {
-                let path = self.folder.join(&hand);
-                let model = HandModel::load_within(&path, self.limits)
-                    .map_err(|error| self.invalid("hand", error.to_string()))?;
-                Some(SceneHand {
-                    path,
-                    model: Arc::new(model),
-                })
+        let listed = match (file.hand, file.hands) {
+            (Some(_), Some(_)) => {
+                return Err(self.invalid("hands", "give `hand` or `hands`, not both"));
             }
-            None => None,
+            (Some(hand), None) => vec![("hand".to_owned(), hand)],
+            (None, Some(hands)) => (0..)
+                .zip(hands)
+                .map(|(index, hand)| (format!("hands[{index}]"), hand))
+                .collect(),
+            (None, None) => Vec::new(),
         };
+        let mut hands: Vec<SceneHand> = Vec::with_capacity(listed.len());
+        for (key, hand) in listed {
+            let path = self.folder.join(&hand);
+            let model = HandModel::load_within(&path, self.limits)
+                .map_err(|error| self.invalid(&key, error.to_string()))?;
+            if hands.iter().any(|other| other.model.side() == model.side()) {
+                return Err(self.invalid(
+                    key,
+                    format!(
+                        "a second {:?} hand: a scene has at most one of each side",
+                        model.side()
+                    ),
+                ));
+            }
+            hands.push(SceneHand {
+                path,
+                model: Arc::new(model),
+            });
+        }
 
         Ok(Scene {
             name: file.name,
             source: self.path.to_owned(),
             parts,
-            hand,
+            hands,
             params: file.params,
             rates: file.rates,
             groups: Groups {

@@ -30,6 +30,8 @@ pub struct AlgorithmParams {
     pub sliding: SlideParams,
     /// Natural grasping's clasp minimisation, the `[params.clasp]` table.
     pub clasp: ClaspParams,
+    /// What a hand does when its tracking drops, the `[params.tracking]` table.
+    pub tracking: TrackingParams,
 }
 
 impl Default for AlgorithmParams {
@@ -38,9 +40,37 @@ impl Default for AlgorithmParams {
             dop_orientations: DEFAULT_K,
             sliding: SlideParams::default(),
             clasp: ClaspParams::default(),
+            tracking: TrackingParams::default(),
         }
     }
 }
+
+/// How a hand driven by hand-joints samples rides out a loss of tracking, in seconds of sample
+/// time (the samples' timestamps, so that a lockstep replay gives the same outcome every time).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrackingParams {
+    /// A hand whose latest sample is this much older than the newest sample of any input is
+    /// untracked, as one whose latest sample says so; 0.1 s by default (a few frames of a
+    /// headset's hand tracking).
+    pub lost_after: f64,
+    /// A hand untracked this long after its last tracked sample lets go of the part it holds
+    /// (where the part is); until then the part stays held. 0.5 s by default, as users of
+    /// hand-tracking SDKs ask for.
+    pub grace: f64,
+}
+
+impl Default for TrackingParams {
+    fn default() -> Self {
+        TrackingParams {
+            lost_after: 0.1,
+            grace: 0.5,
+        }
+    }
+}
+
+/// The longest tracking time accepted (seconds).
+const MAX_TRACKING_S: f64 = 60.0;
 
 /// Rates of the runtime loops, in hertz (each loop runs at most this often).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -115,7 +145,15 @@ impl AlgorithmParams {
         self.clasp.validate().map_err(|e| Problem {
             key: format!("params.clasp.{}", e.key),
             reason: e.reason,
-        })
+        })?;
+        let tracking = (0.0, MAX_TRACKING_S);
+        within(
+            "params.tracking.lost_after",
+            self.tracking.lost_after,
+            tracking,
+            "s",
+        )?;
+        within("params.tracking.grace", self.tracking.grace, tracking, "s")
     }
 }
 
@@ -155,6 +193,17 @@ mod tests {
         let mut params = AlgorithmParams::default();
         params.clasp.max_steps = 0;
         assert_eq!(params.validate().unwrap_err().key, "params.clasp.max_steps");
+        let mut params = AlgorithmParams::default();
+        params.tracking.grace = -0.5;
+        assert_eq!(params.validate().unwrap_err().key, "params.tracking.grace");
+        params.tracking = TrackingParams {
+            lost_after: f64::NAN,
+            grace: 0.5,
+        };
+        assert_eq!(
+            params.validate().unwrap_err().key,
+            "params.tracking.lost_after"
+        );
         let rates = Rates {
             grasping_hz: 0.0,
             ..Rates::default()

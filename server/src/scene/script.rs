@@ -39,6 +39,25 @@ impl Keyframe {
         }
     }
 
+    /// The same keyframe for the other hand: the cart and the hand root mirrored in the world's
+    /// `x = 0` plane (positions get `x` negated, rotations `R` become `S R S` for
+    /// `S = diag(-1, 1, 1)`), the flex values as they are (a mirrored hand model reads them so).
+    pub fn mirrored(&self) -> Keyframe {
+        let mirror = |pose: &Isometry3<f64>| {
+            let t = pose.translation.vector;
+            let q = pose.rotation.quaternion();
+            Isometry3::from_parts(
+                Translation3::new(-t.x, t.y, t.z),
+                UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(q.w, q.i, -q.j, -q.k)),
+            )
+        };
+        Keyframe {
+            cart: mirror(&self.cart),
+            tracker: mirror(&self.tracker),
+            ..*self
+        }
+    }
+
     /// The input sample it stands for (flex values as the glove sends them, in `f32`).
     pub fn input(&self) -> HandInput {
         HandInput {
@@ -67,6 +86,28 @@ pub fn sample(keys: &[Keyframe], rate_hz: f64) -> Vec<Keyframe> {
     }
     out.extend(keys.last());
     out
+}
+
+/// The keyframes at `time`, interpolated as [`sample`] does (before the first key, the first;
+/// after the last, the last); `None` without keys.
+pub fn keyframe_at(keys: &[Keyframe], time: f64) -> Option<Keyframe> {
+    let next = keys.partition_point(|key| key.time <= time);
+    match (
+        next.checked_sub(1).map(|i| keys[i]),
+        keys.get(next).copied(),
+    ) {
+        (Some(a), Some(b)) => {
+            let t = (time - a.time) / (b.time - a.time);
+            Some(Keyframe {
+                time,
+                cart: a.cart.lerp_slerp(&b.cart, t),
+                tracker: a.tracker.lerp_slerp(&b.tracker, t),
+                flex: std::array::from_fn(|v| a.flex[v] + t * (b.flex[v] - a.flex[v])),
+            })
+        }
+        (Some(key), None) | (None, Some(key)) => Some(Keyframe { time, ..key }),
+        (None, None) => None,
+    }
 }
 
 /// A hand posture: flex values in degrees by CyberGlove index, the others zero.
@@ -114,7 +155,7 @@ fn at(translation: [f64; 3]) -> Isometry3<f64> {
 }
 
 /// The radius of the scripted power grasp's handle (metres).
-const HANDLE_RADIUS: f64 = 0.016;
+pub const HANDLE_RADIUS: f64 = 0.016;
 
 /// When a scripted grasp must have happened, in seconds from its start.
 #[derive(Debug, Clone, Copy, PartialEq)]

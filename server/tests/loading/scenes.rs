@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use nalgebra::{Point2, Point3};
 use vas_server::geometry::{TriMesh, load_mesh};
+use vas_server::grasping::Side;
 use vas_server::scene::{Scene, SceneError, default_scene_path};
 use vas_server::sliding::Metaphor;
 
@@ -258,8 +259,12 @@ movable = true
     assert!((two.pose.rotation.quaternion().norm() - 1.0).abs() < 1e-15);
     assert_eq!(three.group, "default");
     assert_eq!(
-        scene.hand.as_ref().map(|hand| hand.path.clone()),
-        Some(dir.join("hand.toml"))
+        scene
+            .hands
+            .iter()
+            .map(|hand| hand.path.clone())
+            .collect::<Vec<_>>(),
+        [dir.join("hand.toml")]
     );
     assert_eq!(scene.params.dop_orientations, 26);
     // Parts with one mesh share one tree (built once, on first use), with the scene's
@@ -497,6 +502,30 @@ fn inconsistent_parts_are_refused() {
         &["hand", "hands/left.toml", "No such file"],
     );
     refused("not_toml", "name = \n", &["line 1"]);
+}
+
+#[test]
+fn a_scene_has_at_most_one_hand_of_each_side() {
+    let [right, left] = ["right", "left"].map(|side| configs().join(format!("hands/{side}.toml")));
+    let dir = scratch_dir("two_hands");
+    let path = write(
+        &dir,
+        "scene.toml",
+        &format!("name = \"s\"\nhands = [{right:?}, {left:?}]\n{PEG}"),
+    );
+    let scene = Scene::load(&path).unwrap();
+    let sides: Vec<Side> = scene.hands.iter().map(|hand| hand.model.side()).collect();
+    assert_eq!(sides, [Side::Right, Side::Left]);
+    refused(
+        "hand_and_hands",
+        &format!("name = \"s\"\nhand = {right:?}\nhands = [{left:?}]\n{PEG}"),
+        &["hands", "not both"],
+    );
+    refused(
+        "two_right_hands",
+        &format!("name = \"s\"\nhands = [{right:?}, {right:?}]\n{PEG}"),
+        &["hands[1]", "at most one of each side"],
+    );
 }
 
 #[test]

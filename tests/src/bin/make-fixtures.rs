@@ -23,7 +23,7 @@ fn main() -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)?;
     for scenario in &EXPECTED {
         let path = vas_tests::fixtures::write_fixture(scenario, &args.configs, &args.out)?;
-        println!("{}: {}", scenario.script, path.display());
+        println!("{}: {}", scenario.motion, path.display());
     }
     Ok(())
 }

@@ -11,7 +11,10 @@ use vas_protocol::{
     ControlStatus, FLEX_COUNT, FLEX_LIMITS_RAD, GloveSample, HandFrame, InputStamp,
     SlidingMetaphor, TrackerSample, wall_clock_ns,
 };
+use vas_server::grasping::Side;
+use vas_server::runtime::hand_joints::wire_joints;
 use vas_server::scene::{Scene, default_scene_path};
+use vas_tests::hands::{PINCH, captured};
 use vas_tests::{
     PATIENCE, Server, Spawned, binary, configs_dir, fixtures_dir, forget_prefix, tracker,
     unique_prefix,
@@ -445,9 +448,9 @@ fn record_writes_the_samples_clients_send() {
             "record",
             file.to_str().expect("utf-8"),
             "--count",
-            "3",
+            "4",
             "--description",
-            "three",
+            "four",
         ],
         Stdio::null(),
     );
@@ -466,16 +469,22 @@ fn record_writes_the_samples_clients_send() {
         timestamp_ns: first.timestamp_ns + 2,
         ..tracker(2, [0.2, 0.0, 0.0])
     };
+    let joints = wire_joints(
+        &captured(PINCH, Side::Right).expect("the capture reads"),
+        1,
+        first.timestamp_ns + 3,
+    );
     client.send_tracker(&first).expect("send");
     client.send_glove(&glove).expect("send");
     client.send_tracker(&second).expect("send");
+    client.send_hand_joints(&joints).expect("send");
     let status = recorder
         .wait_exit(PATIENCE)
-        .expect("the recorder stops after 3 samples");
+        .expect("the recorder stops after 4 samples");
     assert!(status.success(), "{}", recorder.log());
 
     let recording = Recording::load(&file).expect("a valid recording");
-    assert_eq!(recording.header, RecordingHeader::new("demo", "three"));
+    assert_eq!(recording.header, RecordingHeader::new("demo", "four"));
     let inputs: Vec<_> = recording
         .samples
         .iter()
@@ -486,20 +495,27 @@ fn record_writes_the_samples_clients_send() {
         [
             InputSample::Tracker(first),
             InputSample::Glove(glove),
-            InputSample::Tracker(second)
+            InputSample::Tracker(second),
+            InputSample::HandJoints(joints),
         ]
     );
 }
 
-/// Replays the demo scene's recording in lockstep and returns the hand frames and events the
-/// tool prints, without their timestamps (which differ from run to run).
-fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
-    let fixture = fixtures_dir().join("demo_peg_into_block.jsonl");
+/// Replays the recording `fixture` with `vas-client replay --lockstep` against a server in
+/// lockstep (on the scene `scene`, else the demo scene) and returns the hand frames and events
+/// the tool prints, without their timestamps (which differ from run to run).
+fn lockstep_answers(test: &str, fixture: &str, scene: Option<&str>) -> Vec<serde_json::Value> {
+    let fixture = fixtures_dir().join(fixture);
     let expected = Recording::load(&fixture)
         .expect("the fixture loads")
         .samples
         .len();
-    let mut server = Server::start_with(test, &["--lockstep"]);
+    let scene = scene.map(|name| configs_dir().join(name).display().to_string());
+    let mut arguments = vec!["--lockstep"];
+    if let Some(scene) = &scene {
+        arguments.extend(["--scene", scene]);
+    }
+    let mut server = Server::start_with(test, &arguments);
     server.connect();
     let mut replay = server.client_tool(
         &["replay", "--lockstep", fixture.to_str().expect("utf-8")],
@@ -518,7 +534,7 @@ fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
                 .expect("a frame of one kind");
             let payload = payload.as_object_mut().expect("an object");
             payload.remove("timestamp_ns");
-            for stream in ["tracker", "glove"] {
+            for stream in ["tracker", "glove", "joints"] {
                 payload[stream]
                     .as_object_mut()
                     .expect("a stamp")
@@ -546,8 +562,9 @@ fn lockstep_answers(test: &str) -> Vec<serde_json::Value> {
 
 #[test]
 fn a_lockstep_replay_answers_every_sample_the_same_way_twice() {
-    let once = lockstep_answers("lockstep1");
-    assert_eq!(once, lockstep_answers("lockstep2"));
+    let fixture = "demo_peg_into_block.jsonl";
+    let once = lockstep_answers("lockstep1", fixture, None);
+    assert_eq!(once, lockstep_answers("lockstep2", fixture, None));
     // What the README's walkthrough says the recording does.
     let events: Vec<&str> = once
         .iter()
@@ -561,6 +578,24 @@ fn a_lockstep_replay_answers_every_sample_the_same_way_twice() {
             "release peg at sample 219"
         ]
     );
+}
+
+#[test]
+fn a_lockstep_replay_of_captured_hands_answers_every_joint_sample() {
+    let answers = lockstep_answers(
+        "lockstep_joints",
+        "captured_pinch_pin.jsonl",
+        Some("precision_pinch.toml"),
+    );
+    let events: Vec<&str> = answers
+        .iter()
+        .filter_map(|frame| frame["event"]["text"].as_str())
+        .filter(|text| !text.starts_with("contact"))
+        .collect();
+    assert_eq!(events, ["grasp pin (tip_pinch) at sample 58"]);
+    let last = answers.last().expect("answers");
+    assert_eq!(last["hand"]["joints"]["seq"], 101, "{last}");
+    assert_eq!(last["hand"]["grasp_name"], "tip_pinch", "{last}");
 }
 
 /// Receives frames until a geometry frame of a generation after `after` arrives.
@@ -605,7 +640,7 @@ fn the_geometry_follows_every_reset_and_load() {
             );
         }
     }
-    let model = &own.hand.as_ref().expect("the demo has a hand").model;
+    let model = &own.hands.first().expect("the demo has a hand").model;
     assert_eq!(first.hands.len(), 1);
     assert_eq!(first.hands[0].model, model.name());
     assert_eq!(first.hands[0].segments.len(), model.segments().len());

@@ -157,7 +157,7 @@ fn the_renderer_example_draws_what_the_server_holds() {
     let segments: Vec<&String> = (starting("segment").into_iter())
         .filter(|line| field(line, "frame") == frame)
         .collect();
-    let model = &own.hand.as_ref().expect("the demo has a hand").model;
+    let model = &own.hands.first().expect("the demo has a hand").model;
     let flex = answer.flex.map(f64::from);
     let local = model.segment_poses(&flex);
     assert_eq!(

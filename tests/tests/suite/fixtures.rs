@@ -7,22 +7,23 @@ use std::fs;
 use vas_client::recording::Recording;
 use vas_server::scene::Scene;
 use vas_server::scene::script::RecordedScenario;
+use vas_tests::captured::CapturedMotion;
 use vas_tests::fixtures::write_fixture;
 use vas_tests::offline::{self, OfflineRun};
-use vas_tests::scenarios::{EXPECTED, Scenario};
+use vas_tests::scenarios::{EXPECTED, Motion, Scenario};
 
 fn replay(scenario: &Scenario) -> (Scene, OfflineRun) {
     let scene = Scene::load(&scenario.scene_path()).expect("the scenario's scene loads");
     let recording =
         Recording::load(&scenario.fixture_path()).expect("the scenario's fixture loads");
-    assert_eq!(recording.header.scene, scene.name, "{}", scenario.script);
+    assert_eq!(recording.header.scene, scene.name, "{}", scenario.motion);
     let run = offline::replay(&scene, &recording).expect("the fixture replays");
     (scene, run)
 }
 
 fn check(scenario: &Scenario) {
     let (scene, run) = replay(scenario);
-    let name = scenario.script;
+    let name = scenario.motion;
     let expected = &scenario.final_pose;
     let pose = run
         .final_pose(&scene, expected.part)
@@ -39,7 +40,10 @@ fn check(scenario: &Scenario) {
         run.frames,
         run.events
             .iter()
-            .map(|e| format!("{:?} {} {:?} @{}", e.kind, e.part, e.grasp, e.frame))
+            .map(|e| format!(
+                "{:?} {} {:?} hand {} @{}",
+                e.kind, e.part, e.grasp, e.hand, e.frame
+            ))
             .collect::<Vec<_>>(),
         expected.part,
         position_error,
@@ -58,12 +62,12 @@ fn check(scenario: &Scenario) {
     let events: Vec<_> = run
         .events
         .iter()
-        .map(|e| (e.kind, e.part.as_str(), e.grasp))
+        .map(|e| (e.hand, e.kind, e.part.as_str(), e.grasp))
         .collect();
     let wanted: Vec<_> = scenario
         .events
         .iter()
-        .map(|e| (e.kind, e.part, e.grasp))
+        .map(|e| (e.hand, e.kind, e.part, e.grasp))
         .collect();
     assert_eq!(events, wanted, "{name}");
     assert!(
@@ -117,6 +121,43 @@ fn demo_peg_into_block() {
 }
 
 #[test]
+fn captured_pinch_pin() {
+    check(&EXPECTED[6]);
+}
+
+#[test]
+fn captured_relaxed_approach() {
+    check(&EXPECTED[7]);
+}
+
+#[test]
+fn two_hand_handover() {
+    check(&EXPECTED[9]);
+}
+
+#[test]
+fn captured_tracking_loss() {
+    check(&EXPECTED[8]);
+}
+
+/// The tracking-loss recording keeps the pin through the short loss and lets go of it only the
+/// grace period (the scene's default) into the long one.
+#[test]
+fn a_hand_lets_go_only_once_its_tracking_is_lost_longer_than_the_grace() {
+    use vas_tests::captured::{LONG_LOSS_FROM_S, RATE_HZ};
+    let (scene, run) = replay(&EXPECTED[8]);
+    let grace = scene.params.tracking.grace;
+    let release = (run.events.iter())
+        .find(|event| event.kind == vas_protocol::EventKind::Release)
+        .expect("released");
+    let released_at = release.frame as f64 / RATE_HZ;
+    assert!(
+        (released_at - (LONG_LOSS_FROM_S + grace)).abs() <= 1.5 / RATE_HZ,
+        "released at {released_at} s, not {grace} s into the loss at {LONG_LOSS_FROM_S} s"
+    );
+}
+
+#[test]
 fn the_fixtures_are_what_the_generator_writes_every_time() {
     let out = tempfile::tempdir().expect("a temporary folder");
     for scenario in &EXPECTED {
@@ -128,12 +169,12 @@ fn the_fixtures_are_what_the_generator_writes_every_time() {
             write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
         )
         .expect("written");
-        assert_eq!(first, second, "{}: two runs differ", scenario.script);
+        assert_eq!(first, second, "{}: two runs differ", scenario.motion);
         let committed = fs::read(scenario.fixture_path()).expect("the fixture is committed");
         assert!(
             first == committed,
             "{}: the committed fixture is stale; regenerate it (tests/fixtures/README.md)",
-            scenario.script
+            scenario.motion
         );
     }
 }
@@ -167,9 +208,8 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
     let push = &EXPECTED[3];
     let mut scene = Scene::load(&push.scene_path()).expect("loads");
     let recording = Recording::load(&push.fixture_path()).expect("loads");
-    let model = scene.hand.as_ref().map(|hand| hand.model.as_ref());
-    let (inputs, _) = offline::hand_inputs(model, recording.samples.iter().map(|s| s.input));
-    scene.parts[0].pose.translation.vector = inputs[0].tracker.translation.vector;
+    let (targets, _) = offline::hand_targets(&scene, recording.samples.iter().map(|s| s.input));
+    scene.parts[0].pose.translation.vector = targets[0][0].input.tracker.translation.vector;
     let run = offline::replay(&scene, &recording).expect("replays");
     assert!(
         run.penetrations
@@ -182,6 +222,10 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
 
 #[test]
 fn every_recorded_scenario_has_one_expected_outcome() {
-    let listed: Vec<_> = EXPECTED.iter().map(|s| s.script).collect();
-    assert_eq!(listed, RecordedScenario::ALL);
+    let listed: Vec<_> = EXPECTED.iter().map(|s| s.motion).collect();
+    let motions: Vec<_> = (RecordedScenario::ALL.into_iter().map(Motion::Script))
+        .chain(CapturedMotion::ALL.into_iter().map(Motion::Captured))
+        .chain([Motion::HandOver])
+        .collect();
+    assert_eq!(listed, motions);
 }

@@ -109,8 +109,12 @@ fn captured_hands_drive_the_hand_and_impossible_ones_are_counted() {
     let mut client = server.connect();
     let model = HandModel::load(&configs_dir().join("hands/right.toml")).expect("the right hand");
     let retargeter = Retargeter::new(model).expect("the right hand retargets");
-    let relaxed = captured(RELAXED, Side::Right).transformed(&placement());
-    let pinch = captured(PINCH, Side::Right).transformed(&placement());
+    let relaxed = captured(RELAXED, Side::Right)
+        .expect("the capture reads")
+        .transformed(&placement());
+    let pinch = captured(PINCH, Side::Right)
+        .expect("the capture reads")
+        .transformed(&placement());
     let mut sender = Sender { seq: 0 };
 
     let open = sender.until_reached(&mut client, &retargeter, &relaxed);
@@ -187,6 +191,30 @@ fn captured_hands_drive_the_hand_and_impossible_ones_are_counted() {
         client.input_stats(PATIENCE).expect("stats").joints_accepted,
         accepted + 1
     );
+}
+
+/// A free-running server times tracking by its own clock: a hand whose samples stop coming is
+/// published untracked while nothing else comes.
+#[test]
+fn a_free_running_server_notices_a_hand_whose_samples_stop() {
+    let folder = tempfile::tempdir().expect("a scratch folder");
+    let scene = scene(folder.path());
+    let mut server =
+        Server::start_with("silent_hand", &["--scene", scene.to_str().expect("UTF-8")]);
+    let mut client = server.connect();
+    let pinch = captured(PINCH, Side::Right)
+        .expect("the capture reads")
+        .transformed(&placement());
+    let tracked = answer(&mut client, wire_joints(&pinch, 1, 0));
+    assert_eq!(tracked.tracked, 1);
+    let lost = client
+        .wait_for_hand_frame(PATIENCE, |frame| frame.tracked == 0, drop)
+        .expect("wait")
+        .expect("a frame saying the hand is untracked");
+    assert_eq!(lost.joints.seq, 1, "no other sample came");
+    // Where tracking left it (its fingers may still be closing on the last target).
+    assert_eq!(lost.root, tracked.root);
+    assert!(server.process.is_running());
 }
 
 /// What a finished tool printed on stdout; fails the test if it failed.

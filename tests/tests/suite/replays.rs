@@ -3,14 +3,15 @@
 //! in any published frame (judged by parry), and the same output on a second replay after a
 //! reset.
 
+use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Isometry3;
-use vas_client::recording::Recording;
+use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Frame};
-use vas_protocol::{EventKind, GraspType, HandFrame, wall_clock_ns};
-use vas_server::grasping::HandModel;
+use vas_protocol::{EventKind, GraspType, HandFrame, HandSide, wall_clock_ns};
+use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime::frames::Restart;
 use vas_server::scene::Scene;
 use vas_tests::offline::{Oracle, VisibleHand};
@@ -20,8 +21,10 @@ use vas_tests::{PATIENCE, Server};
 /// A hand frame without its frame number and timestamps (which differ between runs).
 #[derive(Debug, PartialEq)]
 struct Answer {
-    /// Sequence numbers of the tracker and glove samples it answers.
-    seqs: [u64; 2],
+    /// The hand's side code.
+    hand: u32,
+    /// Sequence numbers of the tracker, glove and hand-joints samples it answers.
+    seqs: [u64; 3],
     /// Root position and rotation.
     root: [f64; 7],
     /// Flex values, bit for bit.
@@ -30,27 +33,32 @@ struct Answer {
     touching: u32,
     /// Grasp type code.
     grasp: u32,
+    /// Whether the hand is tracked.
+    tracked: u32,
 }
 
 /// What one replay published.
 #[derive(Debug, PartialEq)]
 struct Replay {
-    /// Per sample, the hand frame answering it.
-    answers: Vec<Answer>,
-    /// Every event: kind, grasp, part, other.
-    events: Vec<[u32; 4]>,
+    /// Per sample, the hand frames of the frame answering it, one per hand.
+    answers: Vec<Vec<Answer>>,
+    /// Every event: kind, hand, grasp, part, other.
+    events: Vec<[u32; 5]>,
     /// The last parts frame's poses.
     final_poses: Vec<Isometry3<f64>>,
     /// Penetrations parry found in the published frames.
     penetrations: Vec<String>,
 }
 
+/// The scene's hands as the judge needs them: side code and model, in the scene's order.
+type Hands<'a> = [(u32, &'a HandModel)];
+
 /// Sends every sample of `recording`, each after the answer to the previous one, and gathers
 /// what the server published.
 fn replay(
     client: &mut Client,
     scene: &Scene,
-    (oracle, model): (&Oracle, &HandModel),
+    (oracle, hands): (&Oracle, &Hands),
     recording: &Recording,
 ) -> Replay {
     let mut out = Replay {
@@ -61,42 +69,66 @@ fn replay(
     };
     let mut seen = Seen {
         poses: scene.parts.iter().map(|part| part.pose).collect(),
-        held: None,
+        held: BTreeMap::new(),
+        hands: BTreeMap::new(),
     };
+    let start_ns = wall_clock_ns();
     for (index, recorded) in recording.samples.iter().enumerate() {
-        let input = recorded.input.with_timestamp(wall_clock_ns());
+        let input = recorded.stamped(start_ns);
         client.send_input(&input).expect("send");
         let deadline = Instant::now() + PATIENCE;
-        let answer = loop {
+        let mut answered = None;
+        // The answer, then every hand's frame of the same frame (they come one after another).
+        let frames = loop {
             assert!(Instant::now() < deadline, "sample {index}: no answer");
             client.wait(PATIENCE).expect("wait");
-            let hands = seen.take(&mut out, client.receive().expect("receive"));
-            if let Some(hand) = hands.into_iter().find(|hand| input.is_answered_by(hand)) {
-                break hand;
+            let hands_seen = seen.take(&mut out, client.receive().expect("receive"));
+            answered = answered.or_else(|| {
+                (hands_seen.iter())
+                    .find(|hand| input.is_answered_by(hand))
+                    .map(|hand| hand.frame)
+            });
+            if let Some(frame) = answered
+                && let Some(frames) = seen.hand_frames(frame, hands)
+            {
+                break frames;
             }
         };
-        let hand = VisibleHand {
-            root: answer.root.to_isometry(),
-            flex: answer.flex.map(f64::from),
-            held: seen.held,
-        };
-        assert_segments_placed(&answer, &hand, model, index);
+        let visible: Vec<VisibleHand> = (frames.iter())
+            .zip(hands)
+            .map(|(frame, &(side, model))| {
+                let hand = VisibleHand {
+                    root: frame.root.to_isometry(),
+                    flex: frame.flex.map(f64::from),
+                    held: seen.held.get(&side).copied(),
+                };
+                assert_segments_placed(frame, &hand, model, index);
+                hand
+            })
+            .collect();
         out.penetrations
-            .extend(oracle.penetrations(scene, &seen.poses, &hand, index));
-        let [x, y, z] = answer.root.position;
-        let [qx, qy, qz, qw] = answer.root.rotation;
-        out.answers.push(Answer {
-            seqs: [answer.tracker.seq, answer.glove.seq],
-            root: [x, y, z, qx, qy, qz, qw],
-            flex: answer.flex.iter().map(|v| v.to_bits()).collect(),
-            touching: answer.touching,
-            grasp: answer.grasp_type,
-        });
+            .extend(oracle.penetrations(scene, &seen.poses, &visible, index));
+        out.answers.push(frames.iter().map(answer).collect());
     }
-    // The last frame's parts and events were published before its hand frame.
+    // The last frame's parts and events were published before its hand frames.
     seen.take(&mut out, client.receive().expect("receive"));
     out.final_poses = seen.poses;
     out
+}
+
+/// A hand frame's content, without what differs between runs.
+fn answer(frame: &HandFrame) -> Answer {
+    let [x, y, z] = frame.root.position;
+    let [qx, qy, qz, qw] = frame.root.rotation;
+    Answer {
+        hand: frame.hand,
+        seqs: [frame.tracker.seq, frame.glove.seq, frame.joints.seq],
+        root: [x, y, z, qx, qy, qz, qw],
+        flex: frame.flex.iter().map(|v| v.to_bits()).collect(),
+        touching: frame.touching,
+        grasp: frame.grasp_type,
+        tracked: frame.tracked,
+    }
 }
 
 /// Checks that the hand frame's segment poses are the hand's verified root and flex values
@@ -121,15 +153,17 @@ fn assert_segments_placed(answer: &HandFrame, hand: &VisibleHand, model: &HandMo
     }
 }
 
-/// The state the frames received so far show: the latest part poses and the held part.
+/// The state the frames received so far show: the latest part poses, each hand's latest frame
+/// and held part (by side code).
 struct Seen {
     poses: Vec<Isometry3<f64>>,
-    held: Option<usize>,
+    held: BTreeMap<u32, usize>,
+    hands: BTreeMap<u32, HandFrame>,
 }
 
 impl Seen {
-    /// Takes in received frames: parts frames and events update the state (events are also
-    /// recorded in `out`); the hand frames are returned.
+    /// Takes in received frames: parts frames, events and hand frames update the state (events
+    /// are also recorded in `out`); the hand frames are returned.
     fn take(&mut self, out: &mut Replay, frames: Vec<Frame>) -> Vec<HandFrame> {
         let mut hands = Vec::new();
         for frame in frames {
@@ -143,30 +177,57 @@ impl Seen {
                 }
                 Frame::Event(event) => {
                     match EventKind::try_from(event.kind) {
-                        Ok(EventKind::Grasp) => self.held = Some(event.part as usize),
-                        Ok(EventKind::Release) => self.held = None,
+                        Ok(EventKind::Grasp) => {
+                            self.held.insert(event.hand, event.part as usize);
+                        }
+                        Ok(EventKind::Release | EventKind::HandOver) => {
+                            self.held.remove(&event.hand);
+                        }
                         _ => {}
                     }
-                    out.events
-                        .push([event.kind, event.grasp_type, event.part, event.other]);
+                    out.events.push([
+                        event.kind,
+                        event.hand,
+                        event.grasp_type,
+                        event.part,
+                        event.other,
+                    ]);
                 }
-                Frame::Hand(hand) => hands.push(hand),
+                Frame::Hand(hand) => {
+                    self.hands.insert(hand.hand, hand);
+                    hands.push(hand);
+                }
                 Frame::Force(_) | Frame::Geometry(_) => {}
             }
         }
         hands
     }
+
+    /// Every hand's frame numbered `frame`, in the order of `hands`, once all have come.
+    fn hand_frames(&self, frame: u64, hands: &Hands) -> Option<Vec<HandFrame>> {
+        (hands.iter())
+            .map(|(side, _)| {
+                self.hands
+                    .get(side)
+                    .filter(|hand| hand.frame == frame)
+                    .copied()
+            })
+            .collect()
+    }
 }
 
-fn check(scenario: &Scenario) {
-    let name = scenario.script;
+/// Replays `scenario` twice and checks it; returns what the first replay published.
+fn check(scenario: &Scenario) -> Replay {
+    let name = scenario.motion;
     let scene = Arc::new(Scene::load(&scenario.scene_path()).expect("the scene loads"));
     let recording = Recording::load(&scenario.fixture_path()).expect("the fixture loads");
     let bodies = Restart::new(Arc::clone(&scene), 1)
-        .expect("the scene's hand builds")
-        .hand_bodies
-        .expect("the scene has a hand");
+        .expect("the scene's hands build")
+        .hand_bodies;
     let oracle = Oracle::new(&scene, &bodies);
+    let hands: Vec<(u32, &HandModel)> = (bodies.iter())
+        .map(|bodies| (side_code(bodies.model.side()), bodies.model.as_ref()))
+        .collect();
     let scene_arg = scenario.scene_path().display().to_string();
     let mut server = Server::start_with(
         &format!("replay_{name}"),
@@ -174,7 +235,7 @@ fn check(scenario: &Scenario) {
     );
     let mut client = server.connect();
 
-    let judge = (&oracle, bodies.model.as_ref());
+    let judge = (&oracle, hands.as_slice());
     let first = replay(&mut client, &scene, judge, &recording);
     client.reset(PATIENCE).expect("reset");
     let second = replay(&mut client, &scene, judge, &recording);
@@ -193,13 +254,14 @@ fn check(scenario: &Scenario) {
             .position(|p| p.name == part)
             .expect("the expected part is in the scene") as u32
     };
-    let grasps_and_releases: Vec<(u32, u32, u32)> = first
+    let hand_events = [EventKind::Grasp, EventKind::Release, EventKind::HandOver].map(|k| k as u32);
+    let grasps_and_releases: Vec<[u32; 4]> = first
         .events
         .iter()
-        .filter(|[kind, ..]| *kind == EventKind::Grasp as u32 || *kind == EventKind::Release as u32)
-        .map(|&[kind, grasp, part, _]| (kind, part, grasp))
+        .filter(|[kind, ..]| hand_events.contains(kind))
+        .map(|&[kind, hand, grasp, part, _]| [hand, kind, part, grasp])
         .collect();
-    let expected: Vec<(u32, u32, u32)> = scenario
+    let expected: Vec<[u32; 4]> = scenario
         .events
         .iter()
         .map(|event| {
@@ -207,10 +269,14 @@ fn check(scenario: &Scenario) {
                 EventKind::Grasp => event.grasp,
                 _ => GraspType::None,
             };
-            (event.kind as u32, part_id(event.part), grasp as u32)
+            let hand = hands[event.hand].0;
+            [hand, event.kind as u32, part_id(event.part), grasp as u32]
         })
         .collect();
-    assert_eq!(grasps_and_releases, expected, "{name}: grasps and releases");
+    assert_eq!(
+        grasps_and_releases, expected,
+        "{name}: grasps, releases and hand-overs"
+    );
     let target = &scenario.final_pose;
     let pose = first.final_poses[part_id(target.part) as usize];
     let (position_error, angle_error) = target.errors(&pose);
@@ -226,12 +292,21 @@ fn check(scenario: &Scenario) {
         recording.samples.len(),
         first.events.len()
     );
+    first
+}
+
+/// A hand model's side as the wire codes it.
+fn side_code(side: Side) -> u32 {
+    match side {
+        Side::Right => HandSide::Right as u32,
+        Side::Left => HandSide::Left as u32,
+    }
 }
 
 fn scenario(name: &str) -> &'static Scenario {
     EXPECTED
         .iter()
-        .find(|scenario| scenario.script.name() == name)
+        .find(|scenario| scenario.motion.name() == name)
         .expect("a recorded scenario")
 }
 
@@ -258,4 +333,39 @@ fn push() {
 #[test]
 fn navigate_holding() {
     check(scenario("navigate_holding"));
+}
+
+#[test]
+fn captured_pinch_pin() {
+    check(scenario("captured_pinch_pin"));
+}
+
+#[test]
+fn captured_relaxed_approach() {
+    check(scenario("captured_relaxed_approach"));
+}
+
+#[test]
+fn two_hand_handover() {
+    check(scenario("two_hand_handover"));
+}
+
+/// The hand frames say the hand is untracked exactly while its samples do, and the pin is held
+/// through the short loss and let go in the long one.
+#[test]
+fn captured_tracking_loss() {
+    let scenario = scenario("captured_tracking_loss");
+    let replay = check(scenario);
+    let recording = Recording::load(&scenario.fixture_path()).expect("the fixture loads");
+    let lost: Vec<bool> = (recording.samples.iter())
+        .map(|recorded| match recorded.input {
+            InputSample::HandJoints(sample) => sample.joints.iter().all(|joint| joint.flags == 0),
+            _ => false,
+        })
+        .collect();
+    let untracked: Vec<bool> = (replay.answers.iter())
+        .map(|hands| hands[0].tracked == 0)
+        .collect();
+    assert_eq!(untracked, lost);
+    assert!(lost.iter().filter(|&&lost| lost).count() > 100);
 }

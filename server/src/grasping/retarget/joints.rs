@@ -190,9 +190,11 @@ impl JointPose {
         }
     }
 
-    /// The orientation as a rotation; meaningful once validated.
+    /// The orientation as a rotation, renormalised: validation accepts quaternions a little
+    /// off unit length (as trackers send them), and a pose made from one must not scale what it
+    /// moves. Meaningful once validated.
     pub fn rotation(&self) -> UnitQuaternion<f64> {
-        UnitQuaternion::new_unchecked(self.orientation)
+        UnitQuaternion::new_normalize(self.orientation)
     }
 
     /// The joint's bone direction, `-Z` of its frame.

@@ -204,6 +204,18 @@ fn a_hand_moved_rigidly_retargets_to_the_moved_root_and_the_same_angles() {
 }
 
 #[test]
+fn quaternions_a_little_off_unit_length_give_a_unit_root() {
+    let mut joints = capture("webxr_relaxed.json").joints;
+    for joint in &mut joints.joints {
+        joint.orientation *= 1.0 + 5e-4;
+    }
+    let fit = retargeter(Side::Left)
+        .fit(&joints)
+        .expect("within the tolerance");
+    assert!((fit.root.rotation.quaternion().norm() - 1.0).abs() < 1e-12);
+}
+
+#[test]
 fn impossible_samples_are_rejected() {
     let good = capture("webxr_pinch.json").joints;
     let retargeter = retargeter(Side::Left);

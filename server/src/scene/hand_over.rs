@@ -1,0 +1,106 @@
+//! The scripted two-handed hand-over: the right hand power-grasps one end of a long handle, the
+//! left hand grasps the other end and takes it over, the right hand opens and withdraws, the left
+//! hand lifts the handle and lets go.
+//!
+//! Each hand runs the scripted power grasp ([`ScriptedGrasp::PowerOnHandle`]) at its end of the
+//! handle, the left one mirrored in the world's `x = 0` plane, where the handle's middle is.
+
+use nalgebra::{Isometry3, Translation3, Vector3};
+
+use super::script::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, fist, open_hand};
+use crate::geometry::{TriMesh, shapes};
+
+/// How far from the handle's middle each hand grasps it (metres): the hands' palms, 9 cm wide,
+/// stay 5 cm apart.
+pub const GRIP_OFFSET: f64 = 0.07;
+
+/// The handle's length (metres): 3.5 cm of it reach beyond each hand's thumb side.
+pub const HANDLE_LENGTH: f64 = 0.3;
+
+/// How far the left hand lifts the handle (metres).
+pub const LIFT: f64 = 0.05;
+
+/// How far the right hand withdraws upwards once open (metres).
+pub const WITHDRAW: f64 = 0.1;
+
+/// When the hand-over's steps must have happened, in seconds from its start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandOverMilestones {
+    /// The right hand holds the handle by now.
+    pub right_grasped_by: f64,
+    /// The left hand has taken it over by now.
+    pub left_grasped_by: f64,
+    /// The left hand has lifted it and still holds it.
+    pub lifted: f64,
+}
+
+/// The milestones of [`keyframes`].
+pub const MILESTONES: HandOverMilestones = HandOverMilestones {
+    right_grasped_by: 0.55,
+    left_grasped_by: 1.15,
+    lifted: 2.15,
+};
+
+/// The handle's pose: across both palms, its middle at the world's `x = 0`.
+pub fn handle_pose() -> Isometry3<f64> {
+    let script = ScriptedGrasp::PowerOnHandle.part_pose();
+    Translation3::new(-script.translation.x, 0.0, 0.0) * script
+}
+
+/// The handle's mesh, in its own frame (its axis is `z`).
+pub fn handle_mesh(triangles: usize) -> TriMesh {
+    shapes::cylinder(HANDLE_RADIUS, HANDLE_LENGTH, triangles)
+}
+
+/// The right hand's and the left hand's trajectories, on one time line (both end at the same
+/// time), to be sampled with [`super::script::sample`]. Every key's time is a multiple of 50 ms,
+/// so that at a multiple of 20 Hz both give the same number of samples, at the same times.
+pub fn keyframes() -> [Vec<Keyframe>; 2] {
+    let script = ScriptedGrasp::PowerOnHandle;
+    let grasped_by = script.milestones().grasped_by;
+    let mut grasp = script.keyframes();
+    grasp.retain(|key| key.time <= grasped_by);
+    // The script's hand, moved to the right of the handle's middle.
+    let handle = handle_pose().translation.vector - script.part_pose().translation.vector;
+    let to_grip = Translation3::from(handle - Vector3::x() * GRIP_OFFSET);
+    let placed = |key: &Keyframe, delay: f64| Keyframe {
+        time: key.time + delay,
+        tracker: to_grip * key.tracker,
+        ..*key
+    };
+    let closed = placed(grasp.last().expect("keyframes"), 0.0);
+    let up = |by: f64, key: Keyframe, time: f64| Keyframe {
+        time,
+        tracker: Translation3::new(0.0, 0.0, by) * key.tracker,
+        ..key
+    };
+    let lifted = |key, time| up(LIFT, key, time);
+    let withdrawn = |key, time| up(WITHDRAW, key, time);
+    let at = |key: Keyframe, time: f64| Keyframe { time, ..key };
+    let open = |key: Keyframe, time: f64| Keyframe {
+        time,
+        flex: open_hand(),
+        ..key
+    };
+    let mut right: Vec<Keyframe> = grasp.iter().map(|key| placed(key, 0.0)).collect();
+    right.extend([
+        at(closed, 1.3),
+        open(closed, 1.5),
+        open(closed, 1.55),
+        withdrawn(open(closed, 1.7), 1.7),
+        withdrawn(open(closed, 2.45), 2.45),
+    ]);
+    let delay = 0.6;
+    let mut left: Vec<Keyframe> = vec![placed(&grasp[0], 0.0)];
+    left.extend(grasp.iter().map(|key| placed(key, delay)));
+    let closed = placed(grasp.last().expect("keyframes"), delay);
+    debug_assert_eq!(closed.flex, fist());
+    left.extend([
+        at(closed, 1.8),
+        lifted(closed, 2.1),
+        lifted(closed, 2.15),
+        lifted(open(closed, 2.35), 2.35),
+        lifted(open(closed, 2.45), 2.45),
+    ]);
+    [right, left.iter().map(Keyframe::mirrored).collect()]
+}
