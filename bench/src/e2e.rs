@@ -41,8 +41,12 @@ pub struct E2eArgs {
     warmup: u64,
     /// Send this recording's samples (in order, repeated as needed) instead of the synthetic
     /// tracker stream; each is renumbered and stamped when sent.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "hand_joints")]
     recording: Option<PathBuf>,
+    /// Send two hands' joints instead (the captured relaxed hand, right and left by turns,
+    /// drifting in free space), on both paths; the server's scene needs both hands.
+    #[arg(long)]
+    hand_joints: bool,
     #[command(flatten)]
     output: OutputArgs,
     #[command(flatten)]
@@ -67,7 +71,8 @@ pub struct PathRow {
 pub struct E2eReport {
     /// The server's scene.
     pub scene: String,
-    /// What was sent: `synthetic tracker` or the recording's path.
+    /// What was sent: `synthetic tracker`, `synthetic hand joints, two hands` or the
+    /// recording's path.
     pub input: String,
     /// Exchanges per path left out before measuring.
     pub warmup: u64,
@@ -87,8 +92,10 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     let prefix = args.server.prefix.as_deref();
     let inputs = match &args.recording {
         Some(path) => InputStream::recording(path)?,
+        None if args.hand_joints => InputStream::HandJoints,
         None => InputStream::Synthetic,
     };
+    let input = inputs.describe(args.recording.as_deref());
     let mut server = crate::args::connect(prefix)?;
     let scene = server
         .scene_info(crate::args::CONTROL_TIMEOUT)
@@ -111,8 +118,7 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     let mut inputs = inputs.numbered();
     for index in 0..args.warmup + args.samples {
         let measured = index >= args.warmup;
-        let tracker = InputSample::Tracker(synthetic::tracker(index + 1));
-        match round_trip(&mut echo, tracker, timeout, drop)? {
+        match round_trip(&mut echo, inputs.raw_sample(index + 1), timeout, drop)? {
             Some(latency) if measured => raw.push(latency),
             None if measured => unanswered_raw += 1,
             _ => {}
@@ -131,10 +137,7 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     };
     let report = E2eReport {
         scene,
-        input: match &args.recording {
-            Some(path) => path.display().to_string(),
-            None => "synthetic tracker".to_owned(),
-        },
+        input,
         warmup: args.warmup,
         vas_samples_per_s: vas.len() as f64 / vas.iter().sum::<Duration>().as_secs_f64(),
         rows: vec![summary("raw", &raw)?, summary("vas", &vas)?],
@@ -218,6 +221,8 @@ fn render(report: &E2eReport) -> String {
 enum InputStream {
     /// [`synthetic::tracker`].
     Synthetic,
+    /// [`synthetic::hand_joints`]: two hands by turns.
+    HandJoints,
     /// A recording's samples, in order, repeated.
     Recording(Vec<InputSample>),
 }
@@ -235,6 +240,15 @@ impl InputStream {
                 .map(|sample| sample.input)
                 .collect(),
         ))
+    }
+
+    /// What the stream sends, for the report.
+    fn describe(&self, recording: Option<&Path>) -> String {
+        match (self, recording) {
+            (_, Some(path)) => path.display().to_string(),
+            (InputStream::HandJoints, None) => "synthetic hand joints, two hands".to_owned(),
+            _ => "synthetic tracker".to_owned(),
+        }
     }
 
     /// The stream with fresh sequence numbers: from 1 in each input stream.
@@ -259,9 +273,24 @@ struct NumberedInputs {
 }
 
 impl NumberedInputs {
+    /// Sample `seq` of the raw path: the synthetic stream of the same kind as the `vas`
+    /// path's (a recording's, the tracker's).
+    fn raw_sample(&self, seq: u64) -> InputSample {
+        match self.stream {
+            InputStream::HandJoints => InputSample::HandJoints(synthetic::hand_joints(seq)),
+            InputStream::Synthetic | InputStream::Recording(_) => {
+                InputSample::Tracker(synthetic::tracker(seq))
+            }
+        }
+    }
+
     fn next_sample(&mut self) -> InputSample {
         let recorded = match &self.stream {
             InputStream::Synthetic => None,
+            InputStream::HandJoints => {
+                self.joints_seq += 1;
+                return InputSample::HandJoints(synthetic::hand_joints(self.joints_seq));
+            }
             InputStream::Recording(samples) => Some(samples[self.sent % samples.len()]),
         };
         self.sent += 1;

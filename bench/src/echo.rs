@@ -1,5 +1,6 @@
-//! `vas-bench echo` (hidden): answers every tracker and glove sample at once with a hand frame
-//! carrying its stamp, with no simulation in between.
+//! `vas-bench echo` (hidden): answers every tracker, glove and hand-joints sample at once with a
+//! hand frame carrying its stamp (and, for joints, its hand's side), with no simulation in
+//! between.
 //!
 //! It opens the very services a server opens (same payloads, quality of service and paired
 //! event services) and sleeps on a WaitSet as the server does, so that a client measures the
@@ -12,7 +13,7 @@ use std::time::Duration;
 use anyhow::{Context, anyhow};
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
-use vas_protocol::services::{self, GLOVE, HAND, TRACKER, config_with_prefix};
+use vas_protocol::services::{self, GLOVE, HAND, HAND_JOINTS, TRACKER, config_with_prefix};
 use vas_protocol::{HandFrame, wall_clock_ns};
 
 /// The line the echo prints on stdout once its ports exist, so that a parent knows samples
@@ -45,6 +46,10 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
         .subscriber_builder()
         .create()
         .map_err(|e| ipc("create a port", e))?;
+    let hand_joints = services::open_hand_joints(&node)?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| ipc("create a port", e))?;
     let hand = services::open_hand(&node)?
         .publisher_builder()
         .create()
@@ -57,6 +62,7 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
     };
     let tracker_wakeup = listener(TRACKER)?;
     let glove_wakeup = listener(GLOVE)?;
+    let hand_joints_wakeup = listener(HAND_JOINTS)?;
     let hand_notifier = services::open_wakeup(&node, HAND)?
         .notifier_builder()
         .create()
@@ -71,6 +77,9 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
         .map_err(|e| ipc("attach to the WaitSet", e))?;
     let _glove_guard = waitset
         .attach_notification(&glove_wakeup)
+        .map_err(|e| ipc("attach to the WaitSet", e))?;
+    let _hand_joints_guard = waitset
+        .attach_notification(&hand_joints_wakeup)
         .map_err(|e| ipc("attach to the WaitSet", e))?;
     let _parent_guard = waitset
         .attach_interval(PARENT_CHECK)
@@ -103,7 +112,7 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
         {
             return Ok(());
         }
-        for wakeup in [&tracker_wakeup, &glove_wakeup] {
+        for wakeup in [&tracker_wakeup, &glove_wakeup, &hand_joints_wakeup] {
             wakeup
                 .try_wait(|_| {})
                 .map_err(|e| ipc("drain a listener", e))?;
@@ -122,6 +131,14 @@ pub fn run(prefix: Option<&str>) -> anyhow::Result<()> {
         {
             frame.glove = sample.stamp();
             frame.flex = sample.flex;
+            answer(&mut frame)?;
+        }
+        while let Some(sample) = hand_joints
+            .receive()
+            .map_err(|e| ipc("receive a hand-joints sample", e))?
+        {
+            frame.joints = sample.stamp();
+            frame.hand = sample.side;
             answer(&mut frame)?;
         }
     }

@@ -26,28 +26,25 @@ fn run_tool(server: &Server, args: &[&str]) {
     assert!(status.success(), "{}", tool.log());
 }
 
-#[test]
-fn bench_e2e_and_a_short_soak_report_every_sample() {
-    let mut server = Server::start("benchtools");
-    server.connect();
-    let dir = tempfile::tempdir().expect("temporary directory");
-
-    let e2e_out = dir.path().join("b7.json");
-    let e2e_svg = dir.path().join("b7.svg");
-    run_tool(
-        &server,
-        &[
-            "e2e",
-            "--samples",
-            "40",
-            "--warmup",
-            "5",
-            "--json",
-            e2e_out.to_str().expect("utf-8"),
-            "--svg",
-            e2e_svg.to_str().expect("utf-8"),
-        ],
-    );
+/// Runs `vas-bench e2e` with 40 measured samples (and `extra` arguments) against `server`,
+/// writing into `dir`; checks that both paths answered every sample with ordered percentiles and
+/// returns the report.
+fn short_e2e(server: &Server, dir: &std::path::Path, extra: &[&str]) -> serde_json::Value {
+    let e2e_out = dir.join("b7.json");
+    let e2e_svg = dir.join("b7.svg");
+    let mut args = vec![
+        "e2e",
+        "--samples",
+        "40",
+        "--warmup",
+        "5",
+        "--json",
+        e2e_out.to_str().expect("utf-8"),
+        "--svg",
+        e2e_svg.to_str().expect("utf-8"),
+    ];
+    args.extend_from_slice(extra);
+    run_tool(server, &args);
     let e2e = report(&e2e_out);
     assert_plot(&e2e_svg, &["raw", "vas"]);
     let rows = e2e["rows"].as_array().expect("rows");
@@ -78,6 +75,17 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
             .is_some_and(|rate| rate > 0.0),
         "{e2e}"
     );
+    e2e
+}
+
+#[test]
+fn bench_e2e_and_a_short_soak_report_every_sample() {
+    let mut server = Server::start("benchtools");
+    server.connect();
+    let dir = tempfile::tempdir().expect("temporary directory");
+
+    let e2e = short_e2e(&server, dir.path(), &[]);
+    assert_eq!(e2e["input"], "synthetic tracker");
 
     let soak_out = dir.path().join("soak.json");
     let soak_svg = dir.path().join("soak.svg");
@@ -128,6 +136,28 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
         "{memory}"
     );
     assert!(memory["growth_kib_per_min"].is_f64(), "{memory}");
+}
+
+/// B7 with two hands' joints: every sample of both hands answered on both paths, each accepted
+/// by the server as a hand of the scene.
+#[test]
+fn bench_e2e_takes_two_hands_joints() {
+    let scene = vas_tests::configs_dir().join("two_hand_handover.toml");
+    let mut server =
+        Server::start_with("benchjoints", &["--scene", scene.to_str().expect("utf-8")]);
+    let client = server.connect();
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let e2e = short_e2e(&server, dir.path(), &["--hand-joints"]);
+    assert_eq!(e2e["input"], "synthetic hand joints, two hands");
+    let stats = client.input_stats(PATIENCE).expect("input counters");
+    assert_eq!(
+        (
+            stats.joints_accepted,
+            stats.rejected(),
+            stats.joints_untracked
+        ),
+        (45, 0, 0)
+    );
 }
 
 /// `tree-build` reports each mesh's DOP-tree build and, when FCL was found as vas-bench was
