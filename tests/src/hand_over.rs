@@ -14,7 +14,7 @@ use vas_server::grasping::Side;
 use vas_server::grasping::retarget::Retargeter;
 use vas_server::runtime::hand_joints::wire_joints;
 use vas_server::scene::Scene;
-use vas_server::scene::hand_over::{handle_pose, keyframes};
+use vas_server::scene::hand_over::{block_pose, handle_pose, keyframes};
 use vas_server::scene::script::keyframe_at;
 
 use crate::hands::rounded;
@@ -28,26 +28,31 @@ const PERIOD_NS: u64 = 20_000_000;
 /// The part handed over.
 pub const HANDLE: &str = "handle";
 
+/// The part the handle goes into.
+pub const BLOCK: &str = "block";
+
 /// What the recording shows, for its header.
 pub const DESCRIPTION: &str = "the right hand (tracker and glove) power-grasps one end of a long \
     handle, the left hand (hand joints) grasps the other end and takes it over, the right hand \
-    opens and withdraws, the left lifts the handle 5 cm and lets go";
+    opens and withdraws, the left pushes the handle's other end 3 cm into a block's hole and lets \
+    go";
 
-/// The hand-over's samples in `scene`: its hands the right and then the left one, its part
-/// [`HANDLE`] where the script puts it.
+/// The hand-over's samples in `scene`: its hands the right and then the left one, its parts
+/// [`HANDLE`] and [`BLOCK`] where the script puts them.
 pub fn samples(scene: &Scene) -> anyhow::Result<Vec<InputSample>> {
     let sides: Vec<Side> = scene.hands.iter().map(|hand| hand.model.side()).collect();
     if sides != [Side::Right, Side::Left] {
         bail!("the hand-over needs a right and then a left hand, not {sides:?}");
     }
-    let handle = (scene.parts.iter())
-        .find(|part| part.name == HANDLE)
-        .with_context(|| format!("the scene has no part {HANDLE:?}"))?;
-    let expected = handle_pose();
-    if (handle.pose.translation.vector - expected.translation.vector).norm() > 1e-9
-        || handle.pose.rotation.angle_to(&expected.rotation) > 1e-9
-    {
-        bail!("the handle must lie where the script grasps it, at {expected}");
+    for (name, expected) in [(HANDLE, handle_pose()), (BLOCK, block_pose())] {
+        let part = (scene.parts.iter())
+            .find(|part| part.name == name)
+            .with_context(|| format!("the scene has no part {name:?}"))?;
+        if (part.pose.translation.vector - expected.translation.vector).norm() > 1e-9
+            || part.pose.rotation.angle_to(&expected.rotation) > 1e-9
+        {
+            bail!("the {name} must lie where the script puts it, at {expected}");
+        }
     }
     let left = Retargeter::new(scene.hands[1].model.as_ref().clone())?;
     let [right_keys, left_keys] = keyframes();

@@ -289,11 +289,12 @@ pub const EXPECTED: [Scenario; 10] = [
             by(0, EventKind::HandOver, "handle", GraspType::None),
             by(1, EventKind::Release, "handle", GraspType::None),
         ],
-        // Lifted 5 cm by the left hand, less the 3 to 5 mm its script presses down after the
-        // grasp (it aims 5 mm into the handle).
+        // Pushed 9 cm along its axis by the left hand, its end 3 cm into the block's hole, sunk
+        // the 3 to 5 mm the hands' scripts press down after their grasps (they aim 5 mm into the
+        // handle).
         final_pose: ExpectedPose {
             part: "handle",
-            position: [0.0, 0.075, -0.0125],
+            position: [-0.09, 0.075, -0.0625],
             rpy_degrees: [0.0, 90.0, 0.0],
             position_tolerance: 0.003,
             angle_tolerance: 0.05,

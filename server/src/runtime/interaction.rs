@@ -919,14 +919,23 @@ mod tests {
 
     /// The scripted hand-over (`scene::hand_over`): the right hand grasps the handle, the left
     /// takes it over in the frame it grasps it, the right opens and withdraws without another
-    /// event, and the left lifts the handle and lets go.
+    /// event, and the left pushes the handle into the block's hole and lets go.
     #[test]
-    fn the_left_hand_takes_the_handle_over_from_the_right_and_lifts_it() {
+    fn the_left_hand_takes_the_handle_over_from_the_right_and_inserts_it() {
         use crate::scene::hand_over::{self, MILESTONES};
+        use crate::scene::script::HANDLE_RADIUS;
         use vas_protocol::EventKind;
         const RATE: f64 = 200.0;
         let start = hand_over::handle_pose();
-        let parts = vec![part("handle", hand_over::handle_mesh(3_000), start, true)];
+        let parts = vec![
+            part("handle", hand_over::handle_mesh(3_000), start, true),
+            part(
+                "block",
+                hand_over::block_mesh(3_000),
+                hand_over::block_pose(),
+                false,
+            ),
+        ];
         let [right, left] = hand_over::keyframes().map(|keys| sample(&keys, RATE));
         assert_eq!(right.len(), left.len(), "one time line");
         let right_model = Arc::new(right_hand());
@@ -981,14 +990,13 @@ mod tests {
             events[1].0, events[2].0,
             "the hand-over comes with the grasp"
         );
-        assert!(at(3) > MILESTONES.lifted, "{events:?}");
-        // Lifted 5 cm, less the few millimetres the left hand's script presses down after its
-        // grasp (it aims 5 mm into the handle).
+        assert!(at(3) > MILESTONES.inserted, "{events:?}");
+        // Pushed along its axis into the hole, sunk the few millimetres the hands' scripts press.
         let end = interaction.part_pose(HANDLE).expect("the handle");
         let moved = end.translation.vector - start.translation.vector;
         assert!(
-            (hand_over::LIFT - 0.006..=hand_over::LIFT).contains(&moved.z)
-                && moved.xy().norm() < 0.003,
+            (hand_over::INSERT - 0.002..=hand_over::INSERT + 0.001).contains(&-moved.x)
+                && moved.yz().norm() < hand_over::HOLE_RADIUS - HANDLE_RADIUS,
             "the handle moved by {moved:?}"
         );
         assert!(end.rotation.angle_to(&start.rotation) < 0.05);

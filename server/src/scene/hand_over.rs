@@ -1,6 +1,6 @@
 //! The scripted two-handed hand-over: the right hand power-grasps one end of a long handle, the
 //! left hand grasps the other end and takes it over, the right hand opens and withdraws, the left
-//! hand lifts the handle and lets go.
+//! hand pushes the handle's free end into the hole of a block beside it and lets go.
 //!
 //! Each hand runs the scripted power grasp ([`ScriptedGrasp::PowerOnHandle`]) at its end of the
 //! handle, the left one mirrored in the world's `x = 0` plane, where the handle's middle is.
@@ -17,8 +17,22 @@ pub const GRIP_OFFSET: f64 = 0.07;
 /// The handle's length (metres): 3.5 cm of it reach beyond each hand's thumb side.
 pub const HANDLE_LENGTH: f64 = 0.3;
 
-/// How far the left hand lifts the handle (metres).
-pub const LIFT: f64 = 0.05;
+/// How far the left hand pushes the handle along its axis, towards the block at -x (metres).
+pub const INSERT: f64 = 0.09;
+
+/// The gap between the handle's right end and the block's face, before the push (metres): its end
+/// goes [`INSERT`] minus this into the hole.
+pub const BLOCK_GAP: f64 = 0.06;
+
+/// The block's length along the handle's axis (metres).
+pub const BLOCK_LENGTH: f64 = 0.04;
+
+/// The block's square cross-section's side (metres).
+pub const BLOCK_WIDTH: f64 = 0.06;
+
+/// The radius of the block's hole (metres): the clearance takes the few millimetres the handle
+/// sinks while the hands hold it (each hand's script aims 5 mm into the part it grasps).
+pub const HOLE_RADIUS: f64 = HANDLE_RADIUS + 0.006;
 
 /// How far the right hand withdraws upwards once open (metres).
 pub const WITHDRAW: f64 = 0.1;
@@ -30,21 +44,34 @@ pub struct HandOverMilestones {
     pub right_grasped_by: f64,
     /// The left hand has taken it over by now.
     pub left_grasped_by: f64,
-    /// The left hand has lifted it and still holds it.
-    pub lifted: f64,
+    /// The left hand has pushed it into the block and still holds it.
+    pub inserted: f64,
 }
 
 /// The milestones of [`keyframes`].
 pub const MILESTONES: HandOverMilestones = HandOverMilestones {
     right_grasped_by: 0.55,
     left_grasped_by: 1.15,
-    lifted: 2.15,
+    inserted: 2.15,
 };
 
 /// The handle's pose: across both palms, its middle at the world's `x = 0`.
 pub fn handle_pose() -> Isometry3<f64> {
     let script = ScriptedGrasp::PowerOnHandle.part_pose();
     Translation3::new(-script.translation.x, 0.0, 0.0) * script
+}
+
+/// The block's pose: its hole (along its own `z`) on the handle's axis, its face [`BLOCK_GAP`]
+/// beyond the end of the handle the right hand holds (towards -x).
+pub fn block_pose() -> Isometry3<f64> {
+    let handle = handle_pose();
+    let along = BLOCK_GAP + BLOCK_LENGTH / 2.0;
+    Translation3::new(-(HANDLE_LENGTH / 2.0 + along), 0.0, 0.0) * handle
+}
+
+/// The block's mesh, in its own frame (its hole along `z`).
+pub fn block_mesh(triangles: usize) -> TriMesh {
+    shapes::box_with_hole(BLOCK_WIDTH, BLOCK_LENGTH, HOLE_RADIUS, triangles)
 }
 
 /// The handle's mesh, in its own frame (its axis is `z`).
@@ -69,13 +96,15 @@ pub fn keyframes() -> [Vec<Keyframe>; 2] {
         ..*key
     };
     let closed = placed(grasp.last().expect("keyframes"), 0.0);
-    let up = |by: f64, key: Keyframe, time: f64| Keyframe {
+    let moved = |by: Vector3<f64>, key: Keyframe, time: f64| Keyframe {
         time,
-        tracker: Translation3::new(0.0, 0.0, by) * key.tracker,
+        tracker: Translation3::from(by) * key.tracker,
         ..key
     };
-    let lifted = |key, time| up(LIFT, key, time);
-    let withdrawn = |key, time| up(WITHDRAW, key, time);
+    let withdrawn = |key, time| moved(Vector3::z() * WITHDRAW, key, time);
+    // The left hand's keys are mirrored in x = 0 at the end: towards +x here is towards the
+    // block, at -x, in the world.
+    let pushed = |key, time| moved(Vector3::x() * INSERT, key, time);
     let at = |key: Keyframe, time: f64| Keyframe { time, ..key };
     let open = |key: Keyframe, time: f64| Keyframe {
         time,
@@ -97,10 +126,10 @@ pub fn keyframes() -> [Vec<Keyframe>; 2] {
     debug_assert_eq!(closed.flex, fist());
     left.extend([
         at(closed, 1.8),
-        lifted(closed, 2.1),
-        lifted(closed, 2.15),
-        lifted(open(closed, 2.35), 2.35),
-        lifted(open(closed, 2.45), 2.45),
+        pushed(closed, 2.1),
+        pushed(closed, 2.15),
+        pushed(open(closed, 2.35), 2.35),
+        pushed(open(closed, 2.45), 2.45),
     ]);
     [right, left.iter().map(Keyframe::mirrored).collect()]
 }
