@@ -4,7 +4,7 @@
 export class Connection {
   // `handlers` has one function per message type (status, event, reply, warning: each gets the
   // message and the wall-clock time it arrived), `scene(scene, meshes)`,
-  // `frame(frame, arrivedMs, transport, superseded)` (see link.js) and `open(bool)` for the
+  // `frame(text, scene, arrivedMs, transport, superseded)` (see link.js) and `open(bool)` for the
   // connection itself.
   constructor(handlers) {
     this.handlers = handlers;
@@ -32,7 +32,7 @@ export class Connection {
       case 'frame':
         // Taken: the worker counts the frames the page has not taken yet.
         this.worker.postMessage({ kind: 'took' });
-        this.handlers.frame(data.frame, data.arrivedMs, data.transport, data.superseded);
+        this.handlers.frame(data.text, data.scene, data.arrivedMs, data.transport, data.superseded);
         break;
       case 'message': {
         const handler = this.handlers[data.message.type];

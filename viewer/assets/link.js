@@ -12,14 +12,20 @@
 //   u32 mesh index, u32 vertex count, u32 normal count (0 or the vertex count), u32 triangle count,
 //   f32 positions[3 * vertices], f32 normals[3 * normals], u32 indices[3 * triangles].
 //
+// A frame arrives 1000 times a second and is drawn at most at the display's rate, so the worker
+// does not parse it: the viewer starts every frame message with its scene and the newest publish
+// stamp in it (`{"type":"frame","published_ns":N,"scene":N,`), which is all the worker reads, and
+// the page parses only the frame it draws.
+//
 // To the page (postMessage):
 //   { kind: 'open', open }                  the WebSocket opened (true) or closed (false)
 //   { kind: 'message', message, arrivedMs } a status, event, reply or warning, in order
 //   { kind: 'scene', scene, meshes }        a scene and its meshes (their buffers transferred)
-//   { kind: 'frame', frame, arrivedMs, transport, superseded }
-//       a frame; `transport` lists, per frame that arrived since the last one posted, the
-//       milliseconds from the server's publish to its arrival here; `superseded` counts those
-//       this one replaced while the page was stalled
+//   { kind: 'frame', text, scene, arrivedMs, transport, superseded }
+//       a frame: its message as sent (JSON text) and the scene version it names; `transport`
+//       lists, per frame that arrived since the last one posted, the milliseconds from the
+//       server's publish to its arrival here; `superseded` counts those this one replaced while
+//       the page was stalled
 // From the page:
 //   { kind: 'command', command }  sent to the viewer
 //   { kind: 'took' }              the page took a frame posted
@@ -30,6 +36,8 @@ const RECONNECT_MS = 1000;
 // Frames posted to the page and not yet taken, at most: a quarter of a second at 1 kHz.
 const PAGE_WINDOW = 256;
 const ACK = JSON.stringify({ type: 'ack' });
+// The start of every frame message: its newest publish stamp (ns) and its scene version.
+const FRAME_HEAD = /^\{"type":"frame","published_ns":(\d+),"scene":(\d+),/;
 
 let socket = null;
 let pendingScene = null;
@@ -62,15 +70,18 @@ function receive(data, arrivedMs) {
     receiveMesh(data);
     return;
   }
+  const head = FRAME_HEAD.exec(data);
+  if (head) {
+    socket.send(ACK);
+    // Nanoseconds since the epoch exceed a double's integers: the stamp is good to a microsecond.
+    transport.push(arrivedMs - Number(head[1]) / 1e6);
+    if (newest) superseded += 1;
+    newest = { text: data, scene: Number(head[2]), arrivedMs };
+    postFrame();
+    return;
+  }
   const message = JSON.parse(data);
   switch (message.type) {
-    case 'frame':
-      socket.send(ACK);
-      transport.push(arrivedMs - publishedMs(message));
-      if (newest) superseded += 1;
-      newest = { frame: message, arrivedMs };
-      postFrame();
-      break;
     case 'scene':
       pendingScene = { scene: message, meshes: new Array(message.meshes), received: 0 };
       if (message.meshes === 0) finishScene();
@@ -78,14 +89,6 @@ function receive(data, arrivedMs) {
     default:
       postMessage({ kind: 'message', message, arrivedMs });
   }
-}
-
-// When the server published the newest state in `frame` (the publish that made the viewer send
-// it).
-function publishedMs(frame) {
-  const stamps = frame.hands.map((hand) => hand.published_ns);
-  if (frame.parts) stamps.push(frame.parts.published_ns);
-  return Math.max(...stamps) / 1e6;
 }
 
 function postFrame() {

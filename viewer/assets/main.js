@@ -24,8 +24,9 @@ const state = {
   server: false,
   scene: null,
   sceneNames: [],
-  waiting: null, // the newest frame not drawn yet
-  received: { frames: 0, events: 0, scenes: 0, lastParts: 0, lastHand: 0 },
+  waiting: null, // the newest frame not drawn yet: { text, arrivedMs }
+  newest: null, // the newest frame received
+  received: { frames: 0, events: 0, scenes: 0 },
   drawn: { frames: 0, lastParts: 0, lastHand: 0 },
   events: [],
   replies: [],
@@ -55,22 +56,20 @@ const connection = new Connection({
   scene(scene, meshes) {
     state.scene = scene;
     state.waiting = null;
+    state.newest = null;
     state.received.scenes += 1;
     view.setScene(scene, meshes);
     panel.showScene(scene.name);
   },
-  frame(frame, arrivedMs, transport, superseded) {
+  // A frame as the link's worker posts it: its JSON text, parsed only if it is drawn.
+  frame(text, scene, arrivedMs, transport, superseded) {
     for (const milliseconds of transport) keep(state.timing.transport, milliseconds, TIMING_WINDOW);
     state.timing.superseded += superseded;
-    if (frame.scene !== state.scene?.version) return;
+    if (scene !== state.scene?.version) return;
     state.received.frames += 1;
     if (state.waiting) state.timing.superseded += 1;
-    frame.arrivedMs = arrivedMs;
-    state.received.lastParts = frame.parts?.frame ?? state.received.lastParts;
-    if (frame.hands.length > 0) {
-      state.received.lastHand = Math.max(...frame.hands.map((hand) => hand.frame));
-    }
-    state.waiting = frame;
+    state.waiting = { text, arrivedMs };
+    state.newest = state.waiting;
   },
   event(event) {
     state.received.events += 1;
@@ -100,15 +99,16 @@ let fpsWindow = { start: performance.now(), frames: 0 };
 let lastStartMs = 0;
 view.renderer.setAnimationLoop((now) => {
   const startMs = wallClockMs();
-  const frame = state.waiting;
+  const waiting = state.waiting;
   state.waiting = null;
+  const frame = waiting && parsed(waiting);
   if (frame) view.applyFrame(frame);
   view.render(now);
   if (view.renderer.xr.isPresenting) state.xrFrames += 1;
   if (frame) {
     noteDrawn(frame);
-    keep(state.timing.draw, wallClockMs() - frame.arrivedMs, TIMING_WINDOW);
-    if (lastStartMs > frame.arrivedMs) state.timing.late += 1;
+    keep(state.timing.draw, wallClockMs() - waiting.arrivedMs, TIMING_WINDOW);
+    if (lastStartMs > waiting.arrivedMs) state.timing.late += 1;
   }
   lastStartMs = startMs;
   fpsWindow.frames += 1;
@@ -118,6 +118,12 @@ view.renderer.setAnimationLoop((now) => {
     panel.showPerf(state.fps, median(state.latencies));
   }
 });
+
+// The frame message `received` holds, parsed once.
+function parsed(received) {
+  received.frame ??= JSON.parse(received.text);
+  return received.frame;
+}
 
 // Records that `frame` is on the screen, and the latency of a hand frame drawn for the first time.
 function noteDrawn(frame) {
@@ -153,7 +159,15 @@ window.vasViewer = {
   get server() { return state.server; },
   get scene() { return state.scene && { version: state.scene.version, name: state.scene.name }; },
   get sceneNames() { return state.sceneNames; },
-  get received() { return { ...state.received }; },
+  get received() {
+    const newest = state.newest && parsed(state.newest);
+    const hands = newest?.hands ?? [];
+    return {
+      ...state.received,
+      lastParts: newest?.parts?.frame ?? 0,
+      lastHand: hands.length > 0 ? Math.max(...hands.map((hand) => hand.frame)) : 0,
+    };
+  },
   get drawn() { return { ...state.drawn }; },
   get events() { return [...state.events]; },
   get replies() { return [...state.replies]; },

@@ -67,11 +67,24 @@ struct HandView<'a> {
     touching: u32,
 }
 
+/// A frame message: serialised as is, in this field order. A page's link reads `published_ns`
+/// from the start of the text (`{"type":"frame","published_ns":`) without parsing the rest.
+#[derive(Debug, Serialize)]
+struct FrameView<'a> {
+    #[serde(rename = "type")]
+    kind: &'static str,
+    /// When the server published the newest state in the message (ns since the Unix epoch).
+    published_ns: u64,
+    scene: u64,
+    parts: Option<PartsView<'a>>,
+    hands: Vec<HandView<'a>>,
+}
+
 /// `{"type": "frame"}`: the newest parts frame and each hand's newest frame, for the scene
-/// numbered `scene`.
+/// numbered `scene`, with the newest of their publish stamps first.
 pub fn frame<'a>(
     scene: u64,
-    parts: Option<&PartsFrame>,
+    parts: Option<&'a PartsFrame>,
     hands: impl IntoIterator<Item = &'a HandFrame>,
 ) -> Message {
     let parts = parts.map(|frame| PartsView {
@@ -81,7 +94,19 @@ pub fn frame<'a>(
         parts: frame.parts.iter().map(part_view).collect(),
     });
     let hands: Vec<HandView> = hands.into_iter().map(hand_view).collect();
-    text(&json!({ "type": "frame", "scene": scene, "parts": parts, "hands": hands }))
+    let published_ns = hands
+        .iter()
+        .map(|hand| hand.published_ns)
+        .chain(parts.as_ref().map(|parts| parts.published_ns))
+        .max()
+        .unwrap_or(0);
+    text(&FrameView {
+        kind: "frame",
+        published_ns,
+        scene,
+        parts,
+        hands,
+    })
 }
 
 fn part_view(part: &PartState) -> PartView<'_> {
@@ -114,4 +139,42 @@ fn text(value: &impl Serialize) -> Message {
             .expect("viewer messages serialise")
             .into(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vas_client::PartsFrameHeader;
+
+    #[test]
+    fn a_frame_message_starts_with_its_newest_publish_stamp() {
+        let parts = PartsFrame {
+            header: PartsFrameHeader {
+                timestamp_ns: 1_700_000_000_000_000_200,
+                ..PartsFrameHeader::default()
+            },
+            parts: Vec::new(),
+        };
+        let hand = HandFrame {
+            timestamp_ns: 1_700_000_000_000_000_100,
+            ..HandFrame::default()
+        };
+        let Message::Text(text) = frame(3, Some(&parts), [&hand]) else {
+            panic!("a frame is a text message");
+        };
+        let text = text.as_str();
+        assert!(
+            text.starts_with(r#"{"type":"frame","published_ns":1700000000000000200,"scene":3,"#),
+            "{text}"
+        );
+        let value: serde_json::Value = serde_json::from_str(text).expect("JSON");
+        assert_eq!(
+            value["hands"][0]["published_ns"],
+            1_700_000_000_000_000_100_u64
+        );
+        assert_eq!(
+            value["parts"]["published_ns"],
+            1_700_000_000_000_000_200_u64
+        );
+    }
 }
