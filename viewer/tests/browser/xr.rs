@@ -132,20 +132,19 @@ async fn the_headsets_tracked_hands_drive_both_of_the_servers_hands() {
     assert_eq!(mode, "hand");
     enter_vr(&browser).await;
 
-    // Both hands tracked, each where the emulated hand is in the drawn scene.
+    // Both hands tracked, each where the emulated hand is in the drawn scene (the collision
+    // loop takes a hand there from where it was over a few verified steps).
     let mut hands = NewestHands::default();
-    let first = hands.wait_until(&mut client, "both hands tracked", both_tracked);
+    let mut expected = [[0.0; 3]; 2];
     for side in [HandSide::Right, HandSide::Left] {
-        let frame = &first[side as usize];
-        let expected = in_vas_world(emulated_hand(&browser, side).await);
-        let off = distance(frame.root.position, expected);
-        assert!(
-            off < NEAR_M,
-            "the {} hand's root {:?} is {off} m from the emulated hand at {expected:?} (vas world)",
-            side.name(),
-            frame.root.position
-        );
+        expected[side as usize] = in_vas_world(emulated_hand(&browser, side).await);
     }
+    let what = format!("both hands tracked near the emulated hands at {expected:?} (vas world)");
+    hands.wait_until(&mut client, &what, |frames| {
+        both_tracked(frames)
+            && (0..2).all(|side| distance(frames[side].root.position, expected[side]) < NEAR_M)
+    });
+    let first = hands.settled(&mut client);
     let stats = client
         .input_stats(PATIENCE)
         .expect("the server's input counters");
@@ -159,8 +158,9 @@ async fn the_headsets_tracked_hands_drive_both_of_the_servers_hands() {
         (HandSide::Left, [-0.04, -0.05, -0.08]),
     ] {
         let (moving, other) = (side as usize, 1 - side as usize);
-        let before = hands.newest(moving).root.position;
-        let other_before = hands.newest(other).root.position;
+        let settled = hands.settled(&mut client);
+        let before = settled[moving].root.position;
+        let other_before = settled[other].root.position;
         move_emulated_hand(&browser, side, shift).await;
         let [dx, dy, dz] = shift;
         // WebXR's x, y up, z toward the user are vas's x, z up, -y.
@@ -218,9 +218,25 @@ async fn the_headsets_tracked_hands_drive_both_of_the_servers_hands() {
 struct NewestHands([Option<HandFrame>; 2]);
 
 impl NewestHands {
-    /// The newest frame of the hand with side code `side`.
-    fn newest(&self, side: usize) -> &HandFrame {
-        self.0[side].as_ref().expect("a frame of each hand")
+    /// Receives hand frames until both hands are tracked and at rest: each root where it was
+    /// five samples of its hand before (within 0.1 mm), and returns those.
+    fn settled(&mut self, client: &mut Client) -> [HandFrame; 2] {
+        let deadline = Instant::now() + PATIENCE;
+        loop {
+            let before = self.wait_until(client, "both hands tracked", both_tracked);
+            let after = self.wait_until(client, "five newer samples of each hand", |frames| {
+                (0..2).all(|side| frames[side].joints.seq >= before[side].joints.seq + 5)
+            });
+            let at_rest = (0..2)
+                .all(|side| distance(after[side].root.position, before[side].root.position) < 1e-4);
+            if both_tracked(&after) && at_rest {
+                return after;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "waited for both hands to come to rest"
+            );
+        }
     }
 
     /// Receives hand frames until `condition` holds of the newest of each hand (indexed by side
