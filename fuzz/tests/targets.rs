@@ -449,11 +449,13 @@ fn hand_capture_json() {
 /// A message from a viewer page, as the viewer judges it: the first byte picks a text message
 /// (even) or a binary one (odd), the rest is its payload. A command or an acknowledgement comes
 /// only from a text message of at most `MAX_COMMAND_BYTES`, and a command reads back the same
-/// when written out again.
+/// when written out again; a hand's joints only from a binary message of their exact length,
+/// and they become a sample the server can take (finite, each joint known or unknown).
 #[test]
 fn websocket_messages() {
     use axum::extract::ws::Message;
     use vas_viewer::commands::{MAX_COMMAND_BYTES, PageMessage, parse};
+    use vas_viewer::hand_joints::{HandJoints, MESSAGE_BYTES, encode};
     use vas_viewer::page::{Judged, judge};
     bolero::check!().for_each(|bytes: &[u8]| {
         let Some((&kind, payload)) = bytes.split_first() else {
@@ -472,9 +474,25 @@ fn websocket_messages() {
                 "{judged:?}"
             );
         }
-        if let Judged::Command(command) = judged {
-            let written = serde_json::to_string(&command).expect("a command writes as JSON");
-            assert_eq!(parse(&written), Ok(PageMessage::Command(command)));
+        if let Judged::Command(command) = &judged {
+            let written = serde_json::to_string(command).expect("a command writes as JSON");
+            assert_eq!(parse(&written), Ok(PageMessage::Command(command.clone())));
+        }
+        // A hand taken is one binary message of exactly one hand's joints, and becomes a
+        // sample of finite values with the palm unknown and each joint known or not at all.
+        if let Judged::HandJoints(joints) = &judged {
+            assert!(kind % 2 == 1 && payload.len() == MESSAGE_BYTES);
+            let written = encode(joints.side as u32, &joints.joints);
+            assert_eq!(HandJoints::parse(&written).as_ref(), Ok(joints.as_ref()));
+            let sample = joints.sample(1, 1);
+            assert!(sample.is_finite());
+            assert_eq!(sample.joints[0].flags, 0);
+            assert!(
+                sample
+                    .joints
+                    .iter()
+                    .all(|joint| [0, 0b1111].contains(&joint.flags))
+            );
         }
     });
 }

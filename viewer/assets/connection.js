@@ -11,12 +11,22 @@ export class Connection {
     this.worker = new Worker(new URL('./link.js', import.meta.url), { type: 'module' });
     this.worker.onmessage = ({ data }) => this.receive(data);
     this.open = false;
+    this.handJointsDropped = 0;
   }
 
   // Sends a command; false when there is no connection to send it on.
   send(command) {
     if (!this.open) return false;
     this.worker.postMessage({ kind: 'command', command });
+    return true;
+  }
+
+  // Sends a hand-joints message (an ArrayBuffer, see xr.js; handed over to the worker, so the
+  // caller loses it); false when there is no connection to send it on. The worker drops it
+  // rather than queue it behind a slow socket, and counts that in `handJointsDropped`.
+  sendHandJoints(buffer) {
+    if (!this.open) return false;
+    this.worker.postMessage({ kind: 'hand_joints', buffer }, [buffer]);
     return true;
   }
 
@@ -28,6 +38,9 @@ export class Connection {
         break;
       case 'scene':
         this.handlers.scene(data.scene, data.meshes);
+        break;
+      case 'hand_joints_dropped':
+        this.handJointsDropped += 1;
         break;
       case 'frame':
         // Taken: the worker counts the frames the page has not taken yet.

@@ -26,9 +26,13 @@
 //       lists, per frame that arrived since the last one posted, the milliseconds from the
 //       server's publish to its arrival here; `superseded` counts those this one replaced while
 //       the page was stalled
+//   { kind: 'hand_joints_dropped' }         a hand-joints message was dropped (see below)
 // From the page:
-//   { kind: 'command', command }  sent to the viewer
-//   { kind: 'took' }              the page took a frame posted
+//   { kind: 'command', command }      sent to the viewer
+//   { kind: 'took' }                  the page took a frame posted
+//   { kind: 'hand_joints', buffer }   a binary hand-joints message (xr.js), sent to the viewer
+//       unless the socket already holds more than `HAND_JOINTS_BUFFERED` bytes not yet sent: a
+//       newer one follows within one XR frame, so an old one is dropped rather than queued
 //
 // Times are wall clock in milliseconds since the Unix epoch.
 
@@ -38,6 +42,8 @@ const PAGE_WINDOW = 256;
 const ACK = JSON.stringify({ type: 'ack' });
 // The start of every frame message: its newest publish stamp (ns) and its scene version.
 const FRAME_HEAD = /^\{"type":"frame","published_ns":(\d+),"scene":(\d+),/;
+// Bytes the socket may hold unsent before hand joints are dropped: some ten XR frames of both hands.
+const HAND_JOINTS_BUFFERED = 16 * 1024;
 
 let socket = null;
 let pendingScene = null;
@@ -129,6 +135,12 @@ self.onmessage = ({ data }) => {
   if (data.kind === 'took') {
     untaken -= 1;
     postFrame();
+  } else if (data.kind === 'hand_joints') {
+    if (socket?.readyState === WebSocket.OPEN && socket.bufferedAmount <= HAND_JOINTS_BUFFERED) {
+      socket.send(data.buffer);
+    } else {
+      postMessage({ kind: 'hand_joints_dropped' });
+    }
   } else if (data.kind === 'command') {
     if (socket?.readyState === WebSocket.OPEN) {
       socket.send(JSON.stringify(data.command));

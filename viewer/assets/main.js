@@ -1,5 +1,6 @@
 // The viewer page: receives the scene and frames from vas-viewer over a WebSocket and draws the
-// newest frame at the display's rate, on the screen or in a WebXR session.
+// newest frame at the display's rate, on the screen or in a WebXR session (where xr.js also sends
+// the user's tracked hands to the server, each XR frame).
 //
 // Frames arrive faster or slower than the display draws; only the newest is drawn (a frame
 // that arrived while another was waiting replaces it, here or in the link's worker). The latency shown is from the input
@@ -89,7 +90,7 @@ const connection = new Connection({
   },
 });
 const panel = new Panel((command) => connection.send(command));
-setupXr(view, panel);
+const xr = setupXr(view, panel, connection);
 
 // Wall clock in milliseconds since the Unix epoch, as the frames' timestamps count it.
 const wallClockMs = () => performance.timeOrigin + performance.now();
@@ -97,8 +98,9 @@ const wallClockMs = () => performance.timeOrigin + performance.now();
 let fpsWindow = { start: performance.now(), frames: 0 };
 // When the last animation frame began, wall clock.
 let lastStartMs = 0;
-view.renderer.setAnimationLoop((now) => {
+view.renderer.setAnimationLoop((now, xrFrame) => {
   const startMs = wallClockMs();
+  if (xrFrame) xr.frame(xrFrame);
   const waiting = state.waiting;
   state.waiting = null;
   const frame = waiting && parsed(waiting);
@@ -174,6 +176,10 @@ window.vasViewer = {
   get warnings() { return [...state.warnings]; },
   get latencies() { return [...state.latencies]; },
   get xrFrames() { return state.xrFrames; },
+  // Hand-joints messages handed to the link per side, and those it dropped for a slow socket.
+  get handJoints() {
+    return { posted: { ...xr.hands.posted }, dropped: connection.handJointsDropped };
+  },
   get timing() {
     const { transport, draw, superseded, late } = state.timing;
     return { transport: [...transport], draw: [...draw], superseded, late };

@@ -1,11 +1,15 @@
 //! What a page may send: commands, and acknowledgements of the frames it was sent.
 //!
-//! A page sends small JSON objects with a `type`. Anything else (binary, not JSON, an unknown
-//! type, unexpected or missing fields, more than [`MAX_COMMAND_BYTES`]) is refused: the page
-//! that sent it is broken or hostile, so its connection is closed and the refusal counted.
+//! A page sends small JSON objects with a `type`, and in a WebXR session binary hand-joints
+//! messages ([`crate::hand_joints`]). Anything else (other binary, not JSON, an unknown type,
+//! unexpected or missing fields, more than [`MAX_COMMAND_BYTES`], a malformed hand) is refused:
+//! the page that sent it is broken or hostile, so its connection is closed and the refusal
+//! counted.
 
 use serde::{Deserialize, Serialize};
 use vas_client::SlidingMetaphor;
+
+use crate::hand_joints::HandJointsError;
 
 /// The largest command a page may send, in bytes.
 pub const MAX_COMMAND_BYTES: usize = 4096;
@@ -82,6 +86,8 @@ pub enum Refusal {
     Oversized,
     /// A `type` this viewer does not know.
     Unknown,
+    /// A hand-joints message that is not one hand's 25 finite joints.
+    HandJoints(HandJointsError),
 }
 
 impl Refusal {
@@ -91,6 +97,7 @@ impl Refusal {
             Self::Malformed => "malformed command",
             Self::Oversized => "command too long",
             Self::Unknown => "unknown command",
+            Self::HandJoints(error) => error.reason(),
         }
     }
 }

@@ -3,11 +3,13 @@
 //!
 //! Two halves meet in the [`hub::Hub`]: the link thread ([`link`]) owns the vas client (its
 //! iceoryx2 ports cannot leave their thread) and writes the newest state into the hub; the tokio
-//! side ([`http`], [`page`]) serves the embedded assets and sends each page what the hub holds.
+//! side ([`http`], [`page`]) serves the embedded assets and sends each page what the hub holds,
+//! and passes a headset's hand joints ([`hand_joints`]) back to the link thread to publish.
 
 pub mod assets;
 pub mod commands;
 pub mod events;
+pub mod hand_joints;
 pub mod http;
 pub mod hub;
 pub mod link;

@@ -1,7 +1,8 @@
 //! The link thread: the viewer's vas client, on the one thread its iceoryx2 ports may live on.
 //!
-//! It waits for a server, passes the scene and every frame and event on to the [`Hub`], and
-//! carries out the pages' commands. In lockstep a server publishes only when it gets input, so
+//! It waits for a server, passes the scene and every frame and event on to the [`Hub`], carries
+//! out the pages' commands, and publishes a headset's hand joints on the server's hand-joints
+//! service (numbered per side, stamped with the wall-clock time they reached the viewer). In lockstep a server publishes only when it gets input, so
 //! silence alone says nothing; after [`QUIET`] without a frame the link asks the server for its
 //! counters, and a server that does not answer is taken as gone: the pages are told "no
 //! server", and the link waits for one on the same prefix and starts afresh (new ports, so that
@@ -9,7 +10,6 @@
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 
 use vas_client::{
@@ -17,12 +17,18 @@ use vas_client::{
 };
 
 use crate::commands::Command;
-use crate::hub::{CommandRequest, Hub};
+use crate::hand_joints::Sequence;
+use crate::hub::{Hub, Inbox};
 use crate::stats::Stats;
 use crate::{events, messages, scene};
 
 /// How long one wait for frames lasts: bounds how late a command or a stop is noticed.
 const WAIT: Duration = Duration::from_millis(10);
+/// How long one wait lasts while a headset sends hand joints: bounds how long they wait to be
+/// published (the wait wakes on the server's frames, not on the pages).
+const HAND_WAIT: Duration = Duration::from_millis(1);
+/// How long after the last hand joints the link keeps waiting [`HAND_WAIT`].
+const HANDS_RECENT: Duration = Duration::from_millis(200);
 /// Silence after which the link checks that the server is still there.
 const QUIET: Duration = Duration::from_secs(1);
 /// How long a server has to answer a control request before it is taken as gone.
@@ -33,12 +39,14 @@ const LOAD_TIMEOUT: Duration = Duration::from_secs(60);
 const LOOK: Duration = Duration::from_millis(250);
 
 /// Runs the link until `stop` is set.
-pub fn run(prefix: Option<&str>, hub: &Hub, commands: Receiver<CommandRequest>, stop: &AtomicBool) {
+pub fn run(prefix: Option<&str>, hub: &Hub, inbox: Inbox, stop: &AtomicBool) {
     let mut link = Link {
         hub,
-        commands,
+        inbox,
         stop,
         scene_version: 0,
+        sequence: Sequence::default(),
+        last_hands: None,
     };
     hub.status.send_replace(Some(messages::status(false, &[])));
     while !stop.load(Ordering::Relaxed) {
@@ -53,10 +61,14 @@ pub fn run(prefix: Option<&str>, hub: &Hub, commands: Receiver<CommandRequest>, 
 
 struct Link<'a> {
     hub: &'a Hub,
-    commands: Receiver<CommandRequest>,
+    inbox: Inbox,
     stop: &'a AtomicBool,
     /// Counts the scenes passed on; frames name the scene they belong to.
     scene_version: u64,
+    /// Numbers the hand-joints samples of each side.
+    sequence: Sequence,
+    /// When hand joints last came from a page.
+    last_hands: Option<Instant>,
 }
 
 impl Link<'_> {
@@ -83,7 +95,9 @@ impl Link<'_> {
         let mut last_heard = Instant::now();
         while !self.stop.load(Ordering::Relaxed) {
             self.serve_commands(|command| carry_out(&client, command));
-            match client.wait(WAIT)? {
+            self.publish_hand_joints(&client)?;
+            let hands_recent = (self.last_hands).is_some_and(|at| at.elapsed() < HANDS_RECENT);
+            match client.wait(if hands_recent { HAND_WAIT } else { WAIT })? {
                 Wake::Ready => {
                     last_heard = Instant::now();
                     let frames = client.receive()?;
@@ -119,6 +133,7 @@ impl Link<'_> {
                 Ok(_) => return Ok(true),
                 Err(ClientError::Timeout { .. }) => {
                     self.serve_commands(|_| Err("no vas server answers".to_owned()));
+                    self.drop_hand_joints();
                 }
                 Err(error) => return Err(error),
             }
@@ -126,9 +141,27 @@ impl Link<'_> {
         Ok(false)
     }
 
+    /// Publishes every waiting hand-joints message on the server's hand-joints service.
+    fn publish_hand_joints(&mut self, client: &Client) -> Result<(), ClientError> {
+        while let Ok((joints, arrived_ns)) = self.inbox.hand_joints.try_recv() {
+            self.last_hands = Some(Instant::now());
+            let sample = joints.sample(self.sequence.next(joints.side), arrived_ns);
+            client.send_hand_joints(&sample)?;
+            Stats::count(&self.hub.stats.hand_joints_published);
+        }
+        Ok(())
+    }
+
+    /// Drops every waiting hand-joints message: there is no server to publish them to.
+    fn drop_hand_joints(&self) {
+        while self.inbox.hand_joints.try_recv().is_ok() {
+            Stats::count(&self.hub.stats.hand_joints_dropped);
+        }
+    }
+
     /// Answers every waiting command with `carry_out`.
     fn serve_commands(&self, mut carry_out: impl FnMut(&Command) -> Result<String, String>) {
-        while let Ok(request) = self.commands.try_recv() {
+        while let Ok(request) = self.inbox.commands.try_recv() {
             let answer = carry_out(&request.command);
             tracing::info!(command = request.command.name(), ?answer, "page command");
             // The page may have gone meanwhile.

@@ -31,14 +31,14 @@ fn main() -> anyhow::Result<()> {
         .with_writer(std::io::stderr)
         .init();
 
-    let (hub, link_side) = hub::Hub::new();
+    let (hub, inbox) = hub::Hub::new();
     let hub = Arc::new(hub);
     let stop = Arc::new(AtomicBool::new(false));
     let link = {
         let (hub, stop) = (Arc::clone(&hub), Arc::clone(&stop));
         std::thread::Builder::new()
             .name("vas-link".into())
-            .spawn(move || link::run(args.prefix.as_deref(), &hub, link_side, &stop))
+            .spawn(move || link::run(args.prefix.as_deref(), &hub, inbox, &stop))
             .context("start the link thread")?
     };
 

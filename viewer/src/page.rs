@@ -5,14 +5,17 @@
 //! a page acknowledges each frame it takes, and is sent a frame only while fewer than
 //! [`FRAMES_IN_FLIGHT`] are unacknowledged, so a slow page is sent the newest frame when it is
 //! ready for one and no backlog builds up in the socket or the browser. A page has at most one
-//! command waiting for the server; another sent meanwhile is answered with a refusal.
+//! command waiting for the server; another sent meanwhile is answered with a refusal. Hand
+//! joints from a WebXR session go to the link thread as they come (see [`Hub::submit_hand_joints`]).
 
 use std::sync::Arc;
 
 use axum::extract::ws::{CloseFrame, Message, WebSocket, close_code};
 use tokio::sync::broadcast::error::RecvError;
+use vas_client::wall_clock_ns;
 
 use crate::commands::{self, MAX_COMMAND_BYTES, PageMessage, Refusal};
+use crate::hand_joints::{self, HandJoints};
 use crate::hub::Hub;
 use crate::messages;
 use crate::stats::Stats;
@@ -69,6 +72,7 @@ pub async fn serve(mut socket: WebSocket, hub: Arc<Hub>) {
             Refusal::Malformed => &hub.stats.refused_malformed,
             Refusal::Oversized => &hub.stats.refused_oversized,
             Refusal::Unknown => &hub.stats.refused_unknown,
+            Refusal::HandJoints(_) => &hub.stats.hand_joints_rejected,
         });
         tracing::warn!(
             reason = refusal.reason(),
@@ -152,6 +156,10 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
                         waiting = Some((command.name(), hub.submit(command)));
                         true
                     }
+                    Judged::HandJoints(joints) => {
+                        hub.submit_hand_joints(*joints, wall_clock_ns());
+                        true
+                    }
                     Judged::Refused(refusal) => return End::Refused(refusal),
                     Judged::Nothing => true,
                     Judged::Closed => return End::Gone,
@@ -168,12 +176,14 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
 }
 
 /// What a message from a page comes to.
-#[derive(Debug, PartialEq, Eq)]
+#[derive(Debug, PartialEq)]
 pub enum Judged {
     /// The page took a frame.
     Ack,
     /// A command to carry out.
     Command(commands::Command),
+    /// One hand of a WebXR session's frame, to publish.
+    HandJoints(Box<HandJoints>),
     /// Not a command: the page is closed, and the refusal counted.
     Refused(Refusal),
     /// Nothing to do (the WebSocket layer answers pings itself).
@@ -182,8 +192,8 @@ pub enum Judged {
     Closed,
 }
 
-/// Judges one message from a page: only a text message holding a command or an acknowledgement
-/// is taken.
+/// Judges one message from a page: only a text message holding a command or an acknowledgement,
+/// and a binary hand-joints message, are taken.
 pub fn judge(message: &Message) -> Judged {
     match message {
         Message::Text(text) => match commands::parse(text.as_str()) {
@@ -191,6 +201,12 @@ pub fn judge(message: &Message) -> Judged {
             Ok(PageMessage::Command(command)) => Judged::Command(command),
             Err(refusal) => Judged::Refused(refusal),
         },
+        Message::Binary(bytes) if hand_joints::is_hand_joints(bytes) => {
+            match HandJoints::parse(bytes) {
+                Ok(joints) => Judged::HandJoints(Box::new(joints)),
+                Err(error) => Judged::Refused(Refusal::HandJoints(error)),
+            }
+        }
         Message::Binary(bytes) if bytes.len() > MAX_COMMAND_BYTES => {
             Judged::Refused(Refusal::Oversized)
         }
@@ -213,6 +229,38 @@ async fn send_all(socket: &mut WebSocket, messages: impl IntoIterator<Item = Mes
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::hand_joints::{HandJointsError, WEBXR_JOINT_COUNT, encode};
+
+    #[test]
+    fn binary_hand_joints_are_taken_and_other_binary_refused() {
+        let untracked = encode(1, &[None; WEBXR_JOINT_COUNT]);
+        match judge(&Message::Binary(untracked.clone().into())) {
+            Judged::HandJoints(joints) => assert!(!joints.any_valid()),
+            other => panic!("{other:?}"),
+        }
+        let mut huge = untracked.clone();
+        huge.resize(10 * MAX_COMMAND_BYTES, 0);
+        assert_eq!(
+            judge(&Message::Binary(huge.into())),
+            Judged::Refused(Refusal::HandJoints(HandJointsError::Length))
+        );
+        let mut no_side = untracked;
+        no_side[4] = 9;
+        assert_eq!(
+            judge(&Message::Binary(no_side.into())),
+            Judged::Refused(Refusal::HandJoints(HandJointsError::Side))
+        );
+        assert_eq!(
+            judge(&Message::Binary(vec![2, 0, 0, 0].into())),
+            Judged::Refused(Refusal::Malformed)
+        );
+        // The same bytes as text are no command.
+        let text = String::from_utf8_lossy(&encode(0, &[None; WEBXR_JOINT_COUNT])).into_owned();
+        assert_eq!(
+            judge(&Message::Text(text.into())),
+            Judged::Refused(Refusal::Malformed)
+        );
+    }
 
     #[test]
     fn frames_wait_for_room_and_acks_for_no_frame_are_refused() {

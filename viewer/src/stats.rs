@@ -26,6 +26,15 @@ pub struct Stats {
     pub frames: AtomicU64,
     /// Scenes passed on (a first scene, a new generation, a server that came back).
     pub scenes: AtomicU64,
+    /// Hand-joints messages taken from pages (well-formed, whatever becomes of them).
+    pub hand_joints_accepted: AtomicU64,
+    /// Hand-joints messages refused as malformed (each closes its page's connection).
+    pub hand_joints_rejected: AtomicU64,
+    /// Hand-joints messages taken but not published: the link thread was too far behind, or
+    /// there was no server to publish them to.
+    pub hand_joints_dropped: AtomicU64,
+    /// Hand-joints samples published on the server's hand-joints service.
+    pub hand_joints_published: AtomicU64,
     /// Whether a vas server answers now.
     pub server: AtomicBool,
 }
@@ -44,6 +53,12 @@ impl Stats {
             "oversized": get(&self.refused_oversized),
             "unknown": get(&self.refused_unknown),
         });
+        let hand_joints = json!({
+            "accepted": get(&self.hand_joints_accepted),
+            "rejected": get(&self.hand_joints_rejected),
+            "dropped": get(&self.hand_joints_dropped),
+            "published": get(&self.hand_joints_published),
+        });
         json!({
             "server": self.server.load(Ordering::Relaxed),
             "pages_open": get(&self.pages_open),
@@ -53,6 +68,7 @@ impl Stats {
             "commands": get(&self.commands),
             "frames": get(&self.frames),
             "scenes": get(&self.scenes),
+            "hand_joints": hand_joints,
         })
     }
 }
