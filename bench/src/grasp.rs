@@ -355,8 +355,10 @@ mod tests {
         assert_eq!(row.expected, "power");
         // Every frame of the 1.2 s script clasps (the first frame only places the hand).
         assert_eq!(row.clasps, 1200);
-        assert!(row.mean_clasp_us > 0.0 && row.p99_clasp_us >= row.mean_clasp_us);
-        assert!(row.max_clasp_us >= row.p99_clasp_us && row.p99_frame_us > 0.0);
+        // One slow clasp can lift the mean above p99; neither passes the slowest.
+        assert!(row.mean_clasp_us > 0.0 && row.p99_clasp_us > 0.0);
+        assert!(row.max_clasp_us >= row.p99_clasp_us && row.max_clasp_us >= row.mean_clasp_us);
+        assert!(row.p99_frame_us > 0.0);
         assert!(row.mean_steps >= 1.0 && row.mean_checks >= 16.0);
         assert!(grasp_table(&report.rows).render().contains("handle"));
     }

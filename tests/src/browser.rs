@@ -2,6 +2,7 @@
 //! its latency benchmark. Debian's `chromium` and `chromium-driver` packages provide both.
 
 use std::net::SocketAddr;
+use std::os::unix::process::CommandExt;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -82,7 +83,10 @@ impl Browser {
             .arg(format!("--log-path={}", log.display()))
             .arg("--enable-chrome-logs")
             .env("TMPDIR", scratch.path())
-            .stdout(Stdio::null());
+            .stdout(Stdio::null())
+            // A process group of its own, which Chromium's processes join: a test that fails
+            // before `close` still ends them all when the browser is dropped.
+            .process_group(0);
         let driver = Spawned::spawn(driver);
         let driver_url = format!("http://127.0.0.1:{port}");
         wait_for_port(port).await;
@@ -259,9 +263,20 @@ impl Browser {
     }
 
     /// Ends the session and the browser.
-    pub async fn close(mut self) {
+    pub async fn close(self) {
         let _ = self.client.clone().close().await;
-        self.driver.stop();
+    }
+}
+
+impl Drop for Browser {
+    /// Ends chromedriver and every Chromium process it started (chromedriver's own ending leaves
+    /// them running). The group cannot be another's yet: chromedriver is reaped after this.
+    fn drop(&mut self) {
+        if let Ok(group) = libc::pid_t::try_from(self.driver.id()) {
+            // SAFETY: a signal to the process group chromedriver leads; it fails harmlessly if
+            // they have all ended.
+            unsafe { libc::kill(-group, libc::SIGKILL) };
+        }
     }
 }
 
