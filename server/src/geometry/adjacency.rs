@@ -25,39 +25,62 @@ pub struct EdgeAdjacency {
 }
 
 impl EdgeAdjacency {
-    /// Builds the adjacency of `mesh` in O(n log n) for n triangles.
+    /// Builds the adjacency of `mesh` in time linear in its triangles (for meshes whose vertices
+    /// each have a bounded number of edges, as welded surfaces do).
     pub fn new(mesh: &TriMesh) -> Self {
         let triangles = mesh.triangles();
-        // Every (edge, triangle, corner) incidence, sorted by edge.
-        let mut incidences: Vec<([u32; 2], u32, u8)> = triangles
-            .iter()
-            .enumerate()
-            .flat_map(|(t, corners)| {
-                (0..3u8).map(move |k| {
-                    let (a, b) = (corners[k as usize], corners[(k as usize + 1) % 3]);
-                    ([a.min(b), a.max(b)], t as u32, k)
-                })
-            })
-            .collect();
-        incidences.sort_unstable();
+        let vertex_count = mesh.vertices().len();
+        let corner_edge = |corners: &[u32; 3], k: usize| {
+            let (a, b) = (corners[k], corners[(k + 1) % 3]);
+            (a.min(b), a.max(b))
+        };
+        // Every (edge, triangle, corner) incidence, bucketed by the edge's smaller vertex (a
+        // counting sort), then each bucket (a vertex's few edges) sorted by the larger vertex,
+        // triangle and corner: the incidences in the order of their edges, without a sort of
+        // them all.
+        let mut bucket_starts = vec![0usize; vertex_count + 1];
+        for corners in triangles {
+            for k in 0..3 {
+                bucket_starts[corner_edge(corners, k).0 as usize + 1] += 1;
+            }
+        }
+        for v in 0..vertex_count {
+            bucket_starts[v + 1] += bucket_starts[v];
+        }
+        let mut bucket_fill = bucket_starts.clone();
+        let mut incidences = vec![(0u32, 0u32, 0u8); 3 * triangles.len()];
+        for (t, corners) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (low, high) = corner_edge(corners, k);
+                let slot = &mut bucket_fill[low as usize];
+                incidences[*slot] = (high, t as u32, k as u8);
+                *slot += 1;
+            }
+        }
+        drop(bucket_fill);
 
         let mut edges = Vec::new();
         let mut edge_offsets = vec![0];
         let mut edge_triangles = Vec::with_capacity(incidences.len());
         let mut triangle_edges = vec![[0u32; 3]; triangles.len()];
-        for (edge, t, k) in incidences {
-            if edges.last() != Some(&edge) {
-                if !edges.is_empty() {
-                    edge_offsets.push(edge_triangles.len());
+        for low in 0..vertex_count {
+            let bucket = &mut incidences[bucket_starts[low]..bucket_starts[low + 1]];
+            bucket.sort_unstable();
+            for &(high, t, k) in bucket.iter() {
+                let edge = [low as u32, high];
+                if edges.last() != Some(&edge) {
+                    if !edges.is_empty() {
+                        edge_offsets.push(edge_triangles.len());
+                    }
+                    edges.push(edge);
                 }
-                edges.push(edge);
+                edge_triangles.push(t);
+                triangle_edges[t as usize][k as usize] = (edges.len() - 1) as u32;
             }
-            edge_triangles.push(t);
-            triangle_edges[t as usize][k as usize] = (edges.len() - 1) as u32;
         }
         edge_offsets.push(edge_triangles.len());
+        drop(incidences);
 
-        let vertex_count = mesh.vertices().len();
         let mut vertex_offsets = vec![0usize; vertex_count + 1];
         for corners in triangles {
             for &v in corners {

@@ -258,8 +258,9 @@ impl SlideStage {
                 .map(|part| SlidePart {
                     name: part.name.clone(),
                     movable: part.movable,
-                    body: Arc::new(SlideBody::with_collider(
+                    body: Arc::new(SlideBody::with_parts(
                         part.mesh.clone(),
+                        Arc::clone(part.adjacency()),
                         part.tree().clone(),
                     )),
                 })

@@ -68,8 +68,8 @@ use crate::collision::pipeline::ObjectId;
 use crate::collision::{DopTree, OrientationSet};
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{
-    ConvexHull, FileLimits, GeometryError, Point, TriMesh, describe_toml_error, load_mesh_within,
-    read_regular_text,
+    ConvexHull, EdgeAdjacency, FileLimits, GeometryError, Point, TriMesh, describe_toml_error,
+    load_mesh_within, read_regular_text,
 };
 use crate::grasping::{HandModel, PartGeometry};
 use params::Problem;
@@ -172,8 +172,8 @@ pub struct Part {
     pub movable: bool,
     /// The part's group in the collision interest matrix.
     pub group: String,
-    /// The DOP-tree and convex hull over [`Part::mesh`], built on first use ([`Part::tree`],
-    /// [`Part::hull`]).
+    /// The DOP-tree, convex hull and edge adjacency of [`Part::mesh`], built on first use
+    /// ([`Part::tree`], [`Part::hull`], [`Part::adjacency`]).
     pub tree: PartTree,
 }
 
@@ -189,6 +189,12 @@ impl Part {
     /// pre-check: built by the first caller, then shared like [`Part::tree`].
     pub fn hull(&self) -> &ConvexHull {
         self.tree.hull.get_or_init(|| ConvexHull::of(&self.mesh))
+    }
+
+    /// The edge adjacency of the part's mesh, which sliding classifies contacts with: built by
+    /// the first caller, then shared like [`Part::tree`].
+    pub fn adjacency(&self) -> &Arc<EdgeAdjacency> {
+        (self.tree.adjacency).get_or_init(|| Arc::new(EdgeAdjacency::new(&self.mesh)))
     }
 
     /// The part as the grasping stage tests it: its shared mesh and tree, not copies.
@@ -247,12 +253,12 @@ pub fn log_prepared<'a>(scene: &'a str, parts: &[Part]) -> impl Fn(&Part, f64) +
     }
 }
 
-/// A part's DOP-tree and convex hull, built on first use and shared.
+/// A part's DOP-tree, convex hull and edge adjacency, built on first use and shared.
 ///
 /// A large part's tree takes a noticeable time and memory to build, and the collision, grasping
 /// and sliding loops all test the part: they clone this one (a clone shares the built arrays),
-/// parts that share a mesh share its tree and hull, a reset builds nothing, and checking a config
-/// builds none.
+/// parts that share a mesh share its tree, hull and adjacency, a reset builds nothing, and
+/// checking a config builds none.
 #[derive(Debug, Clone)]
 pub struct PartTree {
     orientations: usize,
@@ -260,6 +266,7 @@ pub struct PartTree {
     cache: Option<Arc<TreeCache>>,
     tree: Arc<OnceLock<(DopTree, Provenance)>>,
     hull: Arc<OnceLock<ConvexHull>>,
+    adjacency: Arc<OnceLock<Arc<EdgeAdjacency>>>,
 }
 
 impl PartTree {
@@ -271,6 +278,7 @@ impl PartTree {
             cache,
             tree: Arc::default(),
             hull: Arc::default(),
+            adjacency: Arc::default(),
         }
     }
 
@@ -491,21 +499,29 @@ impl Scene {
         matrix
     }
 
-    /// Builds every part's DOP-tree and convex hull now ([`Scene::prepare_parts`]): a scene
+    /// Builds every part's DOP-tree, convex hull and edge adjacency now
+    /// ([`Scene::prepare_parts`]): a scene
     /// loaded while another is served is made ready before it replaces it.
     pub fn prepare(&self) {
         Scene::prepare_parts(&self.parts, &log_prepared(&self.name, &self.parts));
     }
 
-    /// Builds the DOP-tree and convex hull of each of `parts`, the parts in parallel, rather
-    /// than on the loops' first use, and calls `ready` with each part and the seconds it took
-    /// as it is done (in no particular order).
+    /// Builds the DOP-tree, convex hull and edge adjacency of each of `parts`, the parts in
+    /// parallel, rather than on the loops' first use, and calls `ready` with each part and the
+    /// seconds it took as it is done (in no particular order).
+    ///
+    /// The largest parts start first, each a task of its own: an assembly's few large panels then
+    /// go to different threads at once, instead of waiting one after another at the end of a
+    /// thread's share.
     pub fn prepare_parts(parts: &[Part], ready: &(dyn Fn(&Part, f64) + Sync)) {
         use rayon::prelude::*;
-        parts.par_iter().for_each(|part| {
+        let mut largest_first: Vec<&Part> = parts.iter().collect();
+        largest_first.sort_by_key(|part| std::cmp::Reverse(part.mesh.triangles().len()));
+        largest_first.par_iter().with_max_len(1).for_each(|part| {
             let started = std::time::Instant::now();
             part.tree();
             part.hull();
+            part.adjacency();
             ready(part, started.elapsed().as_secs_f64());
         });
     }

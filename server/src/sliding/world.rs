@@ -26,7 +26,7 @@ use crate::geometry::{EdgeAdjacency, Point, TriMesh};
 #[derive(Debug)]
 pub struct SlideBody<C> {
     mesh: Arc<TriMesh>,
-    adjacency: EdgeAdjacency,
+    adjacency: Arc<EdgeAdjacency>,
     collider: C,
 }
 
@@ -34,15 +34,17 @@ impl<C: MeshCollider> SlideBody<C> {
     /// Builds adjacency and collider for `mesh` (weld a soup first, so that neighbours share
     /// vertices; classification copes without, by its rim rule).
     pub fn new(mesh: Arc<TriMesh>) -> Self {
+        let adjacency = Arc::new(EdgeAdjacency::new(&mesh));
         let collider = C::build(&mesh);
-        SlideBody::with_collider(mesh, collider)
+        SlideBody::with_parts(mesh, adjacency, collider)
     }
 
-    /// Builds adjacency for `mesh`, whose `collider` is already built (a scene's parts share
-    /// their DOP-trees with the other loops).
-    pub fn with_collider(mesh: Arc<TriMesh>, collider: C) -> Self {
+    /// A body of `mesh` whose `adjacency` and `collider` are already built (a scene's parts
+    /// share their DOP-trees with the other loops, and build their adjacency while the scene is
+    /// prepared).
+    pub fn with_parts(mesh: Arc<TriMesh>, adjacency: Arc<EdgeAdjacency>, collider: C) -> Self {
         SlideBody {
-            adjacency: EdgeAdjacency::new(&mesh),
+            adjacency,
             collider,
             mesh,
         }

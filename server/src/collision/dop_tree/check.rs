@@ -3,11 +3,15 @@
 //! triangle under its node. A tree that passes answers no query wrongly, whoever built it: a tree
 //! read from a cache is checked so before it is used.
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::separation::BOX_TEST_MAX_TRIANGLES;
 use super::tree::{DopTree, Node};
+
+/// The relative margin by which a child's sphere must lie inside its parent's for the check to
+/// take it as held without reading the corners: far above the rounding of the distances.
+const SPHERE_SLACK: f64 = 1e-9;
 
 /// What is wrong with a tree, in words.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -145,9 +149,7 @@ pub(super) fn bounds(tree: &DopTree) -> Result<(), Defect> {
         }
         let sphere = &node.sphere;
         let radius = f64::from(sphere.radius);
-        if !radius.is_finite()
-            || (triangles.iter().flatten()).any(|p| (p.coords - sphere.centre()).norm() > radius)
-        {
+        if !radius.is_finite() || !sphere_holds(tree, index, sphere.centre(), radius) {
             return Err(defect(format!(
                 "the sphere of node {index} misses a corner"
             )));
@@ -179,6 +181,35 @@ pub(super) fn bounds(tree: &DopTree) -> Result<(), Defect> {
     })
 }
 
+/// Whether the sphere (`centre`, `radius`) holds every corner under node `index` (whose own
+/// sphere is not trusted). A descendant whose sphere lies inside it holds its corners, which that
+/// descendant's own check holds them to, so only the subtrees reaching past the sphere are
+/// descended, down to the corners of their leaves.
+fn sphere_holds(tree: &DopTree, index: usize, centre: Vector3<f64>, radius: f64) -> bool {
+    let inside = |node: &Node| {
+        let reach = (node.sphere.centre() - centre).norm() + f64::from(node.sphere.radius);
+        reach * (1.0 + SPHERE_SLACK) <= radius
+    };
+    let mut pending = vec![index];
+    while let Some(index) = pending.pop() {
+        let node = &tree.nodes[index];
+        if node.is_leaf() {
+            let mut corners = tree.node_triangles(index as u32).iter().flatten();
+            if corners.any(|p| (p.coords - centre).norm() > radius) {
+                return false;
+            }
+        } else {
+            let first = node.first as usize;
+            for child in [first, first + 1] {
+                if !inside(&tree.nodes[child]) {
+                    pending.push(child);
+                }
+            }
+        }
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use rand::SeedableRng;
@@ -203,6 +234,34 @@ mod tests {
                 bounds(&tree).expect("bounds");
             }
         }
+    }
+
+    #[test]
+    fn the_sphere_check_agrees_with_reading_every_corner() {
+        use rand::Rng;
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let tree = DopTree::build(&torus(0.3, 24, 12));
+        let every_corner_held = |t: &DopTree| {
+            (0..t.node_count()).all(|i| {
+                let sphere = &t.nodes[i].sphere;
+                (t.node_triangles(i as u32).iter().flatten())
+                    .all(|p| (p.coords - sphere.centre()).norm() <= f64::from(sphere.radius))
+            })
+        };
+        let mut refused = 0;
+        for _ in 0..300 {
+            let mut copy = tree.clone();
+            let mut nodes = copy.nodes.to_vec();
+            for _ in 0..rng.random_range(1..4) {
+                let node = rng.random_range(0..nodes.len());
+                nodes[node].sphere.radius *= rng.random_range(0.9..1.0f32);
+            }
+            copy.nodes = nodes.into();
+            let held = every_corner_held(&copy);
+            assert_eq!(bounds(&copy).is_ok(), held);
+            refused += usize::from(!held);
+        }
+        assert!(refused > 30, "only {refused} damaged trees were refused");
     }
 
     #[test]
