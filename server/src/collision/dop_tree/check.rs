@@ -131,12 +131,16 @@ pub(super) fn bounds(tree: &DopTree) -> Result<(), Defect> {
         }
         let triangles = tree.node_triangles(index as u32);
         if node.is_leaf() {
-            for (i, &offset) in offsets.iter().enumerate() {
-                let normal = tree.set.normal(i);
-                let reach = (triangles.iter().flatten())
-                    .map(|p| normal.dot(&p.coords))
-                    .fold(f64::MIN, f64::max);
-                if f64::from(offset) < reach {
+            let h = k / 2;
+            for (i, axis) in tree.set.axes().iter().enumerate() {
+                let (low, high) = (triangles.iter().flatten())
+                    .map(|p| axis.dot(&p.coords))
+                    .fold((f64::MAX, f64::MIN), |(low, high), x| {
+                        (low.min(x), high.max(x))
+                    });
+                // Normal `i + h` is axis `i` negated, and a negated dot product rounds to the
+                // negated value: its reach is `-low`.
+                if f64::from(offsets[i]) < high || f64::from(offsets[i + h]) < -low {
                     return Err(defect(format!("leaf {index} does not bound its triangles")));
                 }
             }
@@ -299,20 +303,23 @@ mod tests {
             bounds(&copy).map_err(|defect| defect.to_string())
         };
         let k = tree.k;
-        let shrink_offset = |node: usize| {
+        let shrink_offset = |node: usize, offset: usize| {
             move |t: &mut DopTree| {
                 let mut offsets = t.offsets.to_vec();
-                offsets[node * k] -= 1e-3;
+                offsets[node * k + offset] -= 1e-3;
                 t.offsets = offsets.into();
             }
         };
+        for offset in [0, k / 2 + 1, k - 1] {
+            assert!(
+                damaged(&shrink_offset(leaf, offset))
+                    .unwrap_err()
+                    .contains("does not bound"),
+                "offset {offset} of a leaf"
+            );
+        }
         assert!(
-            damaged(&shrink_offset(leaf))
-                .unwrap_err()
-                .contains("does not bound")
-        );
-        assert!(
-            damaged(&shrink_offset(inner))
+            damaged(&shrink_offset(inner, 0))
                 .unwrap_err()
                 .contains("does not bound")
         );
