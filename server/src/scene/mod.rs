@@ -460,6 +460,7 @@ impl Scene {
             tree_cache: options.tree_cache.clone(),
             meshes: HashMap::new(),
             by_content: HashMap::new(),
+            read_ahead: HashMap::new(),
             orientations: file.params.dop_orientations,
             triangles: 0,
         }
@@ -638,6 +639,9 @@ struct Loader<'a> {
     meshes: HashMap<String, (Arc<TriMesh>, PartTree)>,
     /// The same meshes by [content hash](TriMesh::content_hash) (several for a collision).
     by_content: HashMap<u64, Vec<(Arc<TriMesh>, PartTree)>>,
+    /// Mesh files read ahead of their parts ([`Loader::read_ahead`]), by path, until a part
+    /// takes its file.
+    read_ahead: HashMap<PathBuf, Result<TriMesh, GeometryError>>,
     /// The scene's DOP orientation count, for the parts' trees.
     orientations: usize,
     /// The triangles of the parts so far, against [`FileLimits::scene_triangles`].
@@ -664,6 +668,7 @@ impl Loader<'_> {
         file.params.validate().map_err(|p| self.problem(p))?;
         file.rates.validate().map_err(|p| self.problem(p))?;
 
+        self.read_ahead(&file.parts);
         let mut parts: Vec<Part> = Vec::with_capacity(file.parts.len());
         for (index, part) in file.parts.into_iter().enumerate() {
             let part = self.part(index, part)?;
@@ -894,7 +899,15 @@ impl Loader<'_> {
             scene_triangles: self.triangles_left(),
             ..*self.limits
         };
-        let mut mesh = match load_mesh_within(&path, &within) {
+        let loaded = match self.read_ahead.remove(&path) {
+            // Refused for its share of the limit only: read again with all the parts before
+            // it leave.
+            Some(Err(GeometryError::TooManyTriangles { .. })) | None => {
+                load_mesh_within(&path, &within)
+            }
+            Some(read) => read,
+        };
+        let mut mesh = match loaded {
             Err(GeometryError::TooManyTriangles { count, .. }) => {
                 return Err(self.too_many_triangles(&key, name, count));
             }
@@ -940,6 +953,52 @@ impl Loader<'_> {
         self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
         let (mesh, tree) = self.remember(source.clone(), mesh);
         Ok((mesh, source, tree))
+    }
+
+    /// Reads the mesh files `parts` name, each once, on all of rayon's threads, ahead of the
+    /// parts, which are then made in order: their triangles are counted against the scene's
+    /// limit, and the first bad part is reported, as if each file were read in its turn.
+    ///
+    /// The files read at once share what the limit leaves: each claims, before it is read, its
+    /// share (one per thread) of the triangles not claimed yet, and is refused beyond it, so
+    /// that all read ahead stay within the limit together; a file refused for its share is read
+    /// again in its turn, with all the parts before it leave.
+    fn read_ahead(&mut self, parts: &[PartFile]) {
+        use rayon::prelude::*;
+        let mut paths: Vec<PathBuf> = (parts.iter())
+            .filter(|part| part.shape.is_none())
+            .filter_map(|part| part.mesh.as_ref().map(|mesh| self.folder.join(mesh)))
+            .collect();
+        paths.sort_unstable();
+        paths.dedup();
+        let threads = rayon::current_num_threads().max(1) as u64;
+        let limits = *self.limits;
+        let claimed = std::sync::Mutex::new(0u64);
+        let claims = || {
+            claimed
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        };
+        self.read_ahead = (paths.into_par_iter().with_max_len(1))
+            .map(|path| {
+                let share = {
+                    let mut claimed = claims();
+                    let share = limits.scene_triangles.saturating_sub(*claimed) / threads;
+                    *claimed += share;
+                    share
+                };
+                let within = FileLimits {
+                    scene_triangles: share,
+                    ..limits
+                };
+                let read = load_mesh_within(&path, &within);
+                let used = read
+                    .as_ref()
+                    .map_or(0, |mesh| mesh.triangles().len() as u64);
+                *claims() -= share - used.min(share);
+                (path, read)
+            })
+            .collect();
     }
 
     /// How many triangles the next part may have within the scene's limit.

@@ -384,6 +384,22 @@ fn a_scene_over_the_triangle_limit_names_the_part_and_the_figures() {
         "{message}"
     );
 
+    // Mesh files are read ahead in parallel, each within its share of the limit or read again
+    // in its turn; the parts are counted in order, as if each file were read in its turn.
+    let two = "name = \"s\"\n[[parts]]\nname = \"a\"\nmesh = \"part.obj\"\n\
+               [[parts]]\nname = \"b\"\nmesh = \"part_binary.ply\"\n";
+    let message = at(639, two).unwrap_err();
+    assert!(
+        message.contains("parts[1].mesh")
+            && message.contains("part \"b\" needs at least 320")
+            && message.contains("leaves 319"),
+        "{message}"
+    );
+    for limit in [640, 700, 1_000_000] {
+        let scene = at(limit, two).unwrap();
+        assert_eq!(scene.triangle_count(), 640, "limit {limit}");
+    }
+
     // check-scene takes the limit as a flag.
     let path = fixtures().join("assembly.toml");
     let check = |limit: &str| {
