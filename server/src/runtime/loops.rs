@@ -25,7 +25,7 @@ use super::frames::{
     VerifiedFrame, wire_grasp,
 };
 use super::interaction::{GraspStage, HeldPart, SlideStage, SteppedHand};
-use super::rendezvous::{AwakeWatch, Handoff, Received, Work};
+use super::rendezvous::{AwakeWatch, Coalesce, Handoff, Received, Work};
 use super::verify::Verifier;
 use super::wakeup::Waker;
 use crate::grasping::{HandInput, PartId};
@@ -250,6 +250,109 @@ fn period(hz: f64) -> Duration {
     Duration::try_from_secs_f64(1.0 / hz).unwrap_or(Duration::from_millis(10))
 }
 
+/// A loop that goes on at its own pace between inputs, as the grasping and sliding loops do:
+/// what it does with a frame, with a change, and when its time to go on comes.
+/// [`run_at_own_pace`] drives it.
+trait OwnPace {
+    /// What the loop is handed.
+    type Frame: Coalesce;
+    /// When to go on without new input; `None` waits for input.
+    fn wake_at(&self) -> Option<Instant>;
+    /// Processes a frame handed over.
+    fn take_frame(&mut self, frame: Self::Frame);
+    /// Applies a change handed over, between frames.
+    fn take_change(&mut self, change: Change);
+    /// Goes on without new input; false when there was nothing to do.
+    fn go_on(&mut self) -> bool;
+}
+
+/// Runs `stage` on what `inbox` hands it until the inbox is closed, timing each frame on the
+/// meter named `name` (a restart ends the meter's window).
+fn run_at_own_pace<L: OwnPace>(
+    name: &'static str,
+    inbox: &Handoff<L::Frame, Change>,
+    stage: &mut L,
+) {
+    let mut meter = LoopMeter::new(name);
+    loop {
+        let received = inbox.receive(stage.wake_at());
+        let started = Instant::now();
+        let stepped = match received {
+            Received::Work(Work::Frame(frame)) => {
+                stage.take_frame(frame);
+                true
+            }
+            Received::Work(Work::Control(change)) => {
+                let restart = matches!(change, Change::Restart(_));
+                stage.take_change(change);
+                if restart {
+                    meter.log();
+                }
+                false
+            }
+            Received::Timeout => stage.go_on(),
+            Received::Closed => break,
+        };
+        if stepped {
+            meter.frame_done(started);
+        }
+    }
+    meter.log();
+}
+
+impl OwnPace for GraspingLoop {
+    type Frame = InputFrame;
+
+    fn wake_at(&self) -> Option<Instant> {
+        match &self.last {
+            Some((_, true)) if !self.lockstep => Some(self.stepped_at + self.period),
+            _ => None,
+        }
+    }
+
+    fn take_frame(&mut self, input: InputFrame) {
+        self.step(input);
+    }
+
+    fn take_change(&mut self, change: Change) {
+        self.apply(change);
+    }
+
+    /// Steps the hands towards the latest targets again.
+    fn go_on(&mut self) -> bool {
+        let Some((input, _)) = &self.last else {
+            return false;
+        };
+        let input = input.clone();
+        self.step(input);
+        true
+    }
+}
+
+impl OwnPace for SlidingLoop {
+    type Frame = GraspedFrame;
+
+    fn wake_at(&self) -> Option<Instant> {
+        match &self.last {
+            Some((_, _, true)) if !self.lockstep => Some(self.slid_at + self.period),
+            _ => None,
+        }
+    }
+
+    fn take_frame(&mut self, frame: GraspedFrame) {
+        self.slide(frame);
+    }
+
+    fn take_change(&mut self, change: Change) {
+        self.apply(change);
+    }
+
+    fn go_on(&mut self) -> bool {
+        self.keep_sliding();
+        true
+    }
+}
+
 struct GraspingLoop {
     inbox: Arc<Handoff<InputFrame, Change>>,
     outbox: Arc<Handoff<GraspedFrame, Change>>,
@@ -267,33 +370,8 @@ struct GraspingLoop {
 
 impl GraspingLoop {
     fn run(mut self) {
-        let mut meter = LoopMeter::new("grasping");
-        loop {
-            let deadline = match &self.last {
-                Some((_, true)) if !self.lockstep => Some(self.stepped_at + self.period),
-                _ => None,
-            };
-            let received = self.inbox.receive(deadline);
-            let started = Instant::now();
-            match received {
-                Received::Work(Work::Frame(input)) => self.step(input),
-                Received::Work(Work::Control(change)) => {
-                    let restart = matches!(change, Change::Restart(_));
-                    self.apply(change);
-                    if restart {
-                        meter.log();
-                    }
-                    continue;
-                }
-                Received::Timeout => match &self.last {
-                    Some((input, _)) => self.step(input.clone()),
-                    None => continue,
-                },
-                Received::Closed => break,
-            }
-            meter.frame_done(started);
-        }
-        meter.log();
+        let inbox = Arc::clone(&self.inbox);
+        run_at_own_pace("grasping", &inbox, &mut self);
         self.outbox.close();
     }
 
@@ -374,30 +452,8 @@ struct SlidingLoop {
 
 impl SlidingLoop {
     fn run(mut self) {
-        let mut meter = LoopMeter::new("sliding");
-        loop {
-            let deadline = match &self.last {
-                Some((_, _, true)) if !self.lockstep => Some(self.slid_at + self.period),
-                _ => None,
-            };
-            let received = self.inbox.receive(deadline);
-            let started = Instant::now();
-            match received {
-                Received::Work(Work::Frame(frame)) => self.slide(frame),
-                Received::Work(Work::Control(change)) => {
-                    let restart = matches!(change, Change::Restart(_));
-                    self.apply(change);
-                    if restart {
-                        meter.log();
-                    }
-                    continue;
-                }
-                Received::Timeout => self.keep_sliding(),
-                Received::Closed => break,
-            }
-            meter.frame_done(started);
-        }
-        meter.log();
+        let inbox = Arc::clone(&self.inbox);
+        run_at_own_pace("sliding", &inbox, &mut self);
         self.outbox.close();
     }
 
