@@ -62,8 +62,8 @@ enum Command {
     CheckScene {
         /// The scene file.
         file: PathBuf,
-        /// Also build every part's DOP-tree and convex hull, as a server does before it
-        /// answers input, with a progress bar, and say how long that took.
+        /// Also build every part's DOP-tree, convex hull and edge adjacency, as a server does
+        /// before it answers input, with a progress bar, and say how long that took.
         #[arg(long)]
         prepare: bool,
         #[command(flatten)]
@@ -161,7 +161,7 @@ fn main() -> ExitCode {
 }
 
 /// `vas-server check-scene`: loads the scene, prints its summary and, with `prepare`, builds
-/// its parts' trees and hulls with a progress bar (on a terminal) and prints the time.
+/// its parts' trees, hulls and adjacency with a progress bar (on a terminal) and prints the time.
 fn check_scene(file: &Path, prepare: bool, load: &LoadOptions) -> anyhow::Result<()> {
     let scene = Scene::load_with(file, load)?;
     let mut report = scene.summary();
@@ -178,7 +178,7 @@ fn check_scene(file: &Path, prepare: bool, load: &LoadOptions) -> anyhow::Result
         });
         bar.finish_and_clear();
         report.push_str(&format!(
-            "\nprepared (DOP-trees and convex hulls of {} parts) in {:.2} s",
+            "\nprepared (DOP-trees, convex hulls and edge adjacency of {} parts) in {:.2} s",
             scene.parts.len(),
             started.elapsed().as_secs_f64()
         ));

@@ -200,10 +200,11 @@ const LOOPS_PATIENCE: Duration = Duration::from_millis(500);
 /// stops the server at once (the loading thread, which holds nothing but memory, is
 /// abandoned). `None` when termination was requested.
 ///
-/// The loaded scene's trees and hulls are then built in the background, the parts in parallel
-/// ([`Scene::prepare`]): the server serves the scene's description and geometry meanwhile, and
-/// the loops, which need them for their first frame, wait for the builds under way rather than
-/// repeat them.
+/// The loaded scene's trees, hulls and adjacency are then built in the background, the parts in
+/// parallel ([`Scene::prepare`]), and the loops, which need them for their first frame, wait for
+/// the builds under way rather than repeat them. The server serves the scene's description and
+/// geometry once its hands are set up; their segment trees are built in rayon's pool too, where
+/// they may wait behind the parts.
 fn load_to_serve(
     node: &Node<ipc::Service>,
     options: &RunOptions,

@@ -554,7 +554,7 @@ fn check_scene_prints_a_summary_or_fails_with_the_error() {
     assert!(prepared.status.success());
     let stdout = String::from_utf8_lossy(&prepared.stdout);
     assert!(
-        stdout.contains("prepared (DOP-trees and convex hulls of 2 parts) in "),
+        stdout.contains("prepared (DOP-trees, convex hulls and edge adjacency of 2 parts) in "),
         "{stdout}"
     );
 
