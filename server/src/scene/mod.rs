@@ -501,8 +501,8 @@ impl Scene {
     }
 
     /// Builds every part's DOP-tree, convex hull and edge adjacency now
-    /// ([`Scene::prepare_parts`]): a scene
-    /// loaded while another is served is made ready before it replaces it.
+    /// ([`Scene::prepare_parts`]): a scene loaded while another is served is made ready before
+    /// it replaces it.
     pub fn prepare(&self) {
         Scene::prepare_parts(&self.parts, &log_prepared(&self.name, &self.parts));
     }
