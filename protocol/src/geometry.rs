@@ -119,9 +119,40 @@ pub enum GeometryDecodeError {
 }
 
 impl SceneGeometry {
-    /// The header and payload of this geometry's sample.
-    pub fn encode(&self) -> (GeometryHeader, Vec<u8>) {
-        let mut out = Writer::default();
+    /// The header of this geometry's sample.
+    pub fn header(&self) -> GeometryHeader {
+        GeometryHeader {
+            generation: self.generation,
+            byte_len: self.encoded_len() as u64,
+            part_count: count(self.parts.len()),
+            hand_count: count(self.hands.len()),
+        }
+    }
+
+    /// Bytes of this geometry's payload: what [`SceneGeometry::encode_into`] writes.
+    pub fn encoded_len(&self) -> usize {
+        let parts: usize = self.parts.iter().map(MeshData::encoded_len).sum();
+        let hands: usize = (self.hands.iter())
+            .map(|hand| {
+                8 + name_len(&hand.model)
+                    + hand
+                        .segments
+                        .iter()
+                        .map(MeshData::encoded_len)
+                        .sum::<usize>()
+            })
+            .sum();
+        parts + hands
+    }
+
+    /// Writes the payload into `out`, which must be [`SceneGeometry::encoded_len`] bytes long:
+    /// a publisher writes it straight into a loaned sample, with no copy between.
+    ///
+    /// # Panics
+    /// If `out` has another length.
+    pub fn encode_into(&self, out: &mut [u8]) {
+        assert_eq!(out.len(), self.encoded_len(), "geometry payload length");
+        let mut out = Writer { bytes: out, at: 0 };
         for part in &self.parts {
             out.mesh(part);
         }
@@ -133,13 +164,14 @@ impl SceneGeometry {
                 out.mesh(segment);
             }
         }
-        let header = GeometryHeader {
-            generation: self.generation,
-            byte_len: out.bytes.len() as u64,
-            part_count: count(self.parts.len()),
-            hand_count: count(self.hands.len()),
-        };
-        (header, out.bytes)
+    }
+
+    /// The header and payload of this geometry's sample.
+    pub fn encode(&self) -> (GeometryHeader, Vec<u8>) {
+        let header = self.header();
+        let mut bytes = vec![0; header.byte_len as usize];
+        self.encode_into(&mut bytes);
+        (header, bytes)
     }
 
     /// Reads a sample's payload, checking every count against the bytes there are (a corrupt
@@ -186,46 +218,79 @@ fn count(len: usize) -> u32 {
     u32::try_from(len).expect("meshes hold fewer than 2^32 elements")
 }
 
-#[derive(Default)]
-struct Writer {
-    bytes: Vec<u8>,
+impl MeshData {
+    /// Whether the normals are written: one per position.
+    fn has_normals(&self) -> bool {
+        self.normals.len() == self.positions.len() && !self.normals.is_empty()
+    }
+
+    /// Bytes of this mesh in a payload.
+    fn encoded_len(&self) -> usize {
+        let floats = self.positions.len() * if self.has_normals() { 2 } else { 1 };
+        name_len(&self.name) + 16 + 12 * (floats + self.triangles.len())
+    }
 }
 
-impl Writer {
+/// The bytes of `name` that are written: at most [`MAX_MESH_NAME_BYTES`], cut at a character
+/// boundary.
+fn written_name(name: &str) -> &[u8] {
+    let mut end = name.len().min(MAX_MESH_NAME_BYTES);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    &name.as_bytes()[..end]
+}
+
+/// Bytes of a name field.
+fn name_len(name: &str) -> usize {
+    4 + written_name(name).len().next_multiple_of(4)
+}
+
+/// Writes a payload front to back into a buffer of its exact length.
+struct Writer<'a> {
+    bytes: &'a mut [u8],
+    at: usize,
+}
+
+impl Writer<'_> {
+    fn put(&mut self, bytes: &[u8]) {
+        self.bytes[self.at..self.at + bytes.len()].copy_from_slice(bytes);
+        self.at += bytes.len();
+    }
+
     fn u32(&mut self, value: u32) {
-        self.bytes.extend_from_slice(&value.to_le_bytes());
+        self.put(&value.to_le_bytes());
     }
 
     fn name(&mut self, name: &str) {
-        let mut end = name.len().min(MAX_MESH_NAME_BYTES);
-        while !name.is_char_boundary(end) {
-            end -= 1;
+        let bytes = written_name(name);
+        self.u32(count(bytes.len()));
+        self.put(bytes);
+        let padded = bytes.len().next_multiple_of(4);
+        self.put(&[0; 3][..padded - bytes.len()]);
+    }
+
+    /// Writes `values` as little-endian 4-byte words.
+    fn words<T: Copy>(&mut self, values: impl Iterator<Item = T>, to_le: fn(T) -> [u8; 4]) {
+        for (chunk, value) in self.bytes[self.at..].chunks_exact_mut(4).zip(values) {
+            chunk.copy_from_slice(&to_le(value));
+            self.at += 4;
         }
-        self.u32(count(end));
-        self.bytes.extend_from_slice(&name.as_bytes()[..end]);
-        self.bytes.resize(self.bytes.len().next_multiple_of(4), 0);
     }
 
     fn mesh(&mut self, mesh: &MeshData) {
-        let normals = mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty();
+        let normals = mesh.has_normals();
         self.name(&mesh.name);
         self.u32(count(mesh.positions.len()));
         self.u32(count(mesh.triangles.len()));
         self.u32(u32::from(normals));
         self.u32(0);
-        let floats = mesh
-            .positions
-            .iter()
+        let floats = (mesh.positions.iter())
             .chain(mesh.normals.iter().filter(|_| normals))
-            .flatten();
-        self.bytes
-            .reserve(12 * (mesh.positions.len() * 2 + mesh.triangles.len()));
-        for value in floats {
-            self.bytes.extend_from_slice(&value.to_le_bytes());
-        }
-        for index in mesh.triangles.iter().flatten() {
-            self.u32(*index);
-        }
+            .flatten()
+            .copied();
+        self.words(floats, f32::to_le_bytes);
+        self.words(mesh.triangles.iter().flatten().copied(), u32::to_le_bytes);
     }
 }
 

@@ -2,23 +2,26 @@
 //! applied) and of its hand's segments (segment frame), so that a renderer never reads the
 //! server's files.
 //!
-//! A scene's meshes are encoded once; a reset sends the same bytes again under a new generation.
+//! A scene's meshes are converted to render precision once, the parts in parallel; each
+//! publication encodes them straight into its shared-memory sample (see
+//! [`Ports::publish_geometry`](super::ports::Ports::publish_geometry)), and a reset publishes the
+//! same meshes under a new generation.
 
 use std::sync::Arc;
 
-use vas_protocol::{GeometryHeader, HandGeometry, HandSide, MeshData, SceneGeometry};
+use rayon::prelude::*;
+use vas_protocol::{HandGeometry, HandSide, MeshData, SceneGeometry};
 
 use super::frames::Restart;
 use crate::geometry::TriMesh;
 use crate::grasping::Side;
 use crate::scene::Scene;
 
-/// The encoded geometry of the scene being served.
+/// The render geometry of the scene being served.
 pub(super) struct ServedGeometry {
-    /// The scene it was encoded from: a restart on the same scene (a reset) encodes nothing.
+    /// The scene it was made from: a restart on the same scene (a reset) converts nothing.
     scene: Arc<Scene>,
-    header: GeometryHeader,
-    bytes: Vec<u8>,
+    geometry: SceneGeometry,
 }
 
 impl ServedGeometry {
@@ -37,31 +40,29 @@ impl ServedGeometry {
         });
         let geometry = SceneGeometry {
             generation: restart.epoch,
-            parts: (restart.scene.parts.iter())
+            parts: (restart.scene.parts.par_iter())
                 .map(|part| mesh_data(&part.name, &part.mesh))
                 .collect(),
             hands: hands.collect(),
         };
-        let (header, bytes) = geometry.encode();
         Self {
             scene: Arc::clone(&restart.scene),
-            header,
-            bytes,
+            geometry,
         }
     }
 
-    /// Moves on to `restart`: re-encodes only when its scene is another one.
+    /// Moves on to `restart`: converts the meshes again only when its scene is another one.
     pub(super) fn restart(&mut self, restart: &Restart) {
         if Arc::ptr_eq(&self.scene, &restart.scene) {
-            self.header.generation = restart.epoch;
+            self.geometry.generation = restart.epoch;
         } else {
             *self = Self::of(restart);
         }
     }
 
-    /// The sample to publish.
-    pub(super) fn sample(&self) -> (GeometryHeader, &[u8]) {
-        (self.header, &self.bytes)
+    /// What to publish.
+    pub(super) fn geometry(&self) -> &SceneGeometry {
+        &self.geometry
     }
 }
 

@@ -128,8 +128,11 @@ impl InteractionManager {
         });
         let geometry = ServedGeometry::of(start);
         let hand_sides = hand_sides(&session.scene);
-        let (ports, wakeups) =
-            Ports::open(node, session.scene.parts.len(), geometry.sample().1.len())?;
+        let (ports, wakeups) = Ports::open(
+            node,
+            session.scene.parts.len(),
+            geometry.geometry().encoded_len(),
+        )?;
         let mut io = Io {
             ports,
             parts: Vec::new(),
@@ -443,8 +446,8 @@ impl Io {
 
     /// Publishes the served scene's geometry (once per generation).
     fn publish_geometry(&mut self) {
-        let (header, bytes) = self.geometry.sample();
-        self.log_failure(self.ports.publish_geometry(header, bytes));
+        let geometry = self.geometry.geometry();
+        self.log_failure(self.ports.publish_geometry(geometry));
     }
 
     /// The session's scene's parts at their configured poses, as published until the loops

@@ -10,7 +10,7 @@ use iceoryx2::prelude::*;
 use vas_protocol::services::{self, output};
 use vas_protocol::{
     ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame,
-    HandJointsSample, PartState, PartsFrameHeader, SimEvent, TrackerSample,
+    HandJointsSample, PartState, PartsFrameHeader, SceneGeometry, SimEvent, TrackerSample,
 };
 
 use super::RuntimeError;
@@ -196,19 +196,17 @@ impl Ports {
         Ok(())
     }
 
-    /// Publishes a scene generation's geometry and wakes its readers.
-    pub(super) fn publish_geometry(
-        &self,
-        header: GeometryHeader,
-        bytes: &[u8],
-    ) -> Result<(), RuntimeError> {
+    /// Publishes a scene generation's geometry, encoded straight into the sample (a large
+    /// assembly's meshes are a hundred megabytes: no copy between), and wakes its readers.
+    pub(super) fn publish_geometry(&self, geometry: &SceneGeometry) -> Result<(), RuntimeError> {
+        let header = geometry.header();
         let mut sample = self
             .geometry
-            .loan_slice_uninit(bytes.len())
+            .loan_slice(header.byte_len as usize)
             .map_err(|error| RuntimeError::ipc("loan a geometry sample", error))?;
         *sample.user_header_mut() = header;
+        geometry.encode_into(sample.payload_mut());
         sample
-            .write_from_slice(bytes)
             .send()
             .map_err(|error| RuntimeError::ipc("send the geometry", error))?;
         self.geometry_notifier
