@@ -22,6 +22,7 @@ use rayon::prelude::*;
 
 use super::node_bounds::{NodeBox, NodeSphere};
 use super::separation::BOX_TEST_MAX_TRIANGLES;
+use super::shared;
 use super::tree::{Arrays, DopTree, Node};
 use crate::collision::orientation::OrientationSet;
 use crate::collision::triangle::Triangle;
@@ -172,7 +173,7 @@ impl<'a> TreeBuilder<'a> {
     pub(super) fn build(self) -> DopTree {
         let (k, h) = (self.k, self.k / 2);
         let count = self.mesh.triangles().len();
-        let mut ids: Vec<u32> = (0..count as u32).collect();
+        let mut ids = shared::from_fn(count, |i| i as u32);
         let mut dops = vec![0.0f32; count * k];
         let mut centroids = vec![0.0f32; count * h];
         dops.par_chunks_mut(k)
@@ -188,29 +189,26 @@ impl<'a> TreeBuilder<'a> {
                 }
             });
         let plan = self.plan(Items {
-            ids: &mut ids,
+            ids: shared::unshared(&mut ids),
             dops: &mut dops,
             centroids: &mut centroids,
         });
         drop(centroids);
-        let triangles: Vec<Triangle> = ids
-            .par_iter()
-            .map(|&i| self.mesh.triangle(i as usize))
-            .collect();
+        let triangles = shared::from_fn(count, |i| self.mesh.triangle(ids[i] as usize));
         let node_count = plan.len();
-        let mut nodes = vec![Node::default(); node_count];
-        let mut parents = vec![0u32; node_count];
-        let mut triangle_ranges = vec![[0u32; 2]; node_count];
-        let mut offsets = vec![0.0f32; node_count * k];
-        let mut boxes = vec![NodeBox::default(); node_count];
+        let mut nodes = shared::zeroed(node_count);
+        let mut parents = shared::zeroed(node_count);
+        let mut triangle_ranges = shared::zeroed(node_count);
+        let mut offsets = shared::zeroed(node_count * k);
+        let mut boxes = shared::zeroed(node_count);
         let (mut root, below) = Slots {
             first: 0,
             k,
-            nodes: &mut nodes,
-            parents: &mut parents,
-            triangle_ranges: &mut triangle_ranges,
-            offsets: &mut offsets,
-            boxes: &mut boxes,
+            nodes: shared::unshared(&mut nodes),
+            parents: shared::unshared(&mut parents),
+            triangle_ranges: shared::unshared(&mut triangle_ranges),
+            offsets: shared::unshared(&mut offsets),
+            boxes: shared::unshared(&mut boxes),
         }
         .split_at(1);
         let leaves = LeafOrder {

@@ -3,10 +3,13 @@
 //! triangle under its node. A tree that passes answers no query wrongly, whoever built it: a tree
 //! read from a cache is checked so before it is used.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::separation::BOX_TEST_MAX_TRIANGLES;
+use super::shared;
 use super::tree::{DopTree, Node};
 
 /// The relative margin by which a child's sphere must lie inside its parent's for the check to
@@ -22,14 +25,14 @@ fn defect(what: impl Into<String>) -> Defect {
     Defect(what.into())
 }
 
+/// Per node of a tree, its parent and the triangles under it (`start..end` in leaf order).
+type Layout = (Arc<[u32]>, Arc<[[u32; 2]]>);
+
 /// The parent of each node and the triangles under it (`start..end` in leaf order) of `nodes`
 /// over `triangle_count` triangles in leaf order, if they form one tree as the builder lays it
 /// out: the root first, the two children of an inner node adjacent and after it, every node
 /// reached once, leaves taking the triangles in order, each exactly once.
-pub(super) fn structure(
-    nodes: &[Node],
-    triangle_count: usize,
-) -> Result<(Vec<u32>, Vec<[u32; 2]>), Defect> {
+pub(super) fn structure(nodes: &[Node], triangle_count: usize) -> Result<Layout, Defect> {
     const UNREACHED: u32 = u32::MAX;
     if nodes.is_empty() || nodes.len() > 2 * triangle_count.max(1) {
         return Err(defect(format!(
@@ -37,9 +40,12 @@ pub(super) fn structure(
             nodes.len()
         )));
     }
-    let mut parents = vec![UNREACHED; nodes.len()];
+    let (mut shared_parents, mut shared_ranges) =
+        (shared::zeroed(nodes.len()), shared::zeroed(nodes.len()));
+    let parents = shared::unshared(&mut shared_parents);
+    parents.fill(UNREACHED);
     parents[0] = 0;
-    let mut ranges = vec![[0u32; 2]; nodes.len()];
+    let ranges = shared::unshared(&mut shared_ranges);
     let mut next_triangle = 0usize;
     let mut stack = vec![0usize];
     while let Some(index) = stack.pop() {
@@ -89,7 +95,7 @@ pub(super) fn structure(
             ranges[index] = [ranges[first][0], ranges[first + 1][1]];
         }
     }
-    Ok((parents, ranges))
+    Ok((shared_parents, shared_ranges))
 }
 
 /// Whether the triangle ids of a tree over `triangle_count` triangles name each exactly once.

@@ -3,7 +3,8 @@
 //!
 //! A newcomer can read the files in the order a query uses them:
 //! - `tree`: the tree's layout and its public API ([`DopTree`]); `build` makes it, and
-//!   `node_bounds` holds the sphere and the box each node keeps besides its DOP;
+//!   `node_bounds` holds the sphere and the box each node keeps besides its DOP, `shared` how its
+//!   arrays are allocated once and filled in place;
 //! - `query`: a query's entry and the stages it goes through;
 //! - `pair_memory`: what the last queries of the same two trees left (temporal coherence), with
 //!   the `front` where the last walk ended and the `certificates` that keep its pairs apart;
@@ -27,6 +28,7 @@ mod query;
 mod realign;
 mod root_separation;
 mod separation;
+mod shared;
 mod traverse;
 mod tree;
 

@@ -8,14 +8,13 @@
 use std::hash::{Hash, Hasher};
 use std::io::{self, Read, Write};
 
-use bytemuck::{Pod, Zeroable};
-use rayon::prelude::*;
-
 use super::check::{self, Defect};
 use super::node_bounds::NodeBox;
+use super::shared;
 use super::tree::{Arrays, DopTree, Node};
 use crate::collision::orientation::OrientationSet;
 use crate::geometry::TriMesh;
+use bytemuck::{Pod, Zeroable};
 
 /// The first bytes of every tree file.
 const MAGIC: u64 = u64::from_le_bytes(*b"vas-dop\0");
@@ -176,34 +175,34 @@ pub(super) fn read(
         });
     }
     let (nodes, k, triangles) = (nodes as usize, key.k as usize, key.triangles as usize);
-    let mut arrays = Arrays {
-        set: set.clone(),
-        nodes: vec![Node::zeroed(); nodes],
-        parents: Vec::new(),
-        triangle_ranges: Vec::new(),
-        offsets: vec![0.0; nodes * k],
-        boxes: vec![NodeBox::zeroed(); nodes],
-        triangle_ids: vec![0; triangles],
-    };
-    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.nodes))?;
-    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.offsets))?;
-    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.boxes))?;
-    input.read_exact(bytemuck::cast_slice_mut(&mut arrays.triangle_ids))?;
-    let stored = payload(
-        &arrays.nodes,
-        &arrays.offsets,
-        &arrays.boxes,
-        &arrays.triangle_ids,
-    );
-    if checksum(stored) != header.checksum {
+    let mut stored_nodes = shared::zeroed::<Node>(nodes);
+    let mut offsets = shared::zeroed::<f32>(nodes * k);
+    let mut boxes = shared::zeroed::<NodeBox>(nodes);
+    let mut triangle_ids = shared::zeroed::<u32>(triangles);
+    input.read_exact(bytemuck::cast_slice_mut(shared::unshared(
+        &mut stored_nodes,
+    )))?;
+    input.read_exact(bytemuck::cast_slice_mut(shared::unshared(&mut offsets)))?;
+    input.read_exact(bytemuck::cast_slice_mut(shared::unshared(&mut boxes)))?;
+    input.read_exact(bytemuck::cast_slice_mut(shared::unshared(
+        &mut triangle_ids,
+    )))?;
+    if checksum(payload(&stored_nodes, &offsets, &boxes, &triangle_ids)) != header.checksum {
         return Err(Refused::Checksum);
     }
     // Ids in range before the triangles are looked up by them.
-    check::permutation(&arrays.triangle_ids, triangles)?;
-    (arrays.parents, arrays.triangle_ranges) = check::structure(&arrays.nodes, triangles)?;
-    let triangles = (arrays.triangle_ids.par_iter())
-        .map(|&i| mesh.triangle(i as usize))
-        .collect();
+    check::permutation(&triangle_ids, triangles)?;
+    let (parents, triangle_ranges) = check::structure(&stored_nodes, triangles)?;
+    let triangles = shared::from_fn(triangles, |i| mesh.triangle(triangle_ids[i] as usize));
+    let arrays = Arrays {
+        set: set.clone(),
+        nodes: stored_nodes,
+        parents,
+        triangle_ranges,
+        offsets,
+        boxes,
+        triangle_ids,
+    };
     let tree = DopTree::assemble(arrays, triangles);
     check::bounds(&tree)?;
     Ok(tree)

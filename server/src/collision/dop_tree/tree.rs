@@ -78,18 +78,18 @@ pub struct DopTree {
 /// cache reads back.
 pub(super) struct Arrays {
     pub(super) set: OrientationSet,
-    pub(super) nodes: Vec<Node>,
-    pub(super) parents: Vec<u32>,
-    pub(super) triangle_ranges: Vec<[u32; 2]>,
-    pub(super) offsets: Vec<f32>,
-    pub(super) boxes: Vec<NodeBox>,
+    pub(super) nodes: Arc<[Node]>,
+    pub(super) parents: Arc<[u32]>,
+    pub(super) triangle_ranges: Arc<[[u32; 2]]>,
+    pub(super) offsets: Arc<[f32]>,
+    pub(super) boxes: Arc<[NodeBox]>,
     /// The mesh's triangle indices in leaf order.
-    pub(super) triangle_ids: Vec<u32>,
+    pub(super) triangle_ids: Arc<[u32]>,
 }
 
 impl DopTree {
     /// The tree of `arrays`, with a fresh id, over `triangles` (the mesh's, in leaf order).
-    pub(super) fn assemble(arrays: Arrays, triangles: Vec<Triangle>) -> Self {
+    pub(super) fn assemble(arrays: Arrays, triangles: Arc<[Triangle]>) -> Self {
         let k = arrays.set.k();
         let max_abs_offset = arrays.offsets[..k]
             .iter()
@@ -102,14 +102,14 @@ impl DopTree {
             bounding_radius: root.radius as f64,
             set: arrays.set,
             k,
-            nodes: arrays.nodes.into(),
-            parents: arrays.parents.into(),
-            triangle_ranges: arrays.triangle_ranges.into(),
-            offsets: arrays.offsets.into(),
-            triangles: triangles.into(),
-            triangle_ids: arrays.triangle_ids.into(),
+            nodes: arrays.nodes,
+            parents: arrays.parents,
+            triangle_ranges: arrays.triangle_ranges,
+            offsets: arrays.offsets,
+            triangles,
+            triangle_ids: arrays.triangle_ids,
             max_abs_offset,
-            boxes: arrays.boxes.into(),
+            boxes: arrays.boxes,
         }
     }
 
