@@ -8,7 +8,8 @@ use std::sync::{Arc, Mutex};
 use proptest::prelude::*;
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{
-    EdgeAdjacency, GeometryError, TriMesh, load_mesh, parse_mesh_spec, weld, write_obj,
+    EdgeAdjacency, FileLimits, GeometryError, TriMesh, load_mesh, load_mesh_within,
+    parse_mesh_spec, weld, write_obj,
 };
 
 /// The repository root (the server crate's parent).
@@ -157,12 +158,24 @@ fn binary_and_ascii_stl_load() {
     ascii.push_str("endsolid cube\n");
     let ascii = write_scratch("cube_ascii.STL", ascii.as_bytes());
 
+    let limit = |scene_triangles| FileLimits {
+        scene_triangles,
+        ..FileLimits::default()
+    };
     for path in [binary, ascii] {
         let mesh = load_mesh(&path).unwrap();
         assert_eq!(mesh.triangles().len(), 12, "{}", path.display());
         // Identical corners are shared, so the cube is closed.
         assert_eq!(mesh.vertices().len(), 8, "{}", path.display());
         assert!(EdgeAdjacency::new(&mesh).is_closed());
+        assert_eq!(load_mesh_within(&path, &limit(12)).unwrap(), mesh);
+        // Binary files are refused by their count, ASCII ones at the first triangle too many.
+        match load_mesh_within(&path, &limit(11)) {
+            Err(GeometryError::TooManyTriangles { count, allowed, .. }) => {
+                assert_eq!((count, allowed), (12, 11), "{}", path.display());
+            }
+            other => panic!("{}: {other:?}", path.display()),
+        }
     }
 }
 
