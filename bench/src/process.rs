@@ -48,7 +48,9 @@ impl ServerProcess {
 
     /// Starts `binary run --prefix PREFIX ARGS...`, its stderr written to `log`; then connects
     /// once it answers control requests, sends `first` and waits for the hand frame answering
-    /// it. Each wait gives up after `timeout`; a server that exits meanwhile (a bad scene) is
+    /// it. The wait for control is one small request at a time (the input counters), not the
+    /// scene's description, whose one request per part would add a large scene's round trips to
+    /// the time measured. Each wait gives up after `timeout`; a server that exits meanwhile (a bad scene) is
     /// noticed within a second, and the error shows its log.
     pub fn start_ready(
         binary: &Path,
@@ -73,7 +75,7 @@ impl ServerProcess {
             log: log.to_owned(),
         };
         let mut client = crate::args::connect(Some(prefix))?;
-        while let Err(error) = client.scene_info(Duration::from_secs(1)) {
+        while let Err(error) = client.input_stats(Duration::from_secs(1)) {
             if !server.is_running() || started.elapsed() > timeout {
                 let log = server.log_text();
                 server.stop(client);
