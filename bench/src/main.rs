@@ -54,8 +54,9 @@ rows of at least 100k triangles (1 is linear)."
         after_long_help = "Columns: mesh; triangles; dop_1_thread_s, dop_all_threads_s (median DOP-tree build, k = 18, on
 one thread and on all); dop_bytes_per_tri (all the tree holds: nodes, boxes, offsets, triangles
 and their ids); fcl_obb_s, fcl_bytes_per_tri (median FCL BVHModel<OBB> build on one thread, and
-its memUsage: nodes, indices, vertices, triangles); ratio (dop_1_thread_s over fcl_obb_s; '(ref)'
-when FCL was not found at build time and the ratio is against 2.5 s)."
+its memUsage: nodes, indices, vertices, triangles); ratio_1_thread and ratio (dop_1_thread_s and
+dop_all_threads_s over fcl_obb_s; '(ref)' when FCL was not found at build time and the ratios are
+against 2.5 s)."
     )]
     TreeBuild(tree_build::TreeBuildArgs),
     /// B1: the tumbling pair (the paper's Figure 3 with --figure).

@@ -4,24 +4,30 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::triangle::Triangle;
+use crate::geometry::{larger, smaller};
 
 /// Added to the absolute rotation entries so that nearly parallel edges (whose cross product is
 /// almost zero) do not produce false separations, as RAPID does.
 const PARALLEL_SLACK: f64 = 1e-6;
 
-/// Most sweeps of [`symmetric_eigen`]; three or four reach rounding level.
+/// Most sweeps of [`symmetric_eigen`]; three or four reach [`JACOBI_TOLERANCE`].
 const JACOBI_SWEEPS: usize = 8;
+
+/// Where [`symmetric_eigen`] stops: the off-diagonal entries at most this much of the diagonal.
+/// Far below what a box's axes need (the DOP-tree keeps them in `f32`; any orthonormal axes
+/// give a valid box), and a sweep sooner than rounding level.
+const JACOBI_TOLERANCE: f64 = 1e-9;
 
 /// The eigenvectors (as columns) and eigenvalues of the symmetric `m`, by cyclic Jacobi
 /// rotations, as FCL fits its boxes: on a 3x3 matrix a few sweeps bring the off-diagonal entries
-/// to rounding level, several times faster than a general solver. The vectors are orthonormal
+/// to [`JACOBI_TOLERANCE`], several times faster than a general solver. The vectors are orthonormal
 /// whatever the accuracy (products of rotations), which is what a box needs.
 fn symmetric_eigen(m: Matrix3<f64>) -> (Matrix3<f64>, Vector3<f64>) {
     let mut a = m;
     let mut vectors = Matrix3::identity();
     for _ in 0..JACOBI_SWEEPS {
         let off = a[(0, 1)].powi(2) + a[(0, 2)].powi(2) + a[(1, 2)].powi(2);
-        if off <= (f64::EPSILON * a.diagonal().norm()).powi(2) {
+        if off <= (JACOBI_TOLERANCE * a.diagonal().norm()).powi(2) {
             break;
         }
         for (p, q, r) in [(0, 1, 2), (0, 2, 1), (1, 2, 0)] {
@@ -54,6 +60,63 @@ fn symmetric_eigen(m: Matrix3<f64>) -> (Matrix3<f64>, Vector3<f64>) {
     (vectors, a.diagonal())
 }
 
+/// The area-weighted moments of a set of triangles as surfaces, to which a box's axes are
+/// fitted. They add: a node's are the sum of its children's.
+#[derive(Debug, Clone, Copy)]
+pub struct SurfaceMoments {
+    area: f64,
+    /// Sum of each triangle's area times its centroid.
+    first: Vector3<f64>,
+    /// Sum of each triangle's second moment about the origin.
+    second: Matrix3<f64>,
+}
+
+impl SurfaceMoments {
+    pub fn of<'t>(triangles: impl IntoIterator<Item = &'t Triangle>) -> Self {
+        let mut moments = SurfaceMoments {
+            area: 0.0,
+            first: Vector3::zeros(),
+            second: Matrix3::zeros(),
+        };
+        for [p, q, r] in triangles {
+            let area = 0.5 * (q - p).cross(&(r - p)).norm();
+            let m = (p.coords + q.coords + r.coords) / 3.0;
+            moments.area += area;
+            moments.first += area * m;
+            moments.second += (area / 12.0)
+                * (9.0 * m * m.transpose()
+                    + p.coords * p.coords.transpose()
+                    + q.coords * q.coords.transpose()
+                    + r.coords * r.coords.transpose());
+        }
+        moments
+    }
+
+    /// The axes of the fitted box, as columns: the eigenvectors of the covariance, by
+    /// decreasing variance.
+    pub fn axes(&self) -> Matrix3<f64> {
+        let mean = self.first / self.area;
+        let covariance = self.second / self.area - mean * mean.transpose();
+        let (vectors, values) = symmetric_eigen(covariance);
+        // Columns sorted by decreasing variance: the first axis is the one to split along.
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&a, &b| values[b].total_cmp(&values[a]));
+        Matrix3::from_columns(&order.map(|i| vectors.column(i).into_owned()))
+    }
+}
+
+impl std::ops::Add for SurfaceMoments {
+    type Output = SurfaceMoments;
+
+    fn add(self, other: SurfaceMoments) -> SurfaceMoments {
+        SurfaceMoments {
+            area: self.area + other.area,
+            first: self.first + other.first,
+            second: self.second + other.second,
+        }
+    }
+}
+
 /// A box fitted to a set of triangles: the OBB-tree's bounding volume, and the DOP-tree's second
 /// test near the leaves (`dop_tree::NodeBox`).
 #[derive(Debug, Clone, Copy)]
@@ -69,7 +132,7 @@ impl OrientedBox {
     /// The box fitted to the triangles `subset` of `triangles`.
     pub fn fit(triangles: &[Triangle], subset: &[u32]) -> Self {
         let chosen = || subset.iter().map(|&t| &triangles[t as usize]);
-        let axes = Self::fitted_axes(chosen());
+        let axes = SurfaceMoments::of(chosen()).axes();
         let (lo, hi) = Self::local_range(&axes, chosen());
         let scale = hi.abs().max().max(lo.abs().max());
         OrientedBox {
@@ -78,33 +141,6 @@ impl OrientedBox {
             // A relative pad covers the rounding of the projections.
             extents: (hi - lo) * 0.5 + Vector3::repeat(scale * 1e-12),
         }
-    }
-
-    /// The axes of the box fitted to `triangles`, as columns: the eigenvectors of their
-    /// area-weighted covariance, by decreasing variance.
-    pub fn fitted_axes<'t>(triangles: impl IntoIterator<Item = &'t Triangle>) -> Matrix3<f64> {
-        // Area-weighted second moments of the triangles as surfaces.
-        let mut area_sum = 0.0;
-        let mut mean = Vector3::zeros();
-        let mut moment = Matrix3::zeros();
-        for [p, q, r] in triangles {
-            let area = 0.5 * (q - p).cross(&(r - p)).norm();
-            let m = (p.coords + q.coords + r.coords) / 3.0;
-            area_sum += area;
-            mean += area * m;
-            moment += (area / 12.0)
-                * (9.0 * m * m.transpose()
-                    + p.coords * p.coords.transpose()
-                    + q.coords * q.coords.transpose()
-                    + r.coords * r.coords.transpose());
-        }
-        mean /= area_sum;
-        let covariance = moment / area_sum - mean * mean.transpose();
-        let (vectors, values) = symmetric_eigen(covariance);
-        // Columns sorted by decreasing variance: the first axis is the one to split along.
-        let mut order = [0usize, 1, 2];
-        order.sort_by(|&a, &b| values[b].total_cmp(&values[a]));
-        Matrix3::from_columns(&order.map(|i| vectors.column(i).into_owned()))
     }
 
     /// The lowest and highest projections of the corners of `triangles` on each of `axes`
@@ -117,8 +153,10 @@ impl OrientedBox {
         let mut hi = Vector3::repeat(f64::MIN);
         for p in triangles.into_iter().flatten() {
             let local = axes.tr_mul(&p.coords);
-            lo = lo.inf(&local);
-            hi = hi.sup(&local);
+            for i in 0..3 {
+                lo[i] = smaller(lo[i], local[i]);
+                hi[i] = larger(hi[i], local[i]);
+            }
         }
         (lo, hi)
     }
@@ -195,7 +233,7 @@ mod tests {
             let [a, b, c, d, e, f] = entries.map(|x| x * scale);
             let m = Matrix3::new(a, d, e, d, b, f, e, f, c);
             let (vectors, values) = symmetric_eigen(m);
-            let tolerance = 1e-12 * m.norm().max(f64::MIN_POSITIVE);
+            let tolerance = 10.0 * JACOBI_TOLERANCE * m.norm().max(f64::MIN_POSITIVE);
             prop_assert!((vectors.transpose() * vectors - Matrix3::identity()).norm() < 1e-12);
             let diagonal = vectors.transpose() * m * vectors;
             prop_assert!((diagonal - Matrix3::from_diagonal(&values)).norm() < tolerance);
@@ -206,6 +244,26 @@ mod tests {
             for (x, y) in ours.iter().zip(&theirs) {
                 prop_assert!((x - y).abs() < tolerance, "{x} against {y}");
             }
+        }
+
+        /// The moments of two sets of triangles added are those of their union, as a node's box
+        /// is fitted to the sum of its children's.
+        #[test]
+        fn moments_add_up(
+            corners in prop::collection::vec(prop::array::uniform9(-10.0..10.0f64), 2..12),
+            cut in 1usize..11,
+        ) {
+            let triangles: Vec<Triangle> = corners
+                .iter()
+                .map(|c| [0, 3, 6].map(|i| nalgebra::Point3::new(c[i], c[i + 1], c[i + 2])))
+                .collect();
+            let (left, right) = triangles.split_at(cut.min(triangles.len() - 1));
+            let whole = SurfaceMoments::of(&triangles);
+            let sum = SurfaceMoments::of(left) + SurfaceMoments::of(right);
+            let scale = 1e-12 * (1.0 + whole.second.norm());
+            prop_assert!((whole.area - sum.area).abs() <= scale);
+            prop_assert!((whole.first - sum.first).norm() <= scale);
+            prop_assert!((whole.second - sum.second).norm() <= scale);
         }
     }
 }

@@ -14,13 +14,27 @@ pub type Point = Point3<f64>;
 /// The axis-aligned bounding box of `points` as (minimum corner, maximum corner); inverted
 /// (`f64::MAX` above `f64::MIN`) when there are none.
 pub fn bounding_box_of<'a>(points: impl IntoIterator<Item = &'a Point>) -> (Point, Point) {
-    points.into_iter().fold(
-        (
-            Point::from(Vector3::repeat(f64::MAX)),
-            Point::from(Vector3::repeat(f64::MIN)),
-        ),
-        |(lo, hi), p| (lo.inf(p), hi.sup(p)),
-    )
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in points {
+        for i in 0..3 {
+            lo[i] = smaller(lo[i], p[i]);
+            hi[i] = larger(hi[i], p[i]);
+        }
+    }
+    (Point::from(lo), Point::from(hi))
+}
+
+/// The larger of `a` and `b`, in one instruction on finite numbers where `f64::max` takes
+/// several to order NaN: for loops over every point of a mesh.
+#[inline]
+pub fn larger(a: f64, b: f64) -> f64 {
+    if b > a { b } else { a }
+}
+
+/// The smaller of `a` and `b`; see [`larger`].
+#[inline]
+pub fn smaller(a: f64, b: f64) -> f64 {
+    if b < a { b } else { a }
 }
 
 /// The centre of the bounding box of `points` and the radius of the sphere around it that holds
@@ -31,7 +45,7 @@ pub fn bounding_sphere_of<'a>(points: impl IntoIterator<Item = &'a Point> + Clon
     let radius = points
         .into_iter()
         .map(|p| (p - centre).norm())
-        .fold(0.0, f64::max);
+        .fold(0.0, larger);
     (centre, radius)
 }
 

@@ -15,5 +15,7 @@ pub use io::{
     load_mesh_within, mesh_from_bytes, parse_mesh_spec, read_mesh_file, read_regular_text,
     write_obj,
 };
-pub use mesh::{CleanupReport, MeshError, Point, TriMesh, bounding_box_of, bounding_sphere_of};
+pub use mesh::{
+    CleanupReport, MeshError, Point, TriMesh, bounding_box_of, bounding_sphere_of, larger, smaller,
+};
 pub use weld::weld;

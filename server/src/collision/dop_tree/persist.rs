@@ -20,7 +20,7 @@ use bytemuck::{Pod, Zeroable};
 const MAGIC: u64 = u64::from_le_bytes(*b"vas-dop\0");
 
 /// The version of the file's layout and of what its arrays mean: a file of another is stale.
-const LAYOUT: u64 = 1;
+const LAYOUT: u64 = 2;
 
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 #[repr(C)]

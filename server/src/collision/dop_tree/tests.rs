@@ -217,7 +217,7 @@ fn front_certificates_not_due_still_separate() {
             a.intersects(&b, &pose, &mut QueryStats::default());
         }
     }
-    assert!(checked > 10_000, "only {checked} certificates checked");
+    assert!(checked > 5_000, "only {checked} certificates checked");
     assert!(renewed > 500, "only {renewed} certificates renewed");
 }
 
