@@ -277,9 +277,11 @@ impl<'a> TreeBuilder<'a> {
             let dop = &mut slot.offsets[..k];
             dop.copy_from_slice(&left.offsets[..k]);
             merge_max(dop, &right.offsets[..k]);
-            let moments = small.then(|| match (left_moments, right_moments) {
-                (Some(left), Some(right)) => left + right,
-                _ => SurfaceMoments::of(own),
+            let moments = small.then(|| {
+                let halves = left_moments.zip(right_moments);
+                halves
+                    .map(|(left, right)| left + right)
+                    .expect("the children of a node small enough for a box are too")
             });
             let sphere = NodeSphere::enclosing(&left.nodes[0].sphere, &right.nodes[0].sphere);
             (children, 0, moments, Some(sphere))
