@@ -1,8 +1,8 @@
 //! The DOP-tree build against FCL's OBB-tree build on the same meshes: each built `--runs` times,
 //! the median taken; the DOP-tree on all of rayon's threads (the ratio's figure: the build is
-//! parallel, FCL's is not) and on one; bytes a triangle of everything each tree holds. FCL's build runs in its own
-//! process, the harness `bench/fcl/obb_build.cpp` compiled when FCL was found at build time;
-//! without it the ratio is against a reference time.
+//! parallel, FCL's is not) and on one; bytes a triangle of everything each tree holds. FCL's
+//! build runs in its own process, the harness `bench/fcl/obb_build.cpp` compiled when FCL was
+//! found at build time; without it the ratios are against a reference time.
 
 use std::io::Write;
 use std::path::Path;
@@ -97,6 +97,7 @@ pub fn run(args: &TreeBuildArgs) -> Result<()> {
             None => None,
         };
         let fcl_obb_s = fcl.as_mut().map(|f| median(&mut f.seconds));
+        let against = fcl_obb_s.unwrap_or(FCL_REFERENCE_S);
         let row = BuildRow {
             mesh: spec.clone(),
             triangles,
@@ -106,8 +107,8 @@ pub fn run(args: &TreeBuildArgs) -> Result<()> {
             dop_bytes_per_triangle: bytes as f64 / triangles as f64,
             fcl_obb_s,
             fcl_bytes_per_triangle: fcl.map(|f| f.bytes as f64 / triangles as f64),
-            ratio: dop_all_threads_s / fcl_obb_s.unwrap_or(FCL_REFERENCE_S),
-            ratio_1_thread: dop_1_thread_s / fcl_obb_s.unwrap_or(FCL_REFERENCE_S),
+            ratio: dop_all_threads_s / against,
+            ratio_1_thread: dop_1_thread_s / against,
             ratio_measured: fcl_obb_s.is_some(),
         };
         println!(

@@ -95,7 +95,7 @@ impl NodeBox {
     /// The box fitted (as the OBB-tree fits its boxes) to `triangles`, whose moments are
     /// `moments`, rounded to `f32` outwards.
     pub(super) fn fitted(moments: &SurfaceMoments, triangles: &[Triangle]) -> Self {
-        let axes = (moments.axes()).map(|x| x as f32).cast::<f64>();
+        let axes = moments.axes().map(|x| x as f32).cast::<f64>();
         let (lo, hi) = OrientedBox::local_range(&axes, triangles);
         let centre = axes * ((lo + hi) * 0.5);
         let half = (hi - lo) * 0.5;
