@@ -652,8 +652,11 @@ fn split_sliding_queries_agree_with_brute_force() {
         }
     });
     assert!(hits > 20 && misses > 20, "{hits} hits, {misses} misses");
+    // Which queries split depends on the threads' timing: a hit found by one chunk stops the
+    // others and drops the front, so the next query starts from the roots. 14 to 19 of the 300
+    // split on two cores; the floor only guards that the split path is exercised.
     assert!(
-        stats.split_walks >= 15,
+        stats.split_walks >= 5,
         "only {} split walks",
         stats.split_walks
     );
