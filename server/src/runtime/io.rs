@@ -512,9 +512,10 @@ impl Io {
             })
             .collect();
         self.log_failure(self.ports.publish_events(&events));
-        for (index, hand) in frame.hands.iter().enumerate() {
-            if let Some(wrench) = hand.force {
-                self.log_failure(self.ports.publish_force(ForceFrame {
+        let forces: Vec<ForceFrame> = (frame.hands.iter().enumerate())
+            .filter_map(|(index, hand)| {
+                let wrench = hand.force?;
+                Some(ForceFrame {
                     frame: self.hand_frames,
                     tracker: stamps.tracker,
                     glove: stamps.glove,
@@ -523,9 +524,10 @@ impl Io {
                     force: wrench.force.into(),
                     torque: wrench.torque.into(),
                     hand: side(index) as u32,
-                }));
-            }
-        }
+                })
+            })
+            .collect();
+        self.log_failure(self.ports.publish_forces(&forces));
         if frame.epoch == self.session.epoch && frame.parts.len() == self.parts.len() {
             let changed = (0u32..)
                 .zip(&frame.parts)
@@ -542,31 +544,33 @@ impl Io {
         }
         // The hand frames go last: a client that waits for the answer to its sample has the
         // parts and events of the same frame by then.
-        for (index, hand) in frame.hands.iter().enumerate() {
-            let segments = &hand.segments;
-            let frame = HandFrame {
-                frame: self.hand_frames,
-                tracker: stamps.tracker,
-                glove: stamps.glove,
-                joints: hand.joints,
-                timestamp_ns: wall_clock_ns(),
-                root: WirePose::from_isometry(&hand.root),
-                flex: hand.flex,
-                touching: hand.touching,
-                grasp_type: hand.grasp as u32,
-                hand: side(index) as u32,
-                tracked: u32::from(hand.tracked),
-                segment_count: u32::try_from(segments.len().min(HAND_SEGMENT_COUNT))
-                    .expect("at most 16"),
-                reserved: 0,
-                segments: std::array::from_fn(|i| {
-                    segments
-                        .get(i)
-                        .map_or(WirePose::IDENTITY, WirePose::from_isometry)
-                }),
-            };
-            self.log_failure(self.ports.publish_hand(frame));
-        }
+        let hands: Vec<HandFrame> = (frame.hands.iter().enumerate())
+            .map(|(index, hand)| {
+                let segments = &hand.segments;
+                HandFrame {
+                    frame: self.hand_frames,
+                    tracker: stamps.tracker,
+                    glove: stamps.glove,
+                    joints: hand.joints,
+                    timestamp_ns: wall_clock_ns(),
+                    root: WirePose::from_isometry(&hand.root),
+                    flex: hand.flex,
+                    touching: hand.touching,
+                    grasp_type: hand.grasp as u32,
+                    hand: side(index) as u32,
+                    tracked: u32::from(hand.tracked),
+                    segment_count: u32::try_from(segments.len().min(HAND_SEGMENT_COUNT))
+                        .expect("at most 16"),
+                    reserved: 0,
+                    segments: std::array::from_fn(|i| {
+                        segments
+                            .get(i)
+                            .map_or(WirePose::IDENTITY, WirePose::from_isometry)
+                    }),
+                }
+            })
+            .collect();
+        self.log_failure(self.ports.publish_hands(&hands));
     }
 
     /// Publishes the latest part states, stamped with `frame`'s inputs (or the latest inputs).

@@ -215,42 +215,37 @@ impl Ports {
         Ok(())
     }
 
-    /// Publishes a hand frame and wakes its readers.
-    pub(super) fn publish_hand(&self, frame: HandFrame) -> Result<(), RuntimeError> {
-        self.hand
-            .send_copy(frame)
-            .map_err(|error| RuntimeError::ipc("send a hand frame", error))?;
-        self.hand_notifier
-            .notify()
-            .map_err(|error| RuntimeError::ipc("notify hand readers", error))?;
-        Ok(())
+    /// Publishes a frame's hand frames (one per hand) and wakes their readers once: a reader
+    /// woken by the notification finds every hand's frame (a wake-up per hand would wake it
+    /// before the last one is sent, and each notification is a system call).
+    pub(super) fn publish_hands(&self, frames: &[HandFrame]) -> Result<(), RuntimeError> {
+        send_all(
+            &self.hand,
+            &self.hand_notifier,
+            frames,
+            ("send a hand frame", "notify hand readers"),
+        )
     }
 
-    /// Publishes events and wakes their readers once.
+    /// Publishes a frame's events and wakes their readers once.
     pub(super) fn publish_events(&self, events: &[SimEvent]) -> Result<(), RuntimeError> {
-        if events.is_empty() {
-            return Ok(());
-        }
-        for event in events {
-            self.events
-                .send_copy(*event)
-                .map_err(|error| RuntimeError::ipc("send an event", error))?;
-        }
-        self.events_notifier
-            .notify()
-            .map_err(|error| RuntimeError::ipc("notify event readers", error))?;
-        Ok(())
+        send_all(
+            &self.events,
+            &self.events_notifier,
+            events,
+            ("send an event", "notify event readers"),
+        )
     }
 
-    /// Publishes a force frame and wakes its readers.
-    pub(super) fn publish_force(&self, frame: ForceFrame) -> Result<(), RuntimeError> {
-        self.force
-            .send_copy(frame)
-            .map_err(|error| RuntimeError::ipc("send a force frame", error))?;
-        self.force_notifier
-            .notify()
-            .map_err(|error| RuntimeError::ipc("notify force readers", error))?;
-        Ok(())
+    /// Publishes a frame's force frames (one per hand holding a part) and wakes their readers
+    /// once.
+    pub(super) fn publish_forces(&self, frames: &[ForceFrame]) -> Result<(), RuntimeError> {
+        send_all(
+            &self.force,
+            &self.force_notifier,
+            frames,
+            ("send a force frame", "notify force readers"),
+        )
     }
 
     /// Wakes the control clients after responses were sent.
@@ -278,4 +273,26 @@ impl Ports {
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new parts readers", error))
     }
+}
+
+/// Sends `items` on `publisher` and then notifies its readers once; nothing (no notification
+/// either) for no items. `actions` name the sending and the notifying in errors.
+fn send_all<T: Copy + std::fmt::Debug + ZeroCopySend>(
+    publisher: &Publisher<ipc::Service, T, ()>,
+    notifier: &Notifier<ipc::Service>,
+    items: &[T],
+    (send, notify): (&'static str, &'static str),
+) -> Result<(), RuntimeError> {
+    if items.is_empty() {
+        return Ok(());
+    }
+    for item in items {
+        publisher
+            .send_copy(*item)
+            .map_err(|error| RuntimeError::ipc(send, error))?;
+    }
+    notifier
+        .notify()
+        .map_err(|error| RuntimeError::ipc(notify, error))?;
+    Ok(())
 }
