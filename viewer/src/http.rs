@@ -13,6 +13,7 @@ use axum::extract::{State, WebSocketUpgrade};
 use axum::http::{HeaderMap, StatusCode, Uri, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
+use axum::serve::ListenerExt;
 
 use crate::assets;
 use crate::hub::Hub;
@@ -36,6 +37,13 @@ pub async fn serve(listen: SocketAddr, hub: Arc<Hub>) -> anyhow::Result<()> {
         .route("/stats", get(stats))
         .fallback(asset)
         .with_state(hub);
+    // Frames are small messages a page must have at once: without TCP_NODELAY, Nagle's
+    // algorithm holds one back while the one before is unacknowledged.
+    let listener = listener.tap_io(|stream| {
+        if let Err(error) = stream.set_nodelay(true) {
+            tracing::warn!(%error, "cannot set TCP_NODELAY on a page's connection");
+        }
+    });
     axum::serve(listener, app)
         .with_graceful_shutdown(termination())
         .await
