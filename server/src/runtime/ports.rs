@@ -276,7 +276,7 @@ impl Ports {
 }
 
 /// Sends `items` on `publisher` and then notifies its readers once; nothing (no notification
-/// either) for no items. `actions` name the sending and the notifying in errors.
+/// either) for no items. `send` and `notify` name the two steps in errors.
 fn send_all<T: Copy + std::fmt::Debug + ZeroCopySend>(
     publisher: &Publisher<ipc::Service, T, ()>,
     notifier: &Notifier<ipc::Service>,
