@@ -9,6 +9,7 @@ use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::{event, publish_subscribe};
 use serde::Serialize;
 use vas_protocol::services::{self, config_with_prefix};
 use vas_protocol::{
@@ -70,30 +71,24 @@ impl ClientBuilder {
         let geometry_wakeup = services::open_wakeup(&node, services::GEOMETRY)?;
         let control_wakeup = services::open_wakeup(&node, services::CONTROL)?;
         Ok(Client {
-            tracker: tracker
-                .publisher_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            tracker_notifier: tracker_wakeup
-                .notifier_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            glove: glove
-                .publisher_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            glove_notifier: glove_wakeup
-                .notifier_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            hand_joints: hand_joints
-                .publisher_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            hand_joints_notifier: hand_joints_wakeup
-                .notifier_builder()
-                .create()
-                .map_err(ClientError::port)?,
+            tracker: InputPort::open(
+                &tracker,
+                &tracker_wakeup,
+                ["send a tracker sample", "notify the tracker service"],
+            )?,
+            glove: InputPort::open(
+                &glove,
+                &glove_wakeup,
+                ["send a glove sample", "notify the glove service"],
+            )?,
+            hand_joints: InputPort::open(
+                &hand_joints,
+                &hand_joints_wakeup,
+                [
+                    "send a hand-joints sample",
+                    "notify the hand-joints service",
+                ],
+            )?,
             parts: parts
                 .subscriber_builder()
                 .create()
@@ -290,18 +285,56 @@ pub struct PartInfo {
     pub truncated: bool,
 }
 
+/// An input stream's sending end: its publisher, and the notifier that wakes the server after
+/// each sample.
+struct InputPort<T: std::fmt::Debug + ZeroCopySend + 'static> {
+    publisher: Publisher<ipc::Service, T, ()>,
+    notifier: Notifier<ipc::Service>,
+    /// What errors say was being done: sending a sample, then waking the server.
+    actions: [&'static str; 2],
+}
+
+impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> InputPort<T> {
+    fn open(
+        service: &publish_subscribe::PortFactory<ipc::Service, T, ()>,
+        wakeup: &event::PortFactory<ipc::Service>,
+        actions: [&'static str; 2],
+    ) -> Result<Self, ClientError> {
+        Ok(InputPort {
+            publisher: service
+                .publisher_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            notifier: wakeup
+                .notifier_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            actions,
+        })
+    }
+
+    /// Sends `sample` and wakes the server.
+    fn send(&self, sample: &T) -> Result<(), ClientError> {
+        let [sending, notifying] = self.actions;
+        self.publisher
+            .send_copy(*sample)
+            .map_err(|error| ClientError::ipc(sending, error))?;
+        self.notifier
+            .notify()
+            .map_err(|error| ClientError::ipc(notifying, error))?;
+        Ok(())
+    }
+}
+
 /// A connection to a vas server: sends input, receives frames, asks the control service.
 ///
 /// All ports belong to one iceoryx2 node on the chosen prefix. The client is not `Send`
 /// (iceoryx2 ports are bound to their thread): create it on the thread that uses it.
 pub struct Client {
     node: Node<ipc::Service>,
-    tracker: Publisher<ipc::Service, TrackerSample, ()>,
-    tracker_notifier: Notifier<ipc::Service>,
-    glove: Publisher<ipc::Service, GloveSample, ()>,
-    glove_notifier: Notifier<ipc::Service>,
-    hand_joints: Publisher<ipc::Service, HandJointsSample, ()>,
-    hand_joints_notifier: Notifier<ipc::Service>,
+    tracker: InputPort<TrackerSample>,
+    glove: InputPort<GloveSample>,
+    hand_joints: InputPort<HandJointsSample>,
     parts: Subscriber<ipc::Service, [PartState], PartsFrameHeader>,
     parts_listener: Listener<ipc::Service>,
     hand: Subscriber<ipc::Service, HandFrame, ()>,
@@ -335,13 +368,7 @@ impl Client {
 
     /// Sends a tracker sample and wakes the server.
     pub fn send_tracker(&self, sample: &TrackerSample) -> Result<(), ClientError> {
-        self.tracker
-            .send_copy(*sample)
-            .map_err(|error| ClientError::ipc("send a tracker sample", error))?;
-        self.tracker_notifier
-            .notify()
-            .map_err(|error| ClientError::ipc("notify the tracker service", error))?;
-        Ok(())
+        self.tracker.send(sample)
     }
 
     /// Returns once the server has taken in every sample this client sent before the call; call
@@ -357,24 +384,12 @@ impl Client {
 
     /// Sends a glove sample and wakes the server.
     pub fn send_glove(&self, sample: &GloveSample) -> Result<(), ClientError> {
-        self.glove
-            .send_copy(*sample)
-            .map_err(|error| ClientError::ipc("send a glove sample", error))?;
-        self.glove_notifier
-            .notify()
-            .map_err(|error| ClientError::ipc("notify the glove service", error))?;
-        Ok(())
+        self.glove.send(sample)
     }
 
     /// Sends a hand-joints sample (one hand's 26 OpenXR joints) and wakes the server.
     pub fn send_hand_joints(&self, sample: &HandJointsSample) -> Result<(), ClientError> {
-        self.hand_joints
-            .send_copy(*sample)
-            .map_err(|error| ClientError::ipc("send a hand-joints sample", error))?;
-        self.hand_joints_notifier
-            .notify()
-            .map_err(|error| ClientError::ipc("notify the hand-joints service", error))?;
-        Ok(())
+        self.hand_joints.send(sample)
     }
 
     /// Sends a sample of any input stream and wakes the server.
