@@ -11,9 +11,9 @@ pub mod weld;
 pub use adjacency::EdgeAdjacency;
 pub use hull::{ConvexHull, HullSource};
 pub use io::{
-    FileLimits, GeometryError, GltfFile, GltfPart, describe_toml_error, load_mesh,
-    load_mesh_within, mesh_from_bytes, parse_mesh_spec, read_mesh_file, read_regular_text,
-    write_obj,
+    ConfigFileError, FileLimits, GeometryError, GltfFile, GltfPart, describe_toml_error, load_mesh,
+    load_mesh_within, mesh_from_bytes, parse_mesh_spec, read_config_text, read_mesh_file,
+    read_regular_text, write_obj,
 };
 pub use mesh::{
     CleanupReport, MeshError, Point, TriMesh, bounding_box_of, bounding_sphere_of, larger, smaller,

@@ -18,9 +18,8 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
-use thiserror::Error;
 
-use crate::geometry::{FileLimits, describe_toml_error, read_regular_text};
+use crate::geometry::{ConfigFileError, FileLimits, describe_toml_error, read_config_text};
 
 /// Number of flex values: the CyberGlove's 22 sensors, in the order of
 /// `vas_protocol::FLEX_JOINT_NAMES`.
@@ -276,35 +275,7 @@ pub struct HandModel {
 }
 
 /// Why a hand config was refused: the file, the key and the reason.
-#[derive(Debug, Error)]
-pub enum HandConfigError {
-    /// The file could not be read.
-    #[error("{file}: cannot read: {source}")]
-    Io {
-        /// The file.
-        file: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
-    },
-    /// The file is not valid TOML or does not have the expected keys and types.
-    #[error("{file}: {message}")]
-    Syntax {
-        /// The file.
-        file: PathBuf,
-        /// The line, the offending text and the reason.
-        message: String,
-    },
-    /// A value is present but not acceptable.
-    #[error("{file}: {key}: {reason}")]
-    Invalid {
-        /// The file.
-        file: PathBuf,
-        /// The offending key, as a path such as `segment[3].dofs[0].axis`.
-        key: String,
-        /// What is wrong with it.
-        reason: String,
-    },
-}
+pub type HandConfigError = ConfigFileError;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -367,16 +338,12 @@ struct ShapeEntry {
 /// The name a segment config gives as parent when the segment hangs from the hand root.
 const ROOT_PARENT: &str = "root";
 
-/// Builds [`HandConfigError::Invalid`] for `file`.
+/// Builds [`ConfigFileError::Invalid`] for `file`.
 struct Refuse<'a>(&'a Path);
 
 impl Refuse<'_> {
     fn at(&self, key: impl fmt::Display, reason: impl fmt::Display) -> HandConfigError {
-        HandConfigError::Invalid {
-            file: self.0.to_path_buf(),
-            key: key.to_string(),
-            reason: reason.to_string(),
-        }
+        ConfigFileError::invalid(self.0, key, reason)
     }
 }
 
@@ -390,7 +357,7 @@ impl HandModel {
 
     /// [`HandModel::load`] of files of at most `limits.config_bytes`.
     pub fn load_within(path: &Path, limits: &FileLimits) -> Result<HandModel, HandConfigError> {
-        HandModel::from_toml(path, &read_hand_text(path, limits)?, limits)
+        HandModel::from_toml(path, &read_config_text(path, limits.config_bytes)?, limits)
     }
 
     /// [`HandModel::load_within`] on a config's text already read from `path`: errors name
@@ -760,21 +727,12 @@ impl HandModel {
 }
 
 fn read_hand_file(path: &Path, limits: &FileLimits) -> Result<HandFile, HandConfigError> {
-    parse_hand_file(path, &read_hand_text(path, limits)?)
-}
-
-fn read_hand_text(path: &Path, limits: &FileLimits) -> Result<String, HandConfigError> {
-    read_regular_text(path, limits.config_bytes).map_err(|source| HandConfigError::Io {
-        file: path.to_path_buf(),
-        source,
-    })
+    parse_hand_file(path, &read_config_text(path, limits.config_bytes)?)
 }
 
 fn parse_hand_file(path: &Path, text: &str) -> Result<HandFile, HandConfigError> {
-    toml::from_str(text).map_err(|error| HandConfigError::Syntax {
-        file: path.to_path_buf(),
-        message: describe_toml_error(text, &error),
-    })
+    toml::from_str(text)
+        .map_err(|error| ConfigFileError::syntax(path, describe_toml_error(text, &error)))
 }
 
 /// Why a position was refused.

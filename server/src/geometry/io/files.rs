@@ -1,7 +1,10 @@
 //! What the loaders accept, and reading a file within it.
 
+use std::fmt;
 use std::io;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
 
 /// What the loaders accept: the largest files by kind and the most triangles of a scene. A
 /// setting of the deployment (`vas-server --max-mesh-file`, `--max-config-file`,
@@ -64,4 +67,62 @@ pub fn read_regular_file(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
 pub fn read_regular_text(path: &Path, limit: u64) -> io::Result<String> {
     String::from_utf8(read_regular_file(path, limit)?)
         .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
+
+/// Why a config file (a hand model, a hand capture) was refused: the file, and what is wrong.
+#[derive(Debug, Error)]
+pub enum ConfigFileError {
+    /// The file could not be read.
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        /// The file.
+        file: PathBuf,
+        /// The underlying error.
+        source: io::Error,
+    },
+    /// The file is not valid in its format or does not have the expected keys and types.
+    #[error("{file}: {message}")]
+    Syntax {
+        /// The file.
+        file: PathBuf,
+        /// The line, the offending text and the reason.
+        message: String,
+    },
+    /// A value is present but not acceptable.
+    #[error("{file}: {key}: {reason}")]
+    Invalid {
+        /// The file.
+        file: PathBuf,
+        /// The offending key, as a path such as `segment[3].dofs[0].axis`.
+        key: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+impl ConfigFileError {
+    /// A [`ConfigFileError::Syntax`] of `file`.
+    pub fn syntax(file: &Path, message: String) -> Self {
+        ConfigFileError::Syntax {
+            file: file.to_path_buf(),
+            message,
+        }
+    }
+
+    /// A [`ConfigFileError::Invalid`] of `file`.
+    pub fn invalid(file: &Path, key: impl fmt::Display, reason: impl fmt::Display) -> Self {
+        ConfigFileError::Invalid {
+            file: file.to_path_buf(),
+            key: key.to_string(),
+            reason: reason.to_string(),
+        }
+    }
+}
+
+/// [`read_regular_text`] for a config file, its errors naming the file.
+pub fn read_config_text(path: &Path, limit: u64) -> Result<String, ConfigFileError> {
+    read_regular_text(path, limit).map_err(|source| ConfigFileError::Io {
+        file: path.to_path_buf(),
+        source,
+    })
 }

@@ -21,7 +21,9 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use super::mesh::{MeshError, Point, TriMesh};
-pub use files::{FileLimits, read_regular_file, read_regular_text};
+pub use files::{
+    ConfigFileError, FileLimits, read_config_text, read_regular_file, read_regular_text,
+};
 pub use gltf::{GltfFile, GltfPart};
 pub use obj::write_obj;
 pub use spec::parse_mesh_spec;

@@ -14,7 +14,7 @@ use serde::Deserialize;
 use thiserror::Error;
 
 use super::joints::{HandJoints, Joint, JointFlags, JointPose, JointsError, WEBXR_JOINT_COUNT};
-use crate::geometry::read_regular_text;
+use crate::geometry::{ConfigFileError, read_config_text};
 use crate::grasping::Side;
 
 /// The largest capture file read, in bytes: a capture is a few kilobytes.
@@ -36,32 +36,10 @@ pub struct Capture {
 /// Why a capture file was refused: the file and the reason.
 #[derive(Debug, Error)]
 pub enum CaptureError {
-    /// The file could not be read.
-    #[error("{file}: cannot read: {source}")]
-    Io {
-        /// The file.
-        file: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
-    },
-    /// The file is not JSON of the expected shape.
-    #[error("{file}: {message}")]
-    Syntax {
-        /// The file.
-        file: PathBuf,
-        /// The reason, with the line and column.
-        message: String,
-    },
-    /// The joints, or one of them, are wrong.
-    #[error("{file}: {key}: {reason}")]
-    Invalid {
-        /// The file.
-        file: PathBuf,
-        /// `joints`, or the entry, as `joints[3]`.
-        key: String,
-        /// What is wrong.
-        reason: String,
-    },
+    /// The file could not be read, is not JSON of the expected shape, or an entry is wrong
+    /// (`joints`, or the entry, as `joints[3]`).
+    #[error(transparent)]
+    File(#[from] ConfigFileError),
     /// The joints are not a possible hand.
     #[error("{file}: {source}")]
     Hand {
@@ -90,25 +68,15 @@ struct JointEntry {
 impl Capture {
     /// Reads and validates a capture file.
     pub fn read(path: &Path) -> Result<Capture, CaptureError> {
-        let text =
-            read_regular_text(path, MAX_CAPTURE_BYTES).map_err(|source| CaptureError::Io {
-                file: path.to_path_buf(),
-                source,
-            })?;
-        Capture::from_json(path, &text)
+        Capture::from_json(path, &read_config_text(path, MAX_CAPTURE_BYTES)?)
     }
 
     /// A capture from its JSON text; errors name `path`.
     pub fn from_json(path: &Path, text: &str) -> Result<Capture, CaptureError> {
-        let file: CaptureFile =
-            serde_json::from_str(text).map_err(|error| CaptureError::Syntax {
-                file: path.to_path_buf(),
-                message: error.to_string(),
-            })?;
-        let refuse = |key: String, reason: String| CaptureError::Invalid {
-            file: path.to_path_buf(),
-            key,
-            reason,
+        let file: CaptureFile = serde_json::from_str(text)
+            .map_err(|error| ConfigFileError::syntax(path, error.to_string()))?;
+        let refuse = |key: String, reason: String| {
+            CaptureError::from(ConfigFileError::invalid(path, key, reason))
         };
         if file.joints.len() != WEBXR_JOINT_COUNT {
             return Err(refuse(
