@@ -337,24 +337,31 @@ impl Retargeter {
         // Levenberg-Marquardt: a step that made the fingertips worse (the limits make steps
         // projected, not exact) is taken back and tried again shorter, with more damping.
         let mut damping = DAMPING_M * DAMPING_M;
-        let mut best: Option<(f64, FlexVector, Tips, TipJacobian)> = None;
+        let mut best: Option<(f64, FlexVector, Tips)> = None;
+        let mut jacobian = TipJacobian::zeros();
         for evaluation in 0..=REFINE_STEPS {
             let tips = self.tips(flex, &mut poses, &mut axes);
             let residual =
                 target - Tips::from_iterator(tips.iter().flat_map(|t| t.coords.iter().copied()));
             let error = residual.norm_squared();
-            if best.as_ref().is_none_or(|b| error < b.0) {
-                best = Some((error, *flex, residual, self.jacobian(&tips, &axes)));
+            let improved = best.as_ref().is_none_or(|b| error < b.0);
+            if improved {
+                best = Some((error, *flex, residual));
             } else {
                 damping *= 10.0;
             }
-            let (_, from, residual, jacobian) = best.as_ref().expect("set on the first pass");
+            let (_, from, residual) = best.as_ref().expect("set on the first pass");
             *flex = *from;
             if residual.amax() < TIP_TOLERANCE_M || evaluation == REFINE_STEPS {
                 break;
             }
-            // J Jᵀ + λ² I, column by column over the digits each flex value moves (most move
-            // one fingertip); a flex value at a limit that the step would push beyond stays.
+            // The Jacobian at `from`: this evaluation's if it is the best, else kept from the
+            // evaluation that was.
+            if improved {
+                jacobian = self.jacobian(&tips, &axes);
+            }
+            // J Jᵀ + λ² I, by 3 x 3 blocks of the digits each flex value moves (most move one
+            // fingertip); a flex value at a limit that the step would push beyond stays.
             let gradient = jacobian.transpose() * residual;
             let mut free = [true; FLEX_COUNT];
             let mut normal = SMatrix::<f64, TIP_COORDINATES, TIP_COORDINATES>::identity() * damping;
@@ -365,11 +372,13 @@ impl Retargeter {
                     continue;
                 }
                 let column = jacobian.column(f);
-                let rows =
-                    (0..TIP_COORDINATES).filter(|r| self.flex_digits[f] & (1 << (r / 3)) != 0);
-                for r in rows.clone() {
-                    for c in rows.clone() {
-                        normal[(r, c)] += column[r] * column[c];
+                let digits = || (0..5).filter(|d| self.flex_digits[f] & (1 << d) != 0);
+                for a in digits() {
+                    for b in digits() {
+                        let moves = column.fixed_rows::<3>(3 * a)
+                            * column.fixed_rows::<3>(3 * b).transpose();
+                        let mut block = normal.fixed_view_mut::<3, 3>(3 * a, 3 * b);
+                        block += moves;
                     }
                 }
             }
