@@ -1,4 +1,4 @@
-//! What the loaders accept, and reading a file within it.
+//! What the loaders accept, reading a file within it, and why a config file was refused.
 
 use std::fmt;
 use std::io;
