@@ -492,42 +492,36 @@ impl Io {
         let stamps = frame.stamps;
         let sides = self.hand_sides.clone();
         let side = |hand: usize| sides.get(hand).copied().unwrap_or(HandSide::Right);
-        let events: Vec<SimEvent> = frame
-            .events
-            .iter()
-            .map(|event| SimEvent {
+        let events = frame.events.iter().map(|event| SimEvent {
+            frame: self.hand_frames,
+            tracker: stamps.tracker,
+            glove: stamps.glove,
+            joints: stamps.joints,
+            timestamp_ns: now,
+            kind: event.kind as u32,
+            grasp_type: event.grasp as u32,
+            part: event.part,
+            other: event.other,
+            hand: side(event.hand) as u32,
+            segment: event.at.map_or(0, |at| at.segment),
+            point: event.at.map_or([0.0; 3], |at| at.point.into()),
+            normal: event.at.map_or([0.0; 3], |at| at.normal.into()),
+        });
+        self.log_failure(self.ports.publish_events(events));
+        let forces = (frame.hands.iter().enumerate()).filter_map(|(index, hand)| {
+            let wrench = hand.force?;
+            Some(ForceFrame {
                 frame: self.hand_frames,
                 tracker: stamps.tracker,
                 glove: stamps.glove,
-                joints: stamps.joints,
+                joints: hand.joints,
                 timestamp_ns: now,
-                kind: event.kind as u32,
-                grasp_type: event.grasp as u32,
-                part: event.part,
-                other: event.other,
-                hand: side(event.hand) as u32,
-                segment: event.at.map_or(0, |at| at.segment),
-                point: event.at.map_or([0.0; 3], |at| at.point.into()),
-                normal: event.at.map_or([0.0; 3], |at| at.normal.into()),
+                force: wrench.force.into(),
+                torque: wrench.torque.into(),
+                hand: side(index) as u32,
             })
-            .collect();
-        self.log_failure(self.ports.publish_events(&events));
-        let forces: Vec<ForceFrame> = (frame.hands.iter().enumerate())
-            .filter_map(|(index, hand)| {
-                let wrench = hand.force?;
-                Some(ForceFrame {
-                    frame: self.hand_frames,
-                    tracker: stamps.tracker,
-                    glove: stamps.glove,
-                    joints: hand.joints,
-                    timestamp_ns: now,
-                    force: wrench.force.into(),
-                    torque: wrench.torque.into(),
-                    hand: side(index) as u32,
-                })
-            })
-            .collect();
-        self.log_failure(self.ports.publish_forces(&forces));
+        });
+        self.log_failure(self.ports.publish_forces(forces));
         if frame.epoch == self.session.epoch && frame.parts.len() == self.parts.len() {
             let changed = (0u32..)
                 .zip(&frame.parts)
@@ -544,33 +538,31 @@ impl Io {
         }
         // The hand frames go last: a client that waits for the answer to its sample has the
         // parts and events of the same frame by then.
-        let hands: Vec<HandFrame> = (frame.hands.iter().enumerate())
-            .map(|(index, hand)| {
-                let segments = &hand.segments;
-                HandFrame {
-                    frame: self.hand_frames,
-                    tracker: stamps.tracker,
-                    glove: stamps.glove,
-                    joints: hand.joints,
-                    timestamp_ns: wall_clock_ns(),
-                    root: WirePose::from_isometry(&hand.root),
-                    flex: hand.flex,
-                    touching: hand.touching,
-                    grasp_type: hand.grasp as u32,
-                    hand: side(index) as u32,
-                    tracked: u32::from(hand.tracked),
-                    segment_count: u32::try_from(segments.len().min(HAND_SEGMENT_COUNT))
-                        .expect("at most 16"),
-                    reserved: 0,
-                    segments: std::array::from_fn(|i| {
-                        segments
-                            .get(i)
-                            .map_or(WirePose::IDENTITY, WirePose::from_isometry)
-                    }),
-                }
-            })
-            .collect();
-        self.log_failure(self.ports.publish_hands(&hands));
+        let hands = (frame.hands.iter().enumerate()).map(|(index, hand)| {
+            let segments = &hand.segments;
+            HandFrame {
+                frame: self.hand_frames,
+                tracker: stamps.tracker,
+                glove: stamps.glove,
+                joints: hand.joints,
+                timestamp_ns: wall_clock_ns(),
+                root: WirePose::from_isometry(&hand.root),
+                flex: hand.flex,
+                touching: hand.touching,
+                grasp_type: hand.grasp as u32,
+                hand: side(index) as u32,
+                tracked: u32::from(hand.tracked),
+                segment_count: u32::try_from(segments.len().min(HAND_SEGMENT_COUNT))
+                    .expect("at most 16"),
+                reserved: 0,
+                segments: std::array::from_fn(|i| {
+                    segments
+                        .get(i)
+                        .map_or(WirePose::IDENTITY, WirePose::from_isometry)
+                }),
+            }
+        });
+        self.log_failure(self.ports.publish_hands(hands));
     }
 
     /// Publishes the latest part states, stamped with `frame`'s inputs (or the latest inputs).

@@ -218,7 +218,10 @@ impl Ports {
     /// Publishes a frame's hand frames (one per hand) and wakes their readers once: a reader
     /// woken by the notification finds every hand's frame (a wake-up per hand would wake it
     /// before the last one is sent, and each notification is a system call).
-    pub(super) fn publish_hands(&self, frames: &[HandFrame]) -> Result<(), RuntimeError> {
+    pub(super) fn publish_hands(
+        &self,
+        frames: impl IntoIterator<Item = HandFrame>,
+    ) -> Result<(), RuntimeError> {
         send_all(
             &self.hand,
             &self.hand_notifier,
@@ -228,7 +231,10 @@ impl Ports {
     }
 
     /// Publishes a frame's events and wakes their readers once.
-    pub(super) fn publish_events(&self, events: &[SimEvent]) -> Result<(), RuntimeError> {
+    pub(super) fn publish_events(
+        &self,
+        events: impl IntoIterator<Item = SimEvent>,
+    ) -> Result<(), RuntimeError> {
         send_all(
             &self.events,
             &self.events_notifier,
@@ -239,7 +245,10 @@ impl Ports {
 
     /// Publishes a frame's force frames (one per hand holding a part) and wakes their readers
     /// once.
-    pub(super) fn publish_forces(&self, frames: &[ForceFrame]) -> Result<(), RuntimeError> {
+    pub(super) fn publish_forces(
+        &self,
+        frames: impl IntoIterator<Item = ForceFrame>,
+    ) -> Result<(), RuntimeError> {
         send_all(
             &self.force,
             &self.force_notifier,
@@ -277,22 +286,23 @@ impl Ports {
 
 /// Sends `items` on `publisher` and then notifies its readers once; nothing (no notification
 /// either) for no items. `send` and `notify` name the two steps in errors.
-fn send_all<T: Copy + std::fmt::Debug + ZeroCopySend>(
+fn send_all<T: std::fmt::Debug + ZeroCopySend>(
     publisher: &Publisher<ipc::Service, T, ()>,
     notifier: &Notifier<ipc::Service>,
-    items: &[T],
+    items: impl IntoIterator<Item = T>,
     (send, notify): (&'static str, &'static str),
 ) -> Result<(), RuntimeError> {
-    if items.is_empty() {
-        return Ok(());
-    }
+    let mut sent = false;
     for item in items {
         publisher
-            .send_copy(*item)
+            .send_copy(item)
             .map_err(|error| RuntimeError::ipc(send, error))?;
+        sent = true;
     }
-    notifier
-        .notify()
-        .map_err(|error| RuntimeError::ipc(notify, error))?;
+    if sent {
+        notifier
+            .notify()
+            .map_err(|error| RuntimeError::ipc(notify, error))?;
+    }
     Ok(())
 }
