@@ -15,6 +15,7 @@ use vas_server::geometry::{FileLimits, write_obj};
 use vas_server::grasping::retarget::{Capture, HandJoints, Retargeter};
 use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime;
+use vas_server::runtime::priority::RealtimePriority;
 use vas_server::scene::{LoadOptions, Scene, default_scene_path};
 
 /// vas: headless virtual-assembly simulation server.
@@ -43,6 +44,16 @@ enum Command {
         /// stepping on its own: replays give the same output every time.
         #[arg(long)]
         lockstep: bool,
+        /// Run the I/O thread and the three loops under SCHED_FIFO at this priority (1-99), so
+        /// that a renderer busy on the same cores does not delay them; needs CAP_SYS_NICE or an
+        /// rtprio limit (`ulimit -r`). Threads they start (scene loading) keep the normal policy.
+        #[arg(long, value_name = "PRIORITY", value_parser = parse_realtime)]
+        realtime: Option<RealtimePriority>,
+        /// Hold every core's wake-up latency within US microseconds while serving (Linux's
+        /// /dev/cpu_dma_latency; 0: idle cores poll, never sleeping), so that no sample waits
+        /// for a core to leave a deep idle state. Costs power; needs root.
+        #[arg(long, value_name = "US", value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
+        cpu_latency: Option<u32>,
         #[command(flatten)]
         load: LoadArgs,
     },
@@ -125,6 +136,8 @@ fn main() -> ExitCode {
             scenes,
             prefix,
             lockstep,
+            realtime,
+            cpu_latency,
             load,
         } => load.options().and_then(|load| {
             runtime::run(&runtime::RunOptions {
@@ -133,6 +146,8 @@ fn main() -> ExitCode {
                 prefix,
                 lockstep,
                 load,
+                realtime,
+                cpu_latency,
             })
             .map_err(Into::into)
         }),
@@ -341,6 +356,15 @@ fn shape_kind() -> impl TypedValueParser<Value = ShapeKind> {
         name.parse()
             .expect("the possible values are the kinds' own names")
     })
+}
+
+/// clap's parser of a realtime priority.
+fn parse_realtime(text: &str) -> Result<RealtimePriority, String> {
+    let number = text
+        .trim()
+        .parse::<u64>()
+        .map_err(|_| format!("a realtime priority is a whole number, 1 to 99, not {text:?}"))?;
+    RealtimePriority::new(number).map_err(|error| error.to_string())
 }
 
 /// clap's parser of a file size: a whole number of bytes, or of KiB, MiB or GiB (`512MiB`).

@@ -25,6 +25,7 @@ use super::frames::{
     VerifiedFrame, wire_grasp,
 };
 use super::interaction::{GraspStage, HeldPart, SlideStage, SteppedHand};
+use super::priority::RealtimePriority;
 use super::rendezvous::{AwakeWatch, Coalesce, Handoff, Received, Work};
 use super::verify::Verifier;
 use super::wakeup::Waker;
@@ -89,12 +90,12 @@ pub struct Loops {
 }
 
 impl Loops {
-    /// Starts the loops; verified frames go to `verified`, and the collision loop wakes the I/O
-    /// thread with `waker` after each frame the I/O thread is not waiting for awake, so that it
-    /// notices.
+    /// Starts the loops, in lockstep or not and at the realtime priority given, if any; verified
+    /// frames go to `verified`, and the collision loop wakes the I/O thread with `waker` after
+    /// each frame the I/O thread is not waiting for awake, so that it notices.
     pub fn spawn(
         links: &Links,
-        lockstep: bool,
+        (lockstep, realtime): (bool, Option<RealtimePriority>),
         verified: Sender<VerifiedFrame>,
         waker: Waker,
     ) -> std::io::Result<Loops> {
@@ -133,6 +134,15 @@ impl Loops {
         let spawn = |name: &str, body: Box<dyn FnOnce() + Send>| {
             std::thread::Builder::new().name(name.into()).spawn(body)
         };
+        // Each loop raises itself: the collision loop runs on its pool's thread, not on the
+        // thread spawned here.
+        let raise = move || {
+            if let Some(priority) = realtime
+                && let Err(error) = priority.raise_this_thread()
+            {
+                tracing::error!(%error, "this loop stays at the normal priority");
+            }
+        };
         // The collision pipeline runs its back end on the current rayon pool. Here it gets a pool
         // of one thread, so it tests sequentially: a frame moves a handful of objects, and the
         // pool's idle workers spin and yield for a while after each parallel stage, taking the
@@ -144,11 +154,28 @@ impl Loops {
             .map_err(std::io::Error::other)?;
         Ok(Loops {
             threads: vec![
-                spawn("grasping", Box::new(move || grasping.run()))?,
-                spawn("sliding", Box::new(move || sliding.run()))?,
+                spawn(
+                    "grasping",
+                    Box::new(move || {
+                        raise();
+                        grasping.run();
+                    }),
+                )?,
+                spawn(
+                    "sliding",
+                    Box::new(move || {
+                        raise();
+                        sliding.run();
+                    }),
+                )?,
                 spawn(
                     "collision-pool",
-                    Box::new(move || sequential.install(move || collision.run())),
+                    Box::new(move || {
+                        sequential.install(move || {
+                            raise();
+                            collision.run();
+                        });
+                    }),
                 )?,
             ],
         })
@@ -751,7 +778,8 @@ mod tests {
         let links = Links::default();
         let (verified_in, verified_out) = crossbeam_channel::unbounded();
         let (waker, _wakeups) = wakeup::channel().expect("socket pair");
-        let loops = Loops::spawn(&links, true, verified_in, waker).expect("the loop threads start");
+        let loops =
+            Loops::spawn(&links, (true, None), verified_in, waker).expect("the loop threads start");
         let restart = Restart::new(Arc::clone(&scene), 1).expect("the hand builds");
         links.inputs.send(Work::Control(restart.into_change()));
         let mut grasps = 0;

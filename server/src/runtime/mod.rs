@@ -17,6 +17,7 @@
 //! `vas/control` response (`stats`).
 
 pub mod control;
+pub mod cpu_latency;
 pub mod frames;
 mod geometry;
 pub mod hand_joints;
@@ -26,6 +27,7 @@ mod io;
 mod loader;
 pub mod loops;
 mod ports;
+pub mod priority;
 pub mod rendezvous;
 pub mod verify;
 pub mod wakeup;
@@ -40,8 +42,10 @@ use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
 
 use crate::scene::{LoadOptions, Scene, SceneError, log_prepared};
 use control::Session;
+use cpu_latency::{CpuLatencyError, CpuLatencyRequest};
 use frames::HandSetupError;
 use loops::{Links, Loops};
+use priority::{PriorityError, RealtimePriority};
 
 /// What `vas-server run` serves, and where.
 #[derive(Debug, Clone)]
@@ -60,6 +64,14 @@ pub struct RunOptions {
     /// How scenes are loaded (the largest files read, the tree cache), at start-up and for a
     /// load-scene request alike.
     pub load: LoadOptions,
+    /// Runs the I/O thread and the loops under `SCHED_FIFO` at this priority, so that a busy
+    /// renderer on the same cores does not delay them ([`priority`]); `None` keeps the normal
+    /// policy.
+    pub realtime: Option<RealtimePriority>,
+    /// Holds every core's wake-up latency within this many microseconds while serving (0: idle
+    /// cores poll), so that no sample or frame waits for a core to leave a deep idle state
+    /// ([`cpu_latency`]); `None` leaves the cores' idle states to the system.
+    pub cpu_latency: Option<u32>,
 }
 
 /// Why the server could not start or had to stop.
@@ -74,6 +86,12 @@ pub enum RuntimeError {
     /// A loop thread could not be started.
     #[error("cannot start the loop threads: {0}")]
     Thread(#[from] std::io::Error),
+    /// The realtime priority asked for cannot be had.
+    #[error(transparent)]
+    Priority(#[from] PriorityError),
+    /// The CPU latency asked for cannot be requested.
+    #[error(transparent)]
+    CpuLatency(#[from] CpuLatencyError),
     /// The thread loading the scene to serve ended without a scene (it panicked; the log says
     /// where).
     #[error("the scene loader failed; the log says where")]
@@ -131,6 +149,24 @@ impl RuntimeError {
 /// Runs the server until SIGINT or SIGTERM: cleans up the resources of dead nodes, loads the
 /// scene, opens the services, serves. Returns `Ok` on a clean shutdown.
 pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
+    // First of all, so that a server that cannot have the priority or latency asked for says so
+    // at once.
+    if let Some(priority) = options.realtime {
+        priority.raise_this_thread()?;
+        tracing::info!(
+            priority = priority.get(),
+            "the I/O thread and the loops run under SCHED_FIFO"
+        );
+    }
+    // Held until the server returns.
+    let _cpu_latency = match options.cpu_latency {
+        Some(microseconds) => {
+            let request = CpuLatencyRequest::hold(microseconds)?;
+            tracing::info!(microseconds, "holding the cores' wake-up latency");
+            Some(request)
+        }
+        None => None,
+    };
     let config = config_with_prefix(options.prefix.as_deref())?;
     let name =
         NodeName::new("vas-server").map_err(|error| RuntimeError::ipc("name the node", error))?;
@@ -181,7 +217,12 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
         (waker.clone(), wakeups),
         options,
     )?;
-    let loops = Loops::spawn(&links, options.lockstep, verified_in, waker)?;
+    let loops = Loops::spawn(
+        &links,
+        (options.lockstep, options.realtime),
+        verified_in,
+        waker,
+    )?;
     let served = manager.serve(start.into_change(), &loops);
     links.inputs.close();
     loops.join(LOOPS_PATIENCE);

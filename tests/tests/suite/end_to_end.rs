@@ -286,6 +286,137 @@ fn sigint_stops_the_server_promptly_and_successfully() {
     stops_cleanly_on(libc::SIGINT, "sigint");
 }
 
+/// Whether this process may put a thread under `SCHED_FIFO` (as root, or with an rtprio limit):
+/// the server, its child, may too.
+fn realtime_permitted() -> bool {
+    std::thread::spawn(|| {
+        let param = libc::sched_param { sched_priority: 1 };
+        // SAFETY: pid 0 is this short-lived thread; `param` outlives the call.
+        unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) == 0 }
+    })
+    .join()
+    .expect("the probing thread ends")
+}
+
+/// Each thread of process `pid`: its name, realtime priority and policy, from `/proc`.
+fn thread_policies(pid: u32) -> Vec<(String, u32, u32)> {
+    let tasks = std::fs::read_dir(format!("/proc/{pid}/task")).expect("the server's threads");
+    tasks
+        .map(|task| {
+            let stat = std::fs::read_to_string(task.expect("a thread").path().join("stat"))
+                .expect("the thread's stat");
+            // "tid (name) state ...": the name may hold spaces; fields 40 and 41 are the
+            // realtime priority and the policy.
+            let (head, tail) = stat.rsplit_once(") ").expect("a stat line");
+            let name = head
+                .split_once(" (")
+                .expect("the thread's name")
+                .1
+                .to_owned();
+            let fields: Vec<&str> = tail.split_whitespace().collect();
+            let field = |number: usize| fields[number - 3].parse().expect("a number");
+            (name, field(40), field(41))
+        })
+        .collect()
+}
+
+#[test]
+fn a_realtime_server_runs_its_loops_under_fifo_or_says_why_it_cannot() {
+    let prefix = unique_prefix("realtime");
+    let mut server = Spawned::start(
+        &binary("vas-server"),
+        &["run", "--prefix", &prefix, "--realtime", "7"],
+        Stdio::null(),
+    );
+    if !realtime_permitted() {
+        let status = server.wait_exit(PATIENCE).expect("the server gives up");
+        assert!(!status.success());
+        let log = server.log();
+        assert!(
+            log.contains("cannot run at realtime priority 7: ") && log.contains("ulimit -r 7"),
+            "says why and what permits it: {log}"
+        );
+        return;
+    }
+    {
+        let mut client = Client::connect(Some(&prefix)).expect("client connects");
+        client.scene_info(PATIENCE).expect("the server answers");
+        let sample = tracker(1, [0.0, 0.0, 0.0]);
+        client.send_tracker(&sample).expect("send");
+        hand_answering(&mut client, sample.stamp());
+    }
+    let threads = thread_policies(server.id());
+    for name in ["vas-server", "grasping", "sliding", "collision"] {
+        let found = threads.iter().find(|thread| thread.0 == name);
+        assert_eq!(
+            found.map(|thread| (thread.1, thread.2)),
+            Some((7, libc::SCHED_FIFO as u32)),
+            "{name} at priority 7 under SCHED_FIFO: {threads:?}"
+        );
+    }
+    let others: Vec<_> = (threads.iter())
+        .filter(|thread| !["vas-server", "grasping", "sliding", "collision"].contains(&&*thread.0))
+        .collect();
+    assert!(
+        !others.is_empty(),
+        "the server starts other threads: {threads:?}"
+    );
+    assert!(
+        others
+            .iter()
+            .all(|thread| thread.2 == libc::SCHED_OTHER as u32),
+        "the threads the raised ones start keep the normal policy: {threads:?}"
+    );
+    drop(server);
+    // SAFETY: the server has ended and the client was dropped before it.
+    unsafe { forget_prefix(&prefix) };
+}
+
+/// The CPU latency request the kernel holds the cores to (the least of all requests made), in
+/// microseconds.
+fn cpu_latency_in_force() -> i32 {
+    let mut value = [0; 4];
+    std::fs::File::open(vas_server::runtime::cpu_latency::DEVICE)
+        .and_then(|mut device| std::io::Read::read_exact(&mut device, &mut value))
+        .expect("the CPU latency device is readable");
+    i32::from_ne_bytes(value)
+}
+
+#[test]
+fn a_server_holds_the_cpu_latency_asked_for_while_it_runs_or_says_why_it_cannot() {
+    let device = vas_server::runtime::cpu_latency::DEVICE;
+    // Opening the device without writing to it requests nothing.
+    let permitted = std::fs::OpenOptions::new().write(true).open(device).is_ok();
+    let prefix = unique_prefix("cpulatency");
+    let mut server = Spawned::start(
+        &binary("vas-server"),
+        &["run", "--prefix", &prefix, "--cpu-latency", "7"],
+        Stdio::null(),
+    );
+    if !permitted {
+        let status = server.wait_exit(PATIENCE).expect("the server gives up");
+        assert!(!status.success());
+        let log = server.log();
+        assert!(
+            log.contains(&format!(
+                "cannot hold the CPU wake-up latency at 7 us through {device}"
+            )),
+            "says why: {log}"
+        );
+        return;
+    }
+    {
+        let client = Client::connect(Some(&prefix)).expect("client connects");
+        client.scene_info(PATIENCE).expect("the server answers");
+    }
+    assert_eq!(cpu_latency_in_force(), 7, "held while the server runs");
+    server.stop();
+    assert!(cpu_latency_in_force() > 7, "withdrawn when it ends");
+    drop(server);
+    // SAFETY: the server has ended and the client was dropped before it.
+    unsafe { forget_prefix(&prefix) };
+}
+
 #[test]
 fn a_second_server_on_the_same_prefix_is_refused() {
     let mut first = Server::start("twice");
