@@ -95,7 +95,8 @@ impl Loops {
     /// each frame the I/O thread is not waiting for awake, so that it notices.
     pub fn spawn(
         links: &Links,
-        (lockstep, realtime): (bool, Option<RealtimePriority>),
+        lockstep: bool,
+        realtime: Option<RealtimePriority>,
         verified: Sender<VerifiedFrame>,
         waker: Waker,
     ) -> std::io::Result<Loops> {
@@ -131,17 +132,21 @@ impl Loops {
             verifier: None,
             epoch: 0,
         };
-        let spawn = |name: &str, body: Box<dyn FnOnce() + Send>| {
-            std::thread::Builder::new().name(name.into()).spawn(body)
-        };
-        // Each loop raises itself: the collision loop runs on its pool's thread, not on the
-        // thread spawned here.
+        // Each thread raises itself to the realtime priority, if one is given.
         let raise = move || {
             if let Some(priority) = realtime
                 && let Err(error) = priority.raise_this_thread()
             {
                 tracing::error!(%error, "this loop stays at the normal priority");
             }
+        };
+        let spawn = |name: &str, body: Box<dyn FnOnce() + Send>| {
+            std::thread::Builder::new()
+                .name(name.into())
+                .spawn(move || {
+                    raise();
+                    body();
+                })
         };
         // The collision pipeline runs its back end on the current rayon pool. Here it gets a pool
         // of one thread, so it tests sequentially: a frame moves a handful of objects, and the
@@ -154,20 +159,9 @@ impl Loops {
             .map_err(std::io::Error::other)?;
         Ok(Loops {
             threads: vec![
-                spawn(
-                    "grasping",
-                    Box::new(move || {
-                        raise();
-                        grasping.run();
-                    }),
-                )?,
-                spawn(
-                    "sliding",
-                    Box::new(move || {
-                        raise();
-                        sliding.run();
-                    }),
-                )?,
+                spawn("grasping", Box::new(move || grasping.run()))?,
+                spawn("sliding", Box::new(move || sliding.run()))?,
+                // The collision loop runs on its pool's thread, which raises itself too.
                 spawn(
                     "collision-pool",
                     Box::new(move || {
@@ -779,7 +773,7 @@ mod tests {
         let (verified_in, verified_out) = crossbeam_channel::unbounded();
         let (waker, _wakeups) = wakeup::channel().expect("socket pair");
         let loops =
-            Loops::spawn(&links, (true, None), verified_in, waker).expect("the loop threads start");
+            Loops::spawn(&links, true, None, verified_in, waker).expect("the loop threads start");
         let restart = Restart::new(Arc::clone(&scene), 1).expect("the hand builds");
         links.inputs.send(Work::Control(restart.into_change()));
         let mut grasps = 0;

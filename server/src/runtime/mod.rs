@@ -219,7 +219,8 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     )?;
     let loops = Loops::spawn(
         &links,
-        (options.lockstep, options.realtime),
+        options.lockstep,
+        options.realtime,
         verified_in,
         waker,
     )?;
