@@ -96,7 +96,14 @@ pub fn unique_prefix(test: &str) -> String {
 /// dropped.
 pub struct Spawned {
     child: Child,
-    log: Arc<(Mutex<Vec<String>>, Condvar)>,
+    log: Arc<(Mutex<Stderr>, Condvar)>,
+}
+
+/// What a [`Spawned`] process wrote to stderr so far, and whether the pipe has closed.
+#[derive(Default)]
+struct Stderr {
+    lines: Vec<String>,
+    closed: bool,
 }
 
 impl Spawned {
@@ -118,15 +125,17 @@ impl Spawned {
             .unwrap_or_else(|error| {
                 panic!("cannot start {}: {error}", command.get_program().display())
             });
-        let log = Arc::new((Mutex::new(Vec::new()), Condvar::new()));
+        let log = Arc::new((Mutex::new(Stderr::default()), Condvar::new()));
         let stderr = child.stderr.take().expect("stderr is piped");
         let collector = Arc::clone(&log);
         std::thread::spawn(move || {
+            let (collected, changed) = &*collector;
             for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                let (lines, changed) = &*collector;
-                lines.lock().expect("log lock").push(line);
+                collected.lock().expect("log lock").lines.push(line);
                 changed.notify_all();
             }
+            collected.lock().expect("log lock").closed = true;
+            changed.notify_all();
         });
         Self { child, log }
     }
@@ -143,23 +152,32 @@ impl Spawned {
 
     /// Everything the process wrote to stderr so far.
     pub fn log(&self) -> String {
-        self.log.0.lock().expect("log lock").join("\n")
+        self.log.0.lock().expect("log lock").lines.join("\n")
     }
 
     /// Waits until a stderr line contains `text`; false on timeout.
     pub fn wait_for_log(&self, text: &str, timeout: Duration) -> bool {
-        let (lines, changed) = &*self.log;
-        let deadline = Instant::now() + timeout;
-        let mut lines = lines.lock().expect("log lock");
+        self.wait_for_stderr(Instant::now() + timeout, |stderr| {
+            stderr.lines.iter().any(|line| line.contains(text))
+        })
+    }
+
+    /// Waits until `done` holds of the stderr collected so far; false if `deadline` passes first.
+    fn wait_for_stderr(&self, deadline: Instant, done: impl Fn(&Stderr) -> bool) -> bool {
+        let (collected, changed) = &*self.log;
+        let mut collected = collected.lock().expect("log lock");
         loop {
-            if lines.iter().any(|line| line.contains(text)) {
+            if done(&collected) {
                 return true;
             }
             let remaining = deadline.saturating_duration_since(Instant::now());
             if remaining.is_zero() {
                 return false;
             }
-            lines = changed.wait_timeout(lines, remaining).expect("log lock").0;
+            collected = changed
+                .wait_timeout(collected, remaining)
+                .expect("log lock")
+                .0;
         }
     }
 
@@ -177,11 +195,15 @@ impl Spawned {
         matches!(self.child.try_wait(), Ok(None))
     }
 
-    /// Waits for the process to exit; `None` if it still runs after `timeout`.
+    /// Waits for the process to exit; `None` if it still runs after `timeout`. Once it has
+    /// exited, [`Spawned::log`] holds everything it wrote.
     pub fn wait_exit(&mut self, timeout: Duration) -> Option<ExitStatus> {
         let deadline = Instant::now() + timeout;
         loop {
             if let Some(status) = self.child.try_wait().expect("try_wait") {
+                // Its last lines reach the log on the collecting thread, when the pipe closes
+                // (later if a process it started still holds the pipe: not forever).
+                self.wait_for_stderr(Instant::now() + STDERR_GRACE, |stderr| stderr.closed);
                 return Some(status);
             }
             if Instant::now() >= deadline {
@@ -212,6 +234,9 @@ impl Spawned {
 
 /// How long a process gets to stop on SIGTERM when a test ends, before it is killed.
 const STOP_GRACE: Duration = Duration::from_secs(5);
+
+/// How long [`Spawned::wait_exit`] waits, once the process has exited, for its stderr to close.
+const STDERR_GRACE: Duration = Duration::from_secs(2);
 
 impl Drop for Spawned {
     fn drop(&mut self) {
