@@ -13,6 +13,7 @@ use vas_protocol::{
 };
 use vas_server::grasping::Side;
 use vas_server::runtime::hand_joints::wire_joints;
+use vas_server::runtime::priority::RealtimePriority;
 use vas_server::scene::{Scene, default_scene_path};
 use vas_tests::hands::{PINCH, captured};
 use vas_tests::{
@@ -289,13 +290,10 @@ fn sigint_stops_the_server_promptly_and_successfully() {
 /// Whether this process may put a thread under `SCHED_FIFO` (as root, or with an rtprio limit):
 /// the server, its child, may too.
 fn realtime_permitted() -> bool {
-    std::thread::spawn(|| {
-        let param = libc::sched_param { sched_priority: 1 };
-        // SAFETY: pid 0 is this short-lived thread; `param` outlives the call.
-        unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) == 0 }
-    })
-    .join()
-    .expect("the probing thread ends")
+    let lowest = RealtimePriority::new(1).expect("in range");
+    std::thread::spawn(move || lowest.raise_this_thread().is_ok())
+        .join()
+        .expect("the probing thread ends")
 }
 
 /// Each thread of process `pid`: its name, realtime priority and policy, from `/proc`.
@@ -322,30 +320,26 @@ fn thread_policies(pid: u32) -> Vec<(String, u32, u32)> {
 
 #[test]
 fn a_realtime_server_runs_its_loops_under_fifo_or_says_why_it_cannot() {
-    let prefix = unique_prefix("realtime");
-    let mut server = Spawned::start(
-        &binary("vas-server"),
-        &["run", "--prefix", &prefix, "--realtime", "7"],
-        Stdio::null(),
-    );
+    let mut server = Server::start_with("realtime", &["--realtime", "7"]);
     if !realtime_permitted() {
-        let status = server.wait_exit(PATIENCE).expect("the server gives up");
+        let status = server
+            .process
+            .wait_exit(PATIENCE)
+            .expect("the server gives up");
         assert!(!status.success());
-        let log = server.log();
+        let log = server.process.log();
         assert!(
             log.contains("cannot run at realtime priority 7: ") && log.contains("ulimit -r 7"),
             "says why and what permits it: {log}"
         );
         return;
     }
-    {
-        let mut client = Client::connect(Some(&prefix)).expect("client connects");
-        client.scene_info(PATIENCE).expect("the server answers");
-        let sample = tracker(1, [0.0, 0.0, 0.0]);
-        client.send_tracker(&sample).expect("send");
-        hand_answering(&mut client, sample.stamp());
-    }
-    let threads = thread_policies(server.id());
+    let mut client = server.connect();
+    let sample = tracker(1, [0.0, 0.0, 0.0]);
+    client.send_tracker(&sample).expect("send");
+    hand_answering(&mut client, sample.stamp());
+    drop(client);
+    let threads = thread_policies(server.process.id());
     // The I/O thread, the loops, and the thread that lends its pool to the collision loop.
     let raised = [
         "vas-server",
@@ -375,9 +369,6 @@ fn a_realtime_server_runs_its_loops_under_fifo_or_says_why_it_cannot() {
             .all(|thread| thread.2 == libc::SCHED_OTHER as u32),
         "the threads the raised ones start keep the normal policy: {threads:?}"
     );
-    drop(server);
-    // SAFETY: the server has ended and the client was dropped before it.
-    unsafe { forget_prefix(&prefix) };
 }
 
 /// The CPU latency request the kernel holds the cores to (the least of all requests made), in
@@ -395,16 +386,14 @@ fn a_server_holds_the_cpu_latency_asked_for_while_it_runs_or_says_why_it_cannot(
     let device = vas_server::runtime::cpu_latency::DEVICE;
     // Opening the device without writing to it requests nothing.
     let permitted = std::fs::OpenOptions::new().write(true).open(device).is_ok();
-    let prefix = unique_prefix("cpulatency");
-    let mut server = Spawned::start(
-        &binary("vas-server"),
-        &["run", "--prefix", &prefix, "--cpu-latency", "7"],
-        Stdio::null(),
-    );
+    let mut server = Server::start_with("cpulatency", &["--cpu-latency", "7"]);
     if !permitted {
-        let status = server.wait_exit(PATIENCE).expect("the server gives up");
+        let status = server
+            .process
+            .wait_exit(PATIENCE)
+            .expect("the server gives up");
         assert!(!status.success());
-        let log = server.log();
+        let log = server.process.log();
         assert!(
             log.contains(&format!(
                 "cannot hold the CPU wake-up latency at 7 us through {device}"
@@ -413,16 +402,10 @@ fn a_server_holds_the_cpu_latency_asked_for_while_it_runs_or_says_why_it_cannot(
         );
         return;
     }
-    {
-        let client = Client::connect(Some(&prefix)).expect("client connects");
-        client.scene_info(PATIENCE).expect("the server answers");
-    }
+    drop(server.connect());
     assert_eq!(cpu_latency_in_force(), 7, "held while the server runs");
-    server.stop();
+    server.process.stop();
     assert!(cpu_latency_in_force() > 7, "withdrawn when it ends");
-    drop(server);
-    // SAFETY: the server has ended and the client was dropped before it.
-    unsafe { forget_prefix(&prefix) };
 }
 
 #[test]
