@@ -318,16 +318,18 @@ fn thread_policies(pid: u32) -> Vec<(String, u32, u32)> {
         .collect()
 }
 
+/// Waits for a server that must refuse to start to exit unsuccessfully; what it wrote to stderr.
+fn refusal_of(server: &mut Spawned) -> String {
+    let status = server.wait_exit(PATIENCE).expect("the server gives up");
+    assert!(!status.success(), "exit status {status}:\n{}", server.log());
+    server.log()
+}
+
 #[test]
 fn a_realtime_server_runs_its_loops_under_fifo_or_says_why_it_cannot() {
     let mut server = Server::start_with("realtime", &["--realtime", "7"]);
     if !realtime_permitted() {
-        let status = server
-            .process
-            .wait_exit(PATIENCE)
-            .expect("the server gives up");
-        assert!(!status.success());
-        let log = server.process.log();
+        let log = refusal_of(&mut server.process);
         assert!(
             log.contains("cannot run at realtime priority 7: ") && log.contains("ulimit -r 7"),
             "says why and what permits it: {log}"
@@ -388,12 +390,7 @@ fn a_server_holds_the_cpu_latency_asked_for_while_it_runs_or_says_why_it_cannot(
     let permitted = std::fs::OpenOptions::new().write(true).open(device).is_ok();
     let mut server = Server::start_with("cpulatency", &["--cpu-latency", "7"]);
     if !permitted {
-        let status = server
-            .process
-            .wait_exit(PATIENCE)
-            .expect("the server gives up");
-        assert!(!status.success());
-        let log = server.process.log();
+        let log = refusal_of(&mut server.process);
         assert!(
             log.contains(&format!(
                 "cannot hold the CPU wake-up latency at 7 us through {device}"
@@ -417,16 +414,10 @@ fn a_second_server_on_the_same_prefix_is_refused() {
         &["run", "--prefix", first.prefix()],
         Stdio::null(),
     );
-    let status = second
-        .wait_exit(PATIENCE)
-        .expect("the second server gives up");
-    assert!(!status.success());
+    let log = refusal_of(&mut second);
     assert!(
-        second
-            .log()
-            .contains("another vas server already serves this prefix"),
-        "says why in words: {}",
-        second.log()
+        log.contains("another vas server already serves this prefix"),
+        "says why in words: {log}"
     );
     assert!(first.process.is_running());
 }
