@@ -2,6 +2,7 @@
 //! glTF assemblies, in one test binary.
 
 mod assemblies;
+mod counts;
 mod formats;
 mod mesh_files;
 mod scenes;

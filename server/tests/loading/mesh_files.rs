@@ -263,7 +263,7 @@ fn bad_files_are_refused_with_the_file_and_the_reason() {
     assert_refused(
         "undercounted.stl",
         &undercounted,
-        "header counts 1 triangles, but it holds 184 bytes, room for 2 triangles",
+        "does not match its 184 bytes (an 84-byte header and 50 bytes a triangle: room for 2)",
     );
 
     let missing = scratch("does_not_exist.obj");

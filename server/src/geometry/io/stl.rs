@@ -27,7 +27,8 @@ pub(super) fn parse_stl(bytes: &[u8], max_triangles: u64) -> Result<RawMesh, Con
     {
         return Err(ContentError::TooManyTriangles(count));
     }
-    let invalid = |e: std::io::Error| format!("not a valid STL file: {e}");
+    // The kind of error only: stl_io's own messages quote the offending line of the file.
+    let invalid = |e: std::io::Error| format!("not a valid STL file: {}", e.kind());
     let mut cursor = Cursor::new(bytes);
     let reader = stl_io::create_stl_reader(&mut cursor).map_err(invalid)?;
     // A closed mesh has about half as many vertices as triangles.
@@ -56,24 +57,51 @@ pub(super) fn parse_stl(bytes: &[u8], max_triangles: u64) -> Result<RawMesh, Con
 }
 
 /// The triangle count of a binary STL's header (`None` for a file that begins as ASCII STL does,
-/// or is too short for a header). The file must hold no more than the triangles it counts: the
-/// reader stops at the count, so a count smaller than the data would drop triangles silently.
+/// or is too short for a header). The file must hold exactly the triangles it counts: a count
+/// larger than the data would have memory reserved for triangles that are not there, and a
+/// count smaller than the data would drop triangles silently (the reader stops at the count).
 fn binary_stl_count(bytes: &[u8]) -> Result<Option<u64>, ContentError> {
     if bytes.starts_with(b"solid") || bytes.len() < HEADER {
         return Ok(None);
     }
     let count = u32::from_le_bytes(bytes[80..HEADER].try_into().expect("four bytes"));
-    let expected = (count as usize)
-        .checked_mul(TRIANGLE)
-        .and_then(|data| data.checked_add(HEADER));
-    if expected.is_some_and(|expected| bytes.len() > expected) {
+    let data = bytes.len() - HEADER;
+    if u64::from(count) * TRIANGLE as u64 != data as u64 {
         return Err(format!(
-            "not a valid STL file: its header counts {count} triangles, but it holds {} bytes, \
-             room for {} triangles",
+            "not a valid STL file: the triangle count in its binary header does not match its \
+             {} bytes (an {HEADER}-byte header and {TRIANGLE} bytes a triangle: room for {})",
             bytes.len(),
-            (bytes.len() - HEADER) / TRIANGLE
+            data / TRIANGLE
         )
         .into());
     }
     Ok(Some(u64::from(count)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The header's 80 bytes, `count`, and `triangles` zeroed triangles.
+    fn binary(count: u32, triangles: usize) -> Vec<u8> {
+        let mut bytes = vec![0; 80];
+        bytes.extend(count.to_le_bytes());
+        bytes.resize(bytes.len() + triangles * TRIANGLE, 0);
+        bytes
+    }
+
+    #[test]
+    fn a_count_beyond_the_bytes_present_is_refused_before_anything_is_reserved() {
+        // 84 bytes announcing 49,999,999 triangles: about 1.8 GB reserved before the fix.
+        for (count, present) in [(49_999_999, 0), (u32::MAX, 1), (3, 2), (1, 2)] {
+            match parse_stl(&binary(count, present), u64::MAX) {
+                Err(ContentError::Malformed(reason)) => assert!(
+                    reason.contains(&format!("room for {present})")),
+                    "{count}: {reason}"
+                ),
+                other => panic!("{count} announced, {present} present: {other:?}"),
+            }
+        }
+        assert_eq!(parse_stl(&binary(2, 2), 10).unwrap().1.len(), 2);
+    }
 }

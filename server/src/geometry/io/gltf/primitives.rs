@@ -3,7 +3,7 @@
 
 use std::borrow::Cow;
 
-use super::accessors::{self, accessor};
+use super::accessors;
 use super::document::{Document, Primitive, TRIANGLE_FAN, TRIANGLE_STRIP, TRIANGLES};
 use crate::geometry::io::RawMesh;
 
@@ -12,7 +12,8 @@ pub(super) fn has_triangles(primitive: &Primitive) -> bool {
     matches!(primitive.mode, TRIANGLES | TRIANGLE_STRIP | TRIANGLE_FAN)
 }
 
-/// The triangles mesh `mesh` has, from its accessors' counts alone (nothing is read).
+/// The triangles mesh `mesh` has, from its accessors' counts alone (nothing is read), each count
+/// checked against the bytes of its buffer view.
 pub(super) fn triangle_count(document: &Document, mesh: usize) -> Result<u64, String> {
     let mut total = 0u64;
     for (p, primitive) in mesh_of(document, mesh)?.primitives.iter().enumerate() {
@@ -20,8 +21,8 @@ pub(super) fn triangle_count(document: &Document, mesh: usize) -> Result<u64, St
             continue;
         }
         let corners = match primitive.indices {
-            Some(indices) => accessor(document, indices)?.count,
-            None => accessor(document, position_accessor(primitive, mesh, p)?)?.count,
+            Some(indices) => accessors::index_count(document, indices)?,
+            None => accessors::position_count(document, position_accessor(primitive, mesh, p)?)?,
         };
         total = total.saturating_add(match primitive.mode {
             TRIANGLES => corners / 3,
