@@ -25,7 +25,7 @@ use serde::Serialize;
 
 use crate::args::OutputArgs;
 use crate::report::{self, LinePlot, Series, Table};
-use vas_server::collision::interest::GroupId;
+use vas_server::collision::pipeline::interest::GroupId;
 use vas_server::collision::pipeline::{
     CollisionModel, CollisionPipeline, Detail, FrameStats, ObjectDesc, ObjectId, PipelineConfig,
     SPLIT_MIN_BV_TESTS,

@@ -15,7 +15,7 @@ use anyhow::{Context, bail};
 use serde::{Deserialize, Serialize};
 use vas_client::Wake;
 use vas_client::latency::LatencySummary;
-use vas_tests::browser::Browser;
+use vas_testkit::browser::Browser;
 
 use crate::args::{OutputArgs, ServerArgs};
 use crate::report::{LinePlot, Series, Table, format_number};

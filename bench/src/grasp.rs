@@ -21,7 +21,7 @@ use vas_server::grasping::clasp::HandPose;
 use vas_server::grasping::collider::{Obstacle, PartGeometry};
 use vas_server::grasping::hand::{GraspEvent, GraspParams, GraspingHand};
 use vas_server::grasping::model::{FLEX_COUNT, HandModel};
-use vas_server::scene::script::{ScriptedGrasp, sample};
+use vas_testkit::script::{ScriptedGrasp, sample};
 
 /// The default triangle counts of the parts.
 pub const DEFAULT_TRIANGLES: [usize; 5] = [1_000, 5_000, 10_000, 20_000, 50_000];

@@ -18,7 +18,7 @@ use serde::Serialize;
 use crate::args::OutputArgs;
 use crate::baselines::{KdopBruteForceTree, ObbTree};
 use crate::report::{LinePlot, Series, Table, TimingSummary, format_number, timer_overhead};
-use vas_server::collision::tumble::tumble_pose;
+use vas_testkit::tumble::tumble_pose;
 use vas_server::collision::{DopTree, MeshCollider, OrientationSet, ParryMesh, QueryStats};
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{TriMesh, bounding_sphere_of, parse_mesh_spec};

@@ -1,18 +1,19 @@
 //! The modules' layering, checked on the sources: data flows one way, `geometry` ← `collision` ←
-//! `sliding`, `grasping` ← `scene` ← `runtime`, so the non-test code of a module names no module
+//! `sliding`, `grasping` ← `scene` ← `simulation` ← `runtime`, so the non-test code of a module names no module
 //! of its own layer or above (`sliding` and `grasping` stay apart too). Every `crate::` path
 //! counts, not only `use` lines; code under `#[cfg(test)]` may reach up for its fixtures.
 
 use std::path::{Path, PathBuf};
 
 /// The library's modules and their layers, lowest first.
-const LAYERS: [(&str, u8); 6] = [
+const LAYERS: [(&str, u8); 7] = [
     ("geometry", 0),
     ("collision", 1),
     ("sliding", 2),
     ("grasping", 2),
     ("scene", 3),
-    ("runtime", 4),
+    ("simulation", 4),
+    ("runtime", 5),
 ];
 
 fn layer(module: &str) -> Option<u8> {
@@ -266,6 +267,14 @@ fn an_upward_path_is_found_wherever_it_is_written() {
     assert_eq!(
         upward_references("sliding", "use crate::grasping::HandModel;", false),
         ["grasping"]
+    );
+    assert_eq!(
+        upward_references("simulation", "use crate::runtime::loops::Loops;", false),
+        ["runtime"]
+    );
+    assert_eq!(
+        upward_references("scene", "use crate::simulation::frames::Stamps;", false),
+        ["simulation"]
     );
 }
 

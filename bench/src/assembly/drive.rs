@@ -10,7 +10,7 @@ use nalgebra::Isometry3;
 use vas_client::recording::InputSample;
 use vas_client::{Client, Frame, Wake};
 use vas_protocol::{GloveSample, PART_GRASPED, PART_SLIDING, TrackerSample, wall_clock_ns};
-use vas_server::scene::script::Keyframe;
+use vas_testkit::script::Keyframe;
 
 use crate::e2e::round_trip;
 

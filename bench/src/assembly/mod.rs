@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use vas_client::latency::LatencySummary;
 use vas_client::recording::InputSample;
 use vas_server::geometry::load_mesh;
-use vas_server::scene::script::Keyframe;
+use vas_testkit::script::Keyframe;
 
 use crate::args::{CONTROL_TIMEOUT, MAX_TIMEOUT_MS, OutputArgs};
 use crate::e2e::round_trip;

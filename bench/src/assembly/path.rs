@@ -5,7 +5,7 @@
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
-use vas_server::scene::script::{Keyframe, power_grasp_at, sample};
+use vas_testkit::script::{Keyframe, power_grasp_at, sample};
 
 /// The bar's radius: the scripted power grasp's handle's, which the right hand's fist fits.
 pub const BAR_RADIUS: f64 = 0.016;

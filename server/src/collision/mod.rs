@@ -11,14 +11,12 @@
 pub mod broad_phase;
 pub mod brute_force;
 pub mod dop_tree;
-pub mod interest;
 pub mod orientation;
 pub mod oriented_box;
 pub mod parry_mesh;
 pub mod pipeline;
 pub mod separating_plane;
 pub mod triangle;
-pub mod tumble;
 
 use std::ops::AddAssign;
 

@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::brute_force::posed_triangles;
 use super::triangle::triangles_intersect;
-use super::tumble::tumble_pose;
+use vas_testkit::tumble::tumble_pose;
 use super::*;
 use crate::geometry::{TriMesh, shapes};
 

@@ -13,8 +13,6 @@
 //!   hysteresis, cart motion, the hand-over events.
 //! * [`retarget`]: tracked OpenXR or WebXR hand joints onto the model: root and flex values,
 //!   per-user calibration, fingertip error, captures.
-//! * [`script`]: keyframed tracker and glove trajectories and the scripted grasps of the tests and
-//!   of benchmark B6.
 
 pub mod analysis;
 pub mod clasp;
@@ -23,11 +21,7 @@ pub mod flex;
 pub mod hand;
 pub mod model;
 pub mod retarget;
-#[cfg(test)]
-mod scenarios;
 pub mod segment_mesh;
-#[cfg(test)]
-pub(crate) mod testing;
 
 pub use analysis::{GraspType, PrecisionKind};
 pub use clasp::{ClaspParamError, ClaspParams, HandPose};

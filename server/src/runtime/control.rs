@@ -9,11 +9,11 @@ use vas_protocol::{
     MAX_NAME_BYTES, PART_MOVABLE, PartDescription, SlidingMetaphor, WirePose, WireText,
 };
 
-use super::frames::{Change, Restart};
 use super::geometry::wire_side;
 use super::inputs::Inputs;
 use crate::scene::{Part, Scene};
 use crate::sliding::Metaphor;
+use crate::simulation::restart::{Change, HandSetupError, Restart};
 
 /// What the I/O thread serves: the scene, the input state and the count of restarts.
 pub struct Session {
@@ -83,7 +83,7 @@ impl Session {
     pub fn start(
         scene: Scene,
         catalogue: SceneCatalogue,
-    ) -> Result<(Session, Restart), super::frames::HandSetupError> {
+    ) -> Result<(Session, Restart), HandSetupError> {
         let scene = Arc::new(scene);
         let restart = Restart::new(Arc::clone(&scene), 1)?;
         let session = Session {

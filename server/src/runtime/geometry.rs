@@ -12,10 +12,10 @@ use std::sync::Arc;
 use rayon::prelude::*;
 use vas_protocol::{HandGeometry, HandSide, MeshData, SceneGeometry};
 
-use super::frames::Restart;
 use crate::geometry::TriMesh;
 use crate::grasping::Side;
 use crate::scene::Scene;
+use crate::simulation::restart::Restart;
 
 /// The render geometry of the scene being served.
 pub(super) struct ServedGeometry {

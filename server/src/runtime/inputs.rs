@@ -25,11 +25,11 @@ use vas_protocol::{
     InputStats, TrackerSample, TrackerTarget, wall_clock_ns,
 };
 
-use super::frames::{HandTarget, InputFrame, Stamps};
 use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection, JointsTarget};
 use crate::grasping::retarget::JointsError;
 use crate::grasping::{HandInput, HandModel};
 use crate::scene::TrackingParams;
+use crate::simulation::frames::{HandTarget, InputFrame, Stamps};
 
 /// The clock that times a joints-driven hand's tracking.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

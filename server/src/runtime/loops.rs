@@ -20,17 +20,22 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, Sender};
 use nalgebra::Isometry3;
 
-use super::frames::{
-    CandidateFrame, Change, GraspedFrame, GraspedHand, InputFrame, ProposedHand, Stamps,
-    VerifiedFrame, wire_grasp,
-};
-use super::interaction::{GraspStage, HeldPart, SlideStage, SteppedHand};
 use super::priority::RealtimePriority;
 use super::rendezvous::{AwakeWatch, Coalesce, Handoff, Received, Work};
-use super::verify::Verifier;
 use super::wakeup::Waker;
 use crate::grasping::{HandInput, PartId};
 use crate::scene::Scene;
+use crate::simulation::frames::{
+    CandidateFrame, GraspedFrame, GraspedHand, HeldPart, InputFrame, ProposedHand, Stamps,
+    VerifiedFrame, wire_grasp,
+};
+use crate::simulation::grasp_stage::{GraspStage, SteppedHand};
+use crate::simulation::restart::Change;
+use crate::simulation::slide_stage::SlideStage;
+use crate::simulation::verify::Verifier;
+
+/// An item for a loop: a frame, or a change of the simulation between frames.
+pub type LoopWork<F> = Work<F, Change>;
 
 /// The verified part poses of the latest frame, for the grasping loop, tagged with the restart
 /// they belong to.
@@ -693,10 +698,11 @@ mod tests {
     use vas_protocol::{EventKind, InputStamp};
 
     use super::*;
-    use crate::runtime::frames::{HandTarget, Restart};
-    use crate::runtime::interaction::Interaction;
+    use crate::simulation::frames::HandTarget;
+    use crate::simulation::interaction::Interaction;
+    use crate::simulation::restart::Restart;
     use crate::runtime::wakeup;
-    use crate::scene::script::{ScriptedGrasp, sample};
+    use vas_testkit::script::{ScriptedGrasp, sample};
 
     /// Input samples per second.
     const RATE: f64 = 1000.0;
@@ -747,7 +753,16 @@ mod tests {
         let script = ScriptedGrasp::PowerOnHandle;
         let mut keys = script.keyframes();
         keys.retain(|key| key.time <= script.milestones().carried);
-        let inputs: Vec<HandInput> = sample(&keys, RATE).iter().map(|k| k.input()).collect();
+        // The script's keyframes, as this crate's hand input (the kit links its own copy of the
+        // library, whose types are not this test's).
+        let inputs: Vec<HandInput> = sample(&keys, RATE)
+            .iter()
+            .map(|key| HandInput {
+                cart: key.cart,
+                tracker: key.tracker,
+                flex: key.flex.map(|value| value as f32),
+            })
+            .collect();
 
         let mut offline = {
             let restart = Restart::new(Arc::clone(&scene), 1).expect("the hand builds");

@@ -1,6 +1,6 @@
 //! The runtime: the iceoryx2 ports, the three loops and their rendezvous, clean start and stop.
 //!
-//! This is the only module that knows about threads and IPC. The interaction manager (`io`)
+//! This is the only module that knows about threads and IPC. The interaction manager ([`io_thread`])
 //! owns every port on the main thread: it validates input, hands targets to the grasping loop,
 //! publishes what the collision loop verified and answers control requests. The grasping,
 //! sliding and collision loops ([`loops`]) each run on their own thread and meet only at the
@@ -18,18 +18,15 @@
 
 pub mod control;
 pub mod cpu_latency;
-pub mod frames;
 mod geometry;
 pub mod hand_joints;
 pub mod inputs;
-pub mod interaction;
-mod io;
+mod io_thread;
 mod loader;
 pub mod loops;
 mod ports;
 pub mod priority;
 pub mod rendezvous;
-pub mod verify;
 pub mod wakeup;
 
 use std::path::{Path, PathBuf};
@@ -41,9 +38,9 @@ use iceoryx2::prelude::*;
 use vas_protocol::services::{PrefixError, ServiceOpenError, config_with_prefix};
 
 use crate::scene::{LoadOptions, Scene, SceneError, log_prepared};
+use crate::simulation::restart::HandSetupError;
 use control::Session;
 use cpu_latency::{CpuLatencyError, CpuLatencyRequest};
-use frames::HandSetupError;
 use loops::{Links, Loops};
 use priority::{PriorityError, RealtimePriority};
 
@@ -208,7 +205,7 @@ pub fn run(options: &RunOptions) -> Result<(), RuntimeError> {
     let (verified_in, verified_out) = crossbeam_channel::unbounded();
     let (waker, wakeups) =
         wakeup::channel().map_err(|error| RuntimeError::ipc("make the wake-up socket", error))?;
-    let manager = io::InteractionManager::new(
+    let manager = io_thread::InteractionManager::new(
         &node,
         session,
         &start,

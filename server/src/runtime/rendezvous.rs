@@ -22,6 +22,8 @@ use std::sync::atomic::{AtomicBool, Ordering, fence};
 use std::sync::{Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
+pub use crate::simulation::frames::Coalesce;
+
 /// How long a receiver woken by [`Handoff::announce`] waits awake for the frame before it goes
 /// back to sleep: several times a loop's frame with nothing in contact, so that the announced
 /// frame nearly always arrives within it, and short enough that a long frame (a 50,000-triangle
@@ -64,12 +66,6 @@ fn wait_awake_until(until: Instant, mut done: impl FnMut() -> bool) {
     while !done() && Instant::now() < until {
         std::thread::yield_now();
     }
-}
-
-/// A frame that can absorb an older one it overtook in a queue.
-pub trait Coalesce {
-    /// Merges `older` into `self`: `self`'s state stands, `older`'s events go first.
-    fn absorb_older(&mut self, older: Self);
 }
 
 /// One item for a loop.

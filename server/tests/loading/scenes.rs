@@ -591,7 +591,7 @@ fn the_shape_command_writes_a_loadable_obj() {
 fn the_interest_matrix_follows_the_group_and_part_rules_of_the_config() {
     use vas_server::collision::DopTree;
     use vas_server::collision::MeshCollider;
-    use vas_server::collision::interest::InterestKey;
+    use vas_server::collision::pipeline::interest::InterestKey;
     use vas_server::collision::pipeline::{
         CollisionModel, CollisionPipeline, ObjectDesc, PipelineConfig,
     };

@@ -4,7 +4,7 @@
 
 use std::process::Stdio;
 
-use vas_tests::{PATIENCE, Server};
+use vas_testkit::{PATIENCE, Server};
 
 fn report(path: &std::path::Path) -> serde_json::Value {
     let text = std::fs::read_to_string(path).expect("the report is written");
@@ -142,7 +142,7 @@ fn bench_e2e_and_a_short_soak_report_every_sample() {
 /// by the server as a hand of the scene.
 #[test]
 fn bench_e2e_takes_two_hands_joints() {
-    let scene = vas_tests::configs_dir().join("two_hand_handover.toml");
+    let scene = vas_testkit::configs_dir().join("two_hand_handover.toml");
     let mut server =
         Server::start_with("benchjoints", &["--scene", scene.to_str().expect("utf-8")]);
     let client = server.connect();
@@ -166,9 +166,9 @@ fn bench_e2e_takes_two_hands_joints() {
 fn bench_tree_build_reports_each_mesh() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let (json, svg) = (dir.path().join("build.json"), dir.path().join("build.svg"));
-    let bunny = vas_tests::configs_dir().join("meshes/low_poly_bunny.obj");
+    let bunny = vas_testkit::configs_dir().join("meshes/low_poly_bunny.obj");
     let meshes = format!("shape:sphere:2000,{}", bunny.display());
-    let output = std::process::Command::new(vas_tests::binary("vas-bench"))
+    let output = std::process::Command::new(vas_testkit::binary("vas-bench"))
         .args(["tree-build", "--runs", "1", "--meshes", &meshes, "--json"])
         .arg(&json)
         .arg("--svg")
@@ -223,7 +223,7 @@ fn bench_tree_build_reports_each_mesh() {
 fn bench_assembly_grasps_and_slides_the_bar_without_penetration() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let (json, svg) = (dir.path().join("b8.json"), dir.path().join("b8.svg"));
-    let output = std::process::Command::new(vas_tests::binary("vas-bench"))
+    let output = std::process::Command::new(vas_testkit::binary("vas-bench"))
         .args([
             "assembly",
             "--parts",
@@ -234,7 +234,7 @@ fn bench_assembly_grasps_and_slides_the_bar_without_penetration() {
             "1",
         ])
         .args(["--timeout-s", "60", "--hand"])
-        .arg(vas_tests::configs_dir().join("hands/right.toml"))
+        .arg(vas_testkit::configs_dir().join("hands/right.toml"))
         .arg("--json")
         .arg(&json)
         .arg("--svg")

@@ -15,8 +15,8 @@ use vas_server::grasping::Side;
 use vas_server::runtime::hand_joints::wire_joints;
 use vas_server::runtime::priority::RealtimePriority;
 use vas_server::scene::{Scene, default_scene_path};
-use vas_tests::hands::{PINCH, captured};
-use vas_tests::{
+use vas_testkit::hands::{PINCH, captured};
+use vas_testkit::{
     PATIENCE, Server, Spawned, binary, configs_dir, fixtures_dir, forget_prefix, tracker,
     unique_prefix,
 };
@@ -409,8 +409,8 @@ fn a_server_holds_the_cpu_latency_asked_for_while_it_runs_or_says_why_it_cannot(
 fn a_second_server_on_the_same_prefix_is_refused() {
     let mut first = Server::start("twice");
     first.connect();
-    let mut second = vas_tests::Spawned::start(
-        &vas_tests::binary("vas-server"),
+    let mut second = vas_testkit::Spawned::start(
+        &vas_testkit::binary("vas-server"),
         &["run", "--prefix", first.prefix()],
         Stdio::null(),
     );

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use vas_client::recording::Recording;
 use vas_client::{Frame, HandSegment, Wake};
-use vas_tests::{PATIENCE, Server, Spawned, configs_dir, example, fixtures_dir, tracker};
+use vas_testkit::{PATIENCE, Server, Spawned, configs_dir, example, fixtures_dir, tracker};
 
 /// Runs the example `name` with `args`, and returns its stdout lines once it exited
 /// successfully.

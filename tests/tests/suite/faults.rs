@@ -9,7 +9,7 @@ use vas_protocol::services::control::MAX_CLIENTS;
 use vas_protocol::{
     ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, TrackerSample, wall_clock_ns,
 };
-use vas_tests::{PATIENCE, Server, Spawned, binary, forget_prefix, tracker, unique_prefix};
+use vas_testkit::{PATIENCE, Server, Spawned, binary, forget_prefix, tracker, unique_prefix};
 
 /// Receives frames until the hand frame answering `sample`, failing after [`PATIENCE`].
 fn answer(client: &mut Client, sample: &TrackerSample) -> HandFrame {
@@ -363,7 +363,7 @@ fn the_old_scene_is_served_while_a_requested_one_loads() {
     let mut server = Server::start("bgload");
     let mut client = server.connect();
     let served = client.scene_info(PATIENCE).expect("scene info").name;
-    let large = vas_tests::configs_dir().join("peg_insert_50k.toml");
+    let large = vas_testkit::configs_dir().join("peg_insert_50k.toml");
     let large = large.to_str().expect("utf-8").to_owned();
     let prefix = server.prefix().to_owned();
     let loading = std::thread::spawn(move || {
@@ -386,7 +386,7 @@ fn the_old_scene_is_served_while_a_requested_one_loads() {
 
     // A load of a missing file fails quickly, or is refused as busy while the large load is
     // under way: the first busy answer shows the server answering during the load.
-    let missing = vas_tests::configs_dir().join("no_such_scene.toml");
+    let missing = vas_testkit::configs_dir().join("no_such_scene.toml");
     let missing = missing.to_str().expect("utf-8");
     loop {
         assert!(

@@ -6,11 +6,11 @@ use std::fs;
 
 use vas_client::recording::Recording;
 use vas_server::scene::Scene;
-use vas_server::scene::script::RecordedScenario;
-use vas_tests::captured::CapturedMotion;
-use vas_tests::fixtures::write_fixture;
-use vas_tests::offline::{self, OfflineRun};
-use vas_tests::scenarios::{EXPECTED, Motion, Scenario};
+use vas_testkit::script::RecordedScenario;
+use vas_testkit::captured::CapturedMotion;
+use vas_testkit::fixtures::write_fixture;
+use vas_testkit::offline::{self, OfflineRun};
+use vas_testkit::scenarios::{EXPECTED, Motion, Scenario};
 
 fn replay(scenario: &Scenario) -> (Scene, OfflineRun) {
     let scene = Scene::load(&scenario.scene_path()).expect("the scenario's scene loads");
@@ -144,7 +144,7 @@ fn captured_tracking_loss() {
 /// grace period (the scene's default) into the long one.
 #[test]
 fn a_hand_lets_go_only_once_its_tracking_is_lost_longer_than_the_grace() {
-    use vas_tests::captured::{LONG_LOSS_FROM_S, RATE_HZ};
+    use vas_testkit::captured::{LONG_LOSS_FROM_S, RATE_HZ};
     let (scene, run) = replay(&EXPECTED[8]);
     let grace = scene.params.tracking.grace;
     let release = (run.events.iter())
@@ -162,11 +162,11 @@ fn the_fixtures_are_what_the_generator_writes_every_time() {
     let out = tempfile::tempdir().expect("a temporary folder");
     for scenario in &EXPECTED {
         let first = fs::read(
-            write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
+            write_fixture(scenario, &vas_testkit::configs_dir(), out.path()).expect("generates"),
         )
         .expect("written");
         let second = fs::read(
-            write_fixture(scenario, &vas_tests::configs_dir(), out.path()).expect("generates"),
+            write_fixture(scenario, &vas_testkit::configs_dir(), out.path()).expect("generates"),
         )
         .expect("written");
         assert_eq!(first, second, "{}: two runs differ", scenario.motion);

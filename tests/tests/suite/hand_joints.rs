@@ -13,8 +13,8 @@ use vas_protocol::{HandFrame, HandJointsSample, HandSegment, HandSide, wall_cloc
 use vas_server::grasping::retarget::{HandJoints, Joint, Retargeter};
 use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime::hand_joints::wire_joints;
-use vas_tests::hands::{PINCH, RELAXED, captured};
-use vas_tests::{PATIENCE, Server, configs_dir};
+use vas_testkit::hands::{PINCH, RELAXED, captured};
+use vas_testkit::{PATIENCE, Server, configs_dir};
 
 /// A right hand and, far from where the test moves it, one part.
 fn scene(folder: &std::path::Path) -> std::path::PathBuf {
@@ -218,7 +218,7 @@ fn a_free_running_server_notices_a_hand_whose_samples_stop() {
 }
 
 /// What a finished tool printed on stdout; fails the test if it failed.
-fn wait_for_output(mut tool: vas_tests::Spawned) -> String {
+fn wait_for_output(mut tool: vas_testkit::Spawned) -> String {
     let mut stdout = tool.take_stdout().expect("piped");
     let status = tool
         .wait_exit(PATIENCE + Duration::from_secs(5))

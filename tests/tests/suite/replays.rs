@@ -12,11 +12,11 @@ use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Frame};
 use vas_protocol::{EventKind, GraspType, HandFrame, HandSide, wall_clock_ns};
 use vas_server::grasping::{HandModel, Side};
-use vas_server::runtime::frames::Restart;
+use vas_server::simulation::restart::Restart;
 use vas_server::scene::Scene;
-use vas_tests::offline::{Oracle, VisibleHand};
-use vas_tests::scenarios::{EXPECTED, Scenario};
-use vas_tests::{PATIENCE, Server};
+use vas_testkit::offline::{Oracle, VisibleHand};
+use vas_testkit::scenarios::{EXPECTED, Scenario};
+use vas_testkit::{PATIENCE, Server};
 
 /// A hand frame without its frame number and timestamps (which differ between runs).
 #[derive(Debug, PartialEq)]

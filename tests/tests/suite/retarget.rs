@@ -3,7 +3,7 @@
 
 use std::process::Command;
 
-use vas_tests::{binary, fixtures_dir};
+use vas_testkit::{binary, fixtures_dir};
 
 /// Runs `vas-server retarget` with `args` and a JSON report, and returns the report.
 fn retarget(args: &[&str]) -> serde_json::Value {

@@ -1,5 +1,5 @@
 //! What the viewer's tests run: the `vas-viewer` binary, plain HTTP and WebSocket requests to
-//! it, and headless Chromium driven through chromedriver (from `vas_tests`).
+//! it, and headless Chromium driven through chromedriver (from `vas_testkit`).
 
 use std::io::{BufRead, BufReader};
 use std::net::SocketAddr;
@@ -8,9 +8,9 @@ use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
-pub use vas_tests::browser::{Browser, Screenshot};
-pub use vas_tests::http::http_get;
-use vas_tests::{PATIENCE, Spawned};
+pub use vas_testkit::browser::{Browser, Screenshot};
+pub use vas_testkit::http::http_get;
+use vas_testkit::{PATIENCE, Spawned};
 
 /// How often a condition is looked at again while a test waits for it.
 const POLL: Duration = Duration::from_millis(20);

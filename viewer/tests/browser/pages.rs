@@ -1,7 +1,7 @@
 //! Sixteen pages at once, in windows of one headless Chromium: each gets the scene and keeps
 //! getting frames, and draws them.
 
-use vas_tests::{Server, configs_dir};
+use vas_testkit::{Server, configs_dir};
 
 use crate::harness::{Browser, Viewer};
 

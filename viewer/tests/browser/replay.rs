@@ -7,7 +7,7 @@ use std::process::Stdio;
 use serde::Deserialize;
 use vas_client::recording::Recording;
 use vas_client::{Client, PART_GRASPED, PartsFrame};
-use vas_tests::{PATIENCE, Server, configs_dir, fixtures_dir};
+use vas_testkit::{PATIENCE, Server, configs_dir, fixtures_dir};
 
 use crate::harness::{Browser, Screenshot, Viewer};
 

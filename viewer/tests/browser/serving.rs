@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use crate::harness::{Viewer, http_get};
-use vas_tests::{forget_prefix, unique_prefix};
+use vas_testkit::{forget_prefix, unique_prefix};
 
 /// Every file the page loads, by its URL path and its file under `assets/`.
 const ASSETS: &[(&str, &str)] = &[

@@ -10,7 +10,7 @@ use tokio::net::TcpStream;
 use tokio_tungstenite::tungstenite::Message;
 use tokio_tungstenite::tungstenite::protocol::frame::coding::CloseCode;
 use tokio_tungstenite::{MaybeTlsStream, WebSocketStream};
-use vas_tests::{PATIENCE, Server, configs_dir};
+use vas_testkit::{PATIENCE, Server, configs_dir};
 
 use crate::harness::Viewer;
 

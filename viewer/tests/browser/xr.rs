@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::json;
 use vas_client::{Client, HandFrame, HandSide, PART_GRASPED};
-use vas_tests::{PATIENCE, Server, configs_dir};
+use vas_testkit::{PATIENCE, Server, configs_dir};
 
 use crate::harness::{Browser, Viewer};
 use crate::replay::{

@@ -16,7 +16,7 @@ use super::tree::{DopTree, Node};
 use crate::collision::oracle_tests::brute_force_hit;
 use crate::collision::oracle_tests::{random_pose, random_soup, torus};
 use crate::collision::orientation::OrientationSet;
-use crate::collision::tumble::tumble_pose;
+use vas_testkit::tumble::tumble_pose;
 use crate::collision::{MeshCollider, QueryStats};
 
 /// Every corner of every node's triangles, with the node.

@@ -5,7 +5,7 @@ use super::back_end::{BackEnd, Tally};
 use super::objects::Slot;
 use super::{ExactTest, PairEntry, PairKey, is_interesting, ordered};
 use crate::collision::broad_phase::{Aabb, SweepAndPrune};
-use crate::collision::interest::InterestMatrix;
+use super::interest::InterestMatrix;
 use std::time::{Duration, Instant};
 
 /// The bounding-box stage of a frame, with what it reads: the half of

@@ -24,6 +24,7 @@
 mod back_end;
 mod box_stage;
 mod exact;
+pub mod interest;
 mod objects;
 mod pool;
 mod report;
@@ -34,7 +35,7 @@ pub use report::{CollidingPair, Detail, FrameReport, FrameStats, StageCounters};
 
 use super::QueryStats;
 use super::broad_phase::{Aabb, SweepAndPrune};
-use super::interest::{InterestKey, InterestMatrix};
+use interest::{InterestKey, InterestMatrix};
 use super::separating_plane::{PlaneSearch, SeparatingPlane};
 use back_end::{BackEnd, Tally};
 use box_stage::{BoxStage, BoxUpdate};

@@ -3,7 +3,7 @@
 
 use super::PairKey;
 use crate::collision::broad_phase::Aabb;
-use crate::collision::interest::{GroupId, InterestKey};
+use super::interest::{GroupId, InterestKey};
 use crate::geometry::ConvexHull;
 use nalgebra::{Isometry3, Vector3};
 use std::sync::Arc;

@@ -2,7 +2,7 @@
 
 use super::back_end::PAIRS_PER_TASK;
 use super::*;
-use crate::collision::interest::GroupId;
+use super::interest::GroupId;
 use crate::collision::{DopTree, ParryMesh};
 use crate::geometry::{ConvexHull, Point, TriMesh};
 use nalgebra::{Translation3, UnitQuaternion, Vector3};

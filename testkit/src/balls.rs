@@ -1,14 +1,14 @@
-//! Test support: an analytic world of balls and a floor whose collision test with the hand's
+//! An analytic world of balls and a floor whose collision test with the hand's
 //! ideal segment shapes is exact and shares no code with the collision module.
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use super::clasp::{HandPose, ObjectSet, SegmentPlacement};
-use super::model::{HandModel, SegmentId};
+use vas_server::grasping::clasp::{HandPose, ObjectSet, SegmentPlacement};
+use vas_server::grasping::model::{HandModel, SegmentId};
 
 /// Solid balls and an optional solid floor (everything below a height).
 #[derive(Debug, Clone, Default)]
-pub(crate) struct BallWorld {
+pub struct BallWorld {
     /// Height of the floor's top; object 0 when present.
     pub floor: Option<f64>,
     /// Balls (centre, radius); ball `k` is object `k + 1`.

@@ -32,13 +32,15 @@ use std::path::PathBuf;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Deserialize;
 
-use super::{Loader, Part, SceneError, default_group};
+use super::Loader;
+use crate::scene::file::default_group;
+use crate::scene::{Part, SceneError};
 use crate::geometry::{GltfFile, read_mesh_file};
 
 /// An `[[assemblies]]` table as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct AssemblyFile {
+pub(in crate::scene) struct AssemblyFile {
     file: PathBuf,
     #[serde(default)]
     up: UpAxis,

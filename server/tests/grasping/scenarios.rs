@@ -7,15 +7,15 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use parry3d::query::{PointQuery, contact, intersection_test};
 use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh, TriMeshFlags};
 
-use super::analysis::GraspType;
-use super::clasp::HandPose;
-use super::collider::{Obstacle, PartGeometry, PartId};
-use super::hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandMode};
-use super::model::tests::right_hand;
-use super::model::{FLEX_COUNT, HandModel};
-use crate::geometry::TriMesh;
-use crate::geometry::shapes;
-use crate::scene::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
+use vas_server::geometry::TriMesh;
+use vas_server::geometry::shapes;
+use vas_server::grasping::analysis::GraspType;
+use vas_server::grasping::clasp::HandPose;
+use vas_server::grasping::collider::{Obstacle, PartGeometry, PartId};
+use vas_server::grasping::hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandMode};
+use vas_server::grasping::model::{FLEX_COUNT, HandModel};
+use vas_testkit::hand_models::{hands_dir, right_hand};
+use vas_testkit::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
 
 /// Input samples per second of the scripted trajectories (a tracker and glove at 1 kHz).
 const RATE: f64 = 1000.0;
@@ -329,7 +329,7 @@ fn the_left_hand_grasps_a_mirrored_handle() {
             ..*k
         })
         .collect();
-    let left = HandModel::load(&super::model::tests::hands_dir().join("left.toml")).unwrap();
+    let left = HandModel::load(&hands_dir().join("left.toml")).unwrap();
     // The handle is symmetric under the mirror: the same mesh at the mirrored pose.
     let handle = ScenePart::new(1, script.part_mesh(2_000), mirror(&script.part_pose()));
     let run = Run::with_hand(left, vec![handle], keys[0].tracker);
@@ -508,7 +508,7 @@ fn a_hand_carried_into_a_part_by_the_cart_waits_until_moved_free() {
 
 #[test]
 fn the_grasping_scene_names_a_hand_that_grasps_its_handle() {
-    use crate::scene::Scene;
+    use vas_server::scene::Scene;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/grasp_table.toml");
     let scene = Scene::load(&path).unwrap();
     let model = Arc::clone(&scene.hands.first().expect("the scene names a hand").model);

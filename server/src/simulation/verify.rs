@@ -20,6 +20,7 @@ use std::sync::Arc;
 use nalgebra::Isometry3;
 use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOUCHING};
 
+use super::hand_bodies::HandBodies;
 use super::frames::{
     CandidateFrame, ContactAt, Event, VerifiedFrame, VerifiedHand, VerifiedPart, wire_grasp,
 };
@@ -27,43 +28,14 @@ use crate::collision::DopTree;
 use crate::collision::pipeline::{
     CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
 };
-use crate::geometry::{ConvexHull, TriMesh};
-use crate::grasping::{FlexVector, GraspEvent, GraspingHand, HandModel, PartId};
+use crate::geometry::ConvexHull;
+use crate::grasping::{FlexVector, GraspEvent, HandModel, PartId};
 use crate::scene::Scene;
 
 /// How often a frame is checked again after putting objects back before every moved object is
 /// put back (a put-back object is free where it was, so the second pass settles all but chains
 /// of objects pushed into each other).
 const MAX_PASSES: usize = 3;
-
-/// A hand's kinematics and segment meshes, for the verifier.
-#[derive(Clone)]
-pub struct HandBodies {
-    /// The kinematic model.
-    pub model: Arc<HandModel>,
-    /// Each segment's collision mesh, in the segment's frame, in segment order.
-    pub meshes: Vec<TriMesh>,
-    /// The DOP-tree over each mesh, with the scene's orientations (the grasping hand's own).
-    pub trees: Vec<DopTree>,
-}
-
-impl HandBodies {
-    /// The segments of `hand` (whose kinematics are `model`), sharing its meshes' trees.
-    pub fn of(model: Arc<HandModel>, hand: &GraspingHand) -> HandBodies {
-        let geometry = hand.geometry();
-        let segments = 0..model.segments().len();
-        HandBodies {
-            meshes: segments
-                .clone()
-                .map(|segment| geometry.mesh(segment).clone())
-                .collect(),
-            trees: segments
-                .map(|segment| geometry.tree(segment).clone())
-                .collect(),
-            model,
-        }
-    }
-}
 
 /// A hand's segments in the pipeline.
 struct HandObjects {
@@ -527,7 +499,7 @@ mod tests {
 
     use super::*;
     use crate::collision::orientation::DEFAULT_K;
-    use crate::runtime::frames::{ProposedHand, Stamps};
+    use crate::simulation::frames::{ProposedHand, Stamps};
     use crate::scene::PartTree;
 
     fn peg_in_hole() -> Scene {

@@ -2,7 +2,7 @@
 //! offline replay against it, and end-to-end tests can check the live server's output against it.
 //!
 //! The figures follow from the scenes (`configs/`) and the scripts
-//! (`vas_server::scene::script::RecordedScenario`); `tests/fixtures/README.md` lists the same
+//! (`crate::script::RecordedScenario`); `tests/fixtures/README.md` lists the same
 //! table.
 
 use std::fmt;
@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use vas_protocol::{EventKind, GraspType};
-use vas_server::scene::script::RecordedScenario;
+use crate::script::RecordedScenario;
 
 use crate::captured::CapturedMotion;
 

@@ -1,10 +1,10 @@
-//! Writes the recorded scenarios' fixtures: `cargo run -p vas-tests --bin make-fixtures --
+//! Writes the recorded scenarios' fixtures: `cargo run -p vas-testkit --bin make-fixtures --
 //! --out tests/fixtures` from the repository root.
 
 use std::path::PathBuf;
 
 use clap::Parser;
-use vas_tests::scenarios::EXPECTED;
+use vas_testkit::scenarios::EXPECTED;
 
 /// Generates the replay fixtures from the scripted scenarios and their scenes.
 #[derive(Debug, Parser)]
@@ -14,7 +14,7 @@ struct Args {
     #[arg(long)]
     out: PathBuf,
     /// Folder of the scene configs.
-    #[arg(long, default_value_os_t = vas_tests::configs_dir())]
+    #[arg(long, default_value_os_t = vas_testkit::configs_dir())]
     configs: PathBuf,
 }
 
@@ -22,7 +22,7 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     std::fs::create_dir_all(&args.out)?;
     for scenario in &EXPECTED {
-        let path = vas_tests::fixtures::write_fixture(scenario, &args.configs, &args.out)?;
+        let path = vas_testkit::fixtures::write_fixture(scenario, &args.configs, &args.out)?;
         println!("{}: {}", scenario.motion, path.display());
     }
     Ok(())

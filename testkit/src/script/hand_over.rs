@@ -7,8 +7,8 @@
 
 use nalgebra::{Isometry3, Translation3, Vector3};
 
-use super::script::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, fist, open_hand};
-use crate::geometry::{TriMesh, shapes};
+use super::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, fist, open_hand};
+use vas_server::geometry::{TriMesh, shapes};
 
 /// How far from the handle's middle each hand grasps it (metres): the hands' palms, 9 cm wide,
 /// stay 5 cm apart.
@@ -80,7 +80,7 @@ pub fn handle_mesh(triangles: usize) -> TriMesh {
 }
 
 /// The right hand's and the left hand's trajectories, on one time line (both end at the same
-/// time), to be sampled with [`super::script::sample`]. Every key's time is a multiple of 50 ms,
+/// time), to be sampled with [`super::sample`]. Every key's time is a multiple of 50 ms,
 /// so that at a multiple of 20 Hz both give the same number of samples, at the same times.
 pub fn keyframes() -> [Vec<Keyframe>; 2] {
     let script = ScriptedGrasp::PowerOnHandle;

@@ -23,15 +23,16 @@ use vas_protocol::{
 };
 
 use super::control::{self, Session};
-use super::frames::{Change, InputFrame, LoopWork, Restart, Stamps, VerifiedFrame};
 use super::geometry::{ServedGeometry, wire_side};
 use super::inputs::TrackingClock;
 use super::loader::{Loaded, PendingRequest, SceneLoader};
-use super::loops::{Links, Loops};
+use super::loops::{Links, LoopWork, Loops};
 use super::ports::{Ports, Wakeups};
 use super::rendezvous::{ANNOUNCED_WAIT, AwakeWatch, Handoff, Work};
 use super::wakeup::{Waker, WakeupReceiver};
 use super::{RunOptions, RuntimeError, publish_period};
+use crate::simulation::frames::{InputFrame, Stamps, VerifiedFrame};
+use crate::simulation::restart::{Change, Restart};
 
 /// How often the input counters are logged, when they changed.
 const STATS_LOG_PERIOD: Duration = Duration::from_secs(5);

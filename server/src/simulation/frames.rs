@@ -1,19 +1,17 @@
 //! What the loops hand each other: one frame's data at each stage, and the control changes that
 //! travel between frames.
 
-use std::sync::Arc;
-
 use nalgebra::{Isometry3, Point3, Vector3};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGraspType, InputStamp};
 
-use super::interaction::HeldPart;
-use super::rendezvous::{Coalesce, Work};
-use super::verify::HandBodies;
-use crate::grasping::{
-    GraspEvent, GraspType, GraspingHand, HandFrame, HandInput, HandPose, PartId, SegmentContact,
-};
-use crate::scene::Scene;
-use crate::sliding::{Metaphor, Wrench};
+use crate::grasping::{GraspEvent, GraspType, HandFrame, HandInput, PartId, SegmentContact};
+use crate::sliding::{RestReason, Wrench};
+
+/// A frame that can absorb an older one it overtook in a queue between two loops.
+pub trait Coalesce {
+    /// Merges `older` into `self`: `self`'s state stands, `older`'s events go first.
+    fn absorb_older(&mut self, older: Self);
+}
 
 /// The input samples a frame answers: the latest tracker, glove and hand-joints sample when it
 /// was made.
@@ -153,6 +151,33 @@ impl Coalesce for CandidateFrame {
     }
 }
 
+/// A held part after a frame: where the hand holds it and where it is seen.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldPart {
+    /// The part.
+    pub part: PartId,
+    /// The ghost: the pose the hand holds the part at (may penetrate other parts).
+    pub ghost: Isometry3<f64>,
+    /// The visible pose: always free.
+    pub visible: Isometry3<f64>,
+    /// Why the sliding frame ended.
+    pub rest: RestReason,
+    /// The visible hand root: the tracked root moved by the offset from ghost to visible part.
+    pub hand_root: Isometry3<f64>,
+    /// The force and torque pulling the hand towards the visible part.
+    pub wrench: Wrench,
+    /// The obstacles the part touches, by part id, sorted, each with one of its contacts.
+    pub touching: Vec<(PartId, ContactAt)>,
+}
+
+impl HeldPart {
+    /// True when the sliding frame ran out of cycles before the part came to rest: another
+    /// frame towards the same ghost moves it on.
+    pub fn has_sliding_left(&self) -> bool {
+        self.rest == RestReason::CycleLimit
+    }
+}
+
 /// Where two things touch, in the world.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactAt {
@@ -226,85 +251,6 @@ pub struct VerifiedFrame {
     /// Grasps, releases, hand-overs, contact begins and ends of this frame.
     pub events: Vec<Event>,
 }
-
-/// A change of the simulation, sent down the loops between frames.
-pub enum Change {
-    /// Start over on a scene (a new one, or the same one for a reset): every loop rebuilds its
-    /// state from it and takes the parts of the hand it needs.
-    Restart(Box<Restart>),
-    /// Held and later grasped parts follow the hand by this metaphor.
-    Metaphor(Metaphor),
-}
-
-/// What a restart carries.
-pub struct Restart {
-    /// The scene.
-    pub scene: Arc<Scene>,
-    /// The grasping hands, in the scene's order, built and validated by the I/O thread; the
-    /// grasping loop takes them.
-    pub hands: Vec<GraspingHand>,
-    /// The same hands' kinematics and segment meshes, for the collision loop.
-    pub hand_bodies: Vec<HandBodies>,
-    /// Numbers the restarts, so that feedback from before one is ignored after it.
-    pub epoch: u64,
-}
-
-/// Why a scene's hand could not be set up.
-#[derive(Debug, thiserror::Error)]
-pub enum HandSetupError {
-    /// A segment's collision mesh could not be built.
-    #[error("a hand model's segment meshes cannot be built: {0}")]
-    Segments(String),
-}
-
-impl Restart {
-    /// Everything the loops need to start over on `scene`: the hand models it names (loaded and
-    /// validated with it) built, parked flat at the origin.
-    pub fn new(scene: Arc<Scene>, epoch: u64) -> Result<Restart, HandSetupError> {
-        let params = scene.params.grasp();
-        let parked = HandPose {
-            root: Isometry3::identity(),
-            flex: [0.0; FLEX_COUNT],
-        };
-        let mut hands = Vec::with_capacity(scene.hands.len());
-        let mut hand_bodies = Vec::with_capacity(scene.hands.len());
-        for scene_hand in &scene.hands {
-            let model = Arc::clone(&scene_hand.model);
-            let hand = GraspingHand::new(Arc::clone(&model), params, parked)
-                .map_err(|error| HandSetupError::Segments(error.to_string()))?;
-            hand_bodies.push(HandBodies::of(model, &hand));
-            hands.push(hand);
-        }
-        Ok(Restart {
-            scene,
-            hands,
-            hand_bodies,
-            epoch,
-        })
-    }
-
-    /// The change that carries this restart down the loops.
-    pub fn into_change(self) -> Change {
-        Change::Restart(Box::new(self))
-    }
-}
-
-impl std::fmt::Debug for Change {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Change::Restart(restart) => f
-                .debug_struct("Restart")
-                .field("scene", &restart.scene.name)
-                .field("hands", &restart.hands.len())
-                .field("epoch", &restart.epoch)
-                .finish(),
-            Change::Metaphor(metaphor) => f.debug_tuple("Metaphor").field(metaphor).finish(),
-        }
-    }
-}
-
-/// An item for a loop.
-pub type LoopWork<F> = Work<F, Change>;
 
 /// The wire code of an analysed grasp.
 pub fn wire_grasp(grasp: Option<GraspType>) -> WireGraspType {

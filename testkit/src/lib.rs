@@ -1,8 +1,11 @@
-//! Helpers for the end-to-end tests: the real `vas-server` and `vas-client` binaries as child
-//! processes, each test on its own iceoryx2 prefix; and the recorded scenarios: their expected
-//! outcomes ([`scenarios`]), their fixture generator ([`fixtures`]) and their offline replay
-//! through the server's interaction model, checked by parry ([`offline`]). For the viewer's tests
-//! and its benchmark: headless Chromium ([`browser`]) and plain HTTP requests ([`http`]).
+//! What the tests and the benchmarks share, kept out of the server's library: scripted hand
+//! motions and the scripted grasps ([`script`]), B1's tumbling motion ([`tumble`]), a world of
+//! balls for the clasp's tests ([`balls`]); the real `vas-server` and `vas-client` binaries as
+//! child processes, each test on its own iceoryx2 prefix; the recorded scenarios: their expected
+//! outcomes ([`scenarios`]), their fixture generator ([`fixtures`], `make-fixtures`) and their
+//! offline replay through the server's interaction model, checked by parry ([`offline`]). For the
+//! viewer's tests and its benchmark: headless Chromium ([`browser`]) and plain HTTP requests
+//! ([`http`]).
 //!
 //! Finding the binaries: a test of this crate cannot use `env!("CARGO_BIN_EXE_...")` (that only
 //! names binaries of the crate under test), so [`binary`] and [`example`] run `cargo build` for
@@ -343,19 +346,25 @@ pub fn configs_dir() -> PathBuf {
         .join("configs")
 }
 
-/// The directory of the recordings the tests replay.
+/// The directory of the recordings the tests replay (`tests/fixtures/`).
 pub fn fixtures_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("tests")
+        .join("fixtures")
 }
 
+pub mod balls;
 pub mod browser;
 pub mod captured;
 pub mod fixtures;
-pub mod hand_over;
+pub mod hand_models;
 pub mod hands;
 pub mod http;
 pub mod offline;
 pub mod scenarios;
+pub mod script;
+pub mod tumble;
 
 /// A tracker sample stamped now: the hand root at `position` (no rotation), the cart at the
 /// origin.

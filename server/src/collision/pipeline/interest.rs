@@ -5,7 +5,7 @@
 //! object (two parts that touch by design). The matrix knows nothing of scenes: the scene loader
 //! maps its group names and part names onto [`GroupId`]s and [`ObjectId`]s.
 
-use super::pipeline::ObjectId;
+use super::objects::ObjectId;
 use rustc_hash::FxHashSet;
 
 /// A collision group: objects are assigned one each; rules between groups apply to all members.

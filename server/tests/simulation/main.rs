@@ -1,0 +1,3 @@
+//! The simulation step offline, driven by the scripts of `vas-testkit`.
+
+mod interaction;

@@ -1,0 +1,356 @@
+//! The recorded scenarios of the replay fixtures: scripted motions of the right hand placed in
+//! their scenes.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::fmt;
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use vas_server::scene::{Part, Scene};
+
+use super::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, open_hand, pose};
+
+/// A scene lacks a part a recorded scenario moves or aims at.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("scene {scene:?} has no part named {part:?}, which scenario {scenario} needs")]
+pub struct MissingPart {
+    /// The scene's name.
+    pub scene: String,
+    /// The scenario.
+    pub scenario: RecordedScenario,
+    /// The part's name.
+    pub part: &'static str,
+}
+
+/// The recorded scenarios of the replay fixtures: each a scripted motion of the right hand in its
+/// scene, placed from the poses of the scene's parts (so that a scene moved as a whole gives the
+/// same motion relative to its parts).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RecordedScenario {
+    /// A power grasp on a peg standing beside a block, carried over the block's hole, lowered
+    /// into it and released there.
+    PegInsert,
+    /// A power grasp on a pipe lying before an open sheet, pushed along its axis through the
+    /// sheet's hole and released.
+    PipeThroughSheet,
+    /// Thumb and index tips pinch a small pin, lift it and open.
+    PrecisionPinch,
+    /// The flat hand, fingers straight, pushes against the side of a block and withdraws;
+    /// nothing is grasped.
+    Push,
+    /// A power grasp on a handle, then the cart drives and turns while the hand stays still in
+    /// the cart's frame; then the hand opens.
+    NavigateHolding,
+    /// In the demo scene: a power grasp on the peg standing on the table, carried over the
+    /// block, lowered into its hole and released there.
+    DemoPegIntoBlock,
+}
+
+impl fmt::Display for RecordedScenario {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// How far above the block's top the peg's lower end is carried (metres).
+const PEG_CARRY_GAP: f64 = 0.02;
+/// How deep the peg's lower end goes into the hole (metres).
+const PEG_INSERT_DEPTH: f64 = 0.035;
+/// How far the hand strays sideways while the peg goes down the second half of its way into the
+/// hole, before it comes back (metres): more than the hole's clearance, so the peg slides down
+/// along the hole's wall.
+const PEG_DRIFT: f64 = 0.002;
+/// How far the pipe's leading end goes past the sheet (metres).
+const PIPE_PASS_BEYOND: f64 = 0.06;
+/// How far the hand sinks while the pipe makes the second half of its way, before it comes back
+/// (metres): more than the hole's clearance, so the pipe slides along the sheet's rim.
+const PIPE_DRIFT: f64 = 0.004;
+/// How far above its middle the demo's peg is grasped (metres): the fingers stacked along the
+/// upright peg then stay clear of the table, and of the block's top while the peg goes in.
+const DEMO_GRASP_RAISE: f64 = 0.02;
+/// How deep the demo's peg goes into the block's hole (metres).
+const DEMO_INSERT_DEPTH: f64 = 0.01;
+/// The palm's inside face, this far from the hand root along -z (metres).
+const PALM_FACE: f64 = 0.0125;
+/// The palm's middle, this far from the hand root along +y (metres).
+const PALM_MIDDLE: f64 = 0.055;
+/// The pushing palm starts this far from the block (metres).
+const PUSH_GAP: f64 = 0.02;
+/// The push aims this far into the block (metres): the hand must stop at its face.
+const PUSH_DEPTH: f64 = 0.02;
+/// How far the cart drives while the hand holds the handle (metres, in the world).
+const CART_DRIVE: [f64; 3] = [0.3, 0.2, 0.0];
+/// How far the cart turns about its vertical axis meanwhile (degrees).
+const CART_TURN_DEGREES: f64 = 40.0;
+
+impl RecordedScenario {
+    /// Every recorded scenario, in the order of the fixtures' documentation.
+    pub const ALL: [RecordedScenario; 6] = [
+        RecordedScenario::PegInsert,
+        RecordedScenario::PipeThroughSheet,
+        RecordedScenario::PrecisionPinch,
+        RecordedScenario::Push,
+        RecordedScenario::NavigateHolding,
+        RecordedScenario::DemoPegIntoBlock,
+    ];
+
+    /// The scenario's name: its fixture's file stem.
+    pub fn name(self) -> &'static str {
+        match self {
+            RecordedScenario::PegInsert => "peg_insert",
+            RecordedScenario::PipeThroughSheet => "pipe_through_sheet",
+            RecordedScenario::PrecisionPinch => "precision_pinch",
+            RecordedScenario::Push => "push",
+            RecordedScenario::NavigateHolding => "navigate_holding",
+            RecordedScenario::DemoPegIntoBlock => "demo_peg_into_block",
+        }
+    }
+
+    /// What the recording shows, for its header.
+    pub fn description(self) -> &'static str {
+        match self {
+            RecordedScenario::PegInsert => {
+                "power grasp on the peg, carried over the block, lowered 3.5 cm into its hole \
+                 (the hand straying 2 mm sideways on the way down, so the peg slides along the \
+                 hole's wall), released there"
+            }
+            RecordedScenario::PipeThroughSheet => {
+                "power grasp on the pipe, pushed along its axis through the open sheet's hole \
+                 until its end is 6 cm past the sheet (the hand sinking 4 mm on the way, so the \
+                 pipe slides along the hole's rim), released"
+            }
+            RecordedScenario::PrecisionPinch => {
+                "thumb and index tips pinch the pin, lift it 5 cm, and open"
+            }
+            RecordedScenario::Push => {
+                "the flat hand pushes against the block's side, aiming 2 cm into it, and \
+                 withdraws; nothing is grasped"
+            }
+            RecordedScenario::NavigateHolding => {
+                "power grasp on the handle, then the cart drives 36 cm and turns 40 degrees with \
+                 the hand still in the cart's frame, then the hand opens"
+            }
+            RecordedScenario::DemoPegIntoBlock => {
+                "in the demo scene: power grasp on the peg, carried over the block, lowered 1 cm \
+                 into its hole (1 mm of clearance), released there"
+            }
+        }
+    }
+
+    /// The trajectory in `scene`, to be sampled with [`sample`]; the cart starts at the world's
+    /// origin.
+    pub fn keyframes(self, scene: &Scene) -> Result<Vec<Keyframe>, MissingPart> {
+        let part = |name: &'static str| {
+            scene
+                .parts
+                .iter()
+                .find(|p| p.name == name)
+                .ok_or_else(|| MissingPart {
+                    scene: scene.name.clone(),
+                    scenario: self,
+                    part: name,
+                })
+        };
+        Ok(match self {
+            RecordedScenario::PegInsert => peg_insert(part("peg")?, part("block")?),
+            RecordedScenario::PipeThroughSheet => pipe_through_sheet(part("pipe")?, part("sheet")?),
+            RecordedScenario::PrecisionPinch => precision_pinch(part("pin")?),
+            RecordedScenario::Push => push(part("block")?),
+            RecordedScenario::NavigateHolding => navigate_holding(part("handle")?),
+            RecordedScenario::DemoPegIntoBlock => demo_peg_into_block(part("peg")?, part("block")?),
+        })
+    }
+}
+
+/// How far the scripted power grasp's hand presses into its handle (metres, along the palm's
+/// normal): the clasp stops the hand at the handle's surface, so the grasp takes the handle there.
+const POWER_GRASP_PRESS: f64 = 0.005;
+
+/// The scripted power grasp up to the closed fist, placed so that its handle lies where `part`
+/// (a cylinder along its z axis) is; then the hand eases its press, so that the held part, which
+/// follows the tracked hand from the grasp on, stays where it was grasped.
+fn power_grasp_on(part: &Part) -> Vec<Keyframe> {
+    power_grasp_at(&part.pose, HANDLE_RADIUS)
+}
+
+/// The scripted power grasp up to the closed fist on a cylinder of `radius` whose axis and middle
+/// are at `handle` (its z axis), the cart at the world's origin; then the hand eases its press,
+/// so that the held part, which follows the tracked hand from the grasp on, stays where it was
+/// grasped. The hand comes as much closer to the axis as the cylinder is thinner than the
+/// script's handle, so that the palm meets its surface as it meets the handle's.
+pub fn power_grasp_at(handle: &Isometry3<f64>, radius: f64) -> Vec<Keyframe> {
+    let script = ScriptedGrasp::PowerOnHandle;
+    let thinner = Translation3::new(0.0, 0.0, HANDLE_RADIUS - radius);
+    let placement = handle * (thinner * script.part_pose()).inverse();
+    let mut keys: Vec<Keyframe> = script
+        .keyframes()
+        .into_iter()
+        .filter(|k| k.time <= script.milestones().grasped_by)
+        .map(|k| Keyframe {
+            tracker: placement * k.tracker,
+            ..k
+        })
+        .collect();
+    then(&mut keys, 0.1, |k| {
+        k.tracker *= Translation3::new(0.0, 0.0, POWER_GRASP_PRESS);
+    });
+    keys
+}
+
+/// Appends a keyframe `duration` seconds after the last one, changed by `change`.
+fn then(keys: &mut Vec<Keyframe>, duration: f64, change: impl FnOnce(&mut Keyframe)) {
+    let mut key = *keys.last().expect("a trajectory starts with a keyframe");
+    key.time += duration;
+    change(&mut key);
+    keys.push(key);
+}
+
+/// Moves the hand by `offset` in the world (the cart stays at the origin).
+fn shift(offset: Vector3<f64>) -> impl FnOnce(&mut Keyframe) {
+    move |k| k.tracker = Translation3::from(offset) * k.tracker
+}
+
+/// Opens the hand over 0.2 s and holds still for 0.1 s.
+fn open_and_rest(keys: &mut Vec<Keyframe>) {
+    then(keys, 0.2, |k| k.flex = open_hand());
+    then(keys, 0.1, |_| {});
+}
+
+/// The lowest and highest value of the part's vertices along `axis` in the world.
+fn extent(part: &Part, axis: &Vector3<f64>) -> (f64, f64) {
+    part.mesh
+        .vertices()
+        .iter()
+        .map(|v| (part.pose * v).coords.dot(axis))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
+/// How to carry `peg` over `block`'s hole: the lift (up, or down) that puts its lower end
+/// [`PEG_CARRY_GAP`] above the block's top, then the level move over the block's middle.
+fn carry_over(peg: &Part, block: &Part) -> (Vector3<f64>, Vector3<f64>) {
+    let up = Vector3::z();
+    let (peg_bottom, _) = extent(peg, &up);
+    let (_, block_top) = extent(block, &up);
+    let lift = (block_top + PEG_CARRY_GAP - peg_bottom) * up;
+    let mut over = block.pose.translation.vector - peg.pose.translation.vector;
+    over.z = 0.0;
+    (lift, over)
+}
+
+fn peg_insert(peg: &Part, block: &Part) -> Vec<Keyframe> {
+    let up = Vector3::z();
+    let (lift, over) = carry_over(peg, block);
+    let drift = PEG_DRIFT * Vector3::y();
+    let mut keys = power_grasp_on(peg);
+    then(&mut keys, 0.2, shift(lift));
+    then(&mut keys, 0.5, shift(over));
+    then(&mut keys, 0.05, |_| {});
+    then(
+        &mut keys,
+        0.25,
+        shift(-(PEG_CARRY_GAP + PEG_INSERT_DEPTH / 2.0) * up),
+    );
+    then(&mut keys, 0.25, shift(drift - PEG_INSERT_DEPTH / 2.0 * up));
+    then(&mut keys, 0.1, shift(-drift));
+    then(&mut keys, 0.05, |_| {});
+    open_and_rest(&mut keys);
+    keys
+}
+
+fn demo_peg_into_block(peg: &Part, block: &Part) -> Vec<Keyframe> {
+    let up = Vector3::z();
+    let (lift, over) = carry_over(peg, block);
+    // The cylinder's axis taken downwards puts the thumb on top, clear of the table.
+    let handle = Translation3::new(0.0, 0.0, DEMO_GRASP_RAISE)
+        * peg.pose
+        * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI);
+    let (left, right) = extent(peg, &Vector3::x());
+    let mut keys = power_grasp_at(&handle, (right - left) / 2.0);
+    then(&mut keys, 0.3, shift(lift));
+    then(&mut keys, 0.6, shift(over));
+    then(&mut keys, 0.1, |_| {});
+    then(
+        &mut keys,
+        0.4,
+        shift(-(PEG_CARRY_GAP + DEMO_INSERT_DEPTH) * up),
+    );
+    then(&mut keys, 0.05, |_| {});
+    open_and_rest(&mut keys);
+    keys
+}
+
+fn pipe_through_sheet(pipe: &Part, sheet: &Part) -> Vec<Keyframe> {
+    let mut axis = pipe.pose.rotation * Vector3::z();
+    let to_sheet = sheet.pose.translation.vector - pipe.pose.translation.vector;
+    if to_sheet.dot(&axis) < 0.0 {
+        axis = -axis;
+    }
+    let (lo, hi) = extent(pipe, &axis);
+    let half_length = (hi - lo) / 2.0;
+    let travel = to_sheet.dot(&axis) - half_length + PIPE_PASS_BEYOND;
+    let drift = -PIPE_DRIFT * Vector3::z();
+    let mut keys = power_grasp_on(pipe);
+    then(&mut keys, 0.05, |_| {});
+    then(&mut keys, 0.3, shift(travel / 2.0 * axis));
+    then(&mut keys, 0.3, shift(travel / 2.0 * axis + drift));
+    then(&mut keys, 0.1, shift(-drift));
+    then(&mut keys, 0.05, |_| {});
+    open_and_rest(&mut keys);
+    keys
+}
+
+fn precision_pinch(pin: &Part) -> Vec<Keyframe> {
+    // The scripted screw lies along x in its own frame; a scene's cylinder along its z.
+    let script = ScriptedGrasp::TipPinchOfScrew;
+    let hand_to_pin =
+        script.part_pose() * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), FRAC_PI_2);
+    let placement = pin.pose * hand_to_pin.inverse();
+    script
+        .keyframes()
+        .into_iter()
+        .map(|k| Keyframe {
+            tracker: placement * k.tracker,
+            ..k
+        })
+        .collect()
+}
+
+fn push(block: &Part) -> Vec<Keyframe> {
+    // Palm (the hand's -z) towards +x, fingers along +y, thumb down.
+    let palm_towards_x = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -FRAC_PI_2);
+    let (block_near, _) = extent(block, &Vector3::x());
+    let centre = block.pose.translation.vector;
+    let start = pose(
+        [
+            block_near - PUSH_GAP - PALM_FACE,
+            centre.y - PALM_MIDDLE,
+            centre.z,
+        ],
+        palm_towards_x,
+    );
+    let mut keys = vec![Keyframe::new(0.0, start, open_hand())];
+    then(&mut keys, 0.1, |_| {});
+    then(
+        &mut keys,
+        0.4,
+        shift((PUSH_GAP + PUSH_DEPTH) * Vector3::x()),
+    );
+    then(&mut keys, 0.1, |_| {});
+    then(&mut keys, 0.3, |k| k.tracker = start);
+    then(&mut keys, 0.05, |_| {});
+    keys
+}
+
+fn navigate_holding(handle: &Part) -> Vec<Keyframe> {
+    let drive = Isometry3::from_parts(
+        Translation3::from(Vector3::from(CART_DRIVE)),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), CART_TURN_DEGREES.to_radians()),
+    );
+    let mut keys = power_grasp_on(handle);
+    then(&mut keys, 0.05, |_| {});
+    then(&mut keys, 1.0, |k| k.cart = drive);
+    then(&mut keys, 0.1, |_| {});
+    open_and_rest(&mut keys);
+    keys
+}
