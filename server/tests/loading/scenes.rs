@@ -755,10 +755,36 @@ fn scenes_whose_derived_values_would_overflow_are_refused() {
     }
 }
 
-/// A config of one endless line is refused with a message of bounded length: the offending
-/// line is quoted cut short (a 50 MB line once came back whole in the error).
+/// A file that is no config (a password file, a key file) is refused naming the file, where and
+/// what is wrong, and quoting nothing of it: a scene load once answered with its first line.
 #[test]
-fn errors_quote_a_huge_line_cut_short() {
+fn errors_name_the_file_and_quote_none_of_it() {
+    let dir = scratch_dir("foreign_files");
+    for (name, contents) in [
+        (
+            "shadow",
+            "root:$6$hunter2salt$hunter2hash:19000:0:99999:7:::\n",
+        ),
+        ("key", "hunter2-private-key\n"),
+        ("values", "name = \"hunter2\"\nhand = 42\n"),
+    ] {
+        let file = write(&dir, name, contents);
+        let scene_error = Scene::load(&file).expect_err("refused").to_string();
+        let hand_error = vas_server::grasping::HandModel::load(&file)
+            .expect_err("refused")
+            .to_string();
+        for message in [scene_error, hand_error] {
+            assert!(message.contains(&file.display().to_string()), "{message}");
+            assert!(message.contains("line "), "{message}");
+            assert!(!message.contains("hunter2"), "{message}");
+        }
+    }
+}
+
+/// A config of one endless line is refused with a message of bounded length (a 50 MB line once
+/// came back whole in the error).
+#[test]
+fn errors_of_a_huge_line_are_short() {
     let dir = scratch_dir("huge_line");
     let line = format!("name = {}\n", "x".repeat(1_000_000));
     let scene = write(&dir, "scene.toml", &line);

@@ -215,9 +215,8 @@ impl Header {
             let line = line.trim();
             rest = &rest[end + 1..];
             line_number += 1;
-            let bad = |reason: &str| {
-                format!("not a valid PLY file: header line {line_number} ({line:?}): {reason}")
-            };
+            let bad =
+                |reason: &str| format!("not a valid PLY file: header line {line_number}: {reason}");
             let words: Vec<&str> = line.split_ascii_whitespace().collect();
             match words.as_slice() {
                 ["ply"] if line_number == 1 => {}
@@ -344,7 +343,7 @@ impl<'a> Body<'a> {
             let token = self.token(at)?;
             return token
                 .parse::<f64>()
-                .map_err(|_| format!("{}: {token:?} is not a number", at()));
+                .map_err(|_| format!("{}: a word that is not a number", at()));
         }
         let size = scalar.size();
         let bytes = self

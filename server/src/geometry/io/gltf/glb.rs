@@ -22,10 +22,7 @@ pub(super) fn split(bytes: &[u8]) -> Result<Glb<'_>, String> {
         ));
     }
     if &bytes[..4] != MAGIC {
-        return Err(format!(
-            "not a GLB file: it begins with {:?}, not the magic \"glTF\"",
-            String::from_utf8_lossy(&bytes[..4])
-        ));
+        return Err("not a GLB file: its first bytes are not the magic \"glTF\"".to_owned());
     }
     if word(4) != 2 {
         return Err(format!("GLB version {}; vas reads version 2", word(4)));
