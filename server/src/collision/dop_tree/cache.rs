@@ -2,11 +2,13 @@
 //! that a scene started again reads its large parts' trees instead of building them. A file that
 //! cannot be read, or is stale, corrupt or not a valid tree of its mesh, is logged and replaced by
 //! a fresh build, never trusted. Files are written whole under a temporary name and then renamed,
-//! so that servers sharing the folder never read one half-written.
+//! so that servers sharing the folder never read one half-written; the temporary name is random
+//! and created anew, so that a link planted in the folder is never written through.
 
-use std::io::{self, BufReader, BufWriter, Write};
+use std::fs::OpenOptions;
+use std::io::{self, BufReader, BufWriter};
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::persist::{self, BuildKey, Refused};
 use super::tree::DopTree;
@@ -80,27 +82,26 @@ impl TreeCache {
         (tree, Provenance::Built)
     }
 
-    /// Writes `tree` to `path` through a temporary file in the same folder.
+    /// Writes `tree` to `path` through a temporary file in the same folder, of a random name
+    /// and created anew (`O_EXCL`, `O_NOFOLLOW`): a file or link already there, planted or
+    /// left over, is never written through (another name is tried), and the name cannot be
+    /// guessed in advance. The file is removed if the write or the rename fails.
     fn store(&self, path: &Path, key: &BuildKey, tree: &DopTree) -> io::Result<()> {
-        static WRITES: AtomicU64 = AtomicU64::new(0);
-        let temporary = self.folder.join(format!(
-            ".{}.{}.{}.tmp",
-            key.file_name(),
-            std::process::id(),
-            WRITES.fetch_add(1, Ordering::Relaxed)
-        ));
-        let written = std::fs::File::create(&temporary).and_then(|file| {
-            let mut out = BufWriter::new(file);
-            persist::write(tree, key, &mut out)?;
-            out.flush()
-        });
-        match written.and_then(|()| std::fs::rename(&temporary, path)) {
-            Ok(()) => Ok(()),
-            Err(error) => {
-                let _ = std::fs::remove_file(&temporary);
-                Err(error)
-            }
-        }
+        let temporary = tempfile::Builder::new()
+            .prefix(&format!(".{}.", key.file_name()))
+            .suffix(".tmp")
+            .make_in(&self.folder, |name| {
+                OpenOptions::new()
+                    .write(true)
+                    .create_new(true)
+                    .custom_flags(libc::O_NOFOLLOW)
+                    .open(name)
+            })?;
+        let mut out = BufWriter::new(temporary);
+        persist::write(tree, key, &mut out)?;
+        let temporary = out.into_inner().map_err(io::IntoInnerError::into_error)?;
+        temporary.persist(path).map_err(|error| error.error)?;
+        Ok(())
     }
 }
 
@@ -171,6 +172,33 @@ mod tests {
         assert_eq!(provenance, Provenance::Built);
         let names = std::fs::read_dir(cache.folder()).unwrap().count();
         assert_eq!(names, 3, "three trees, no temporary file left");
+    }
+
+    #[test]
+    fn links_planted_at_temporary_names_are_never_written_through() {
+        let folder = tempfile::tempdir().unwrap();
+        let cache = TreeCache::open(&folder.path().join("trees")).unwrap();
+        let target = folder.path().join("target.txt");
+        std::fs::write(&target, "not a tree").unwrap();
+        let mesh = torus(0.3, 24, 12);
+        let set = OrientationSet::default();
+        let name = BuildKey::of(&mesh, &set, DEFAULT_LEAF_SIZE).file_name();
+        // Every name of the old scheme, `.{name}.{pid}.{n}.tmp`, for this process's first writes.
+        for n in 0..1024 {
+            let link = format!(".{name}.{}.{n}.tmp", std::process::id());
+            std::os::unix::fs::symlink(&target, cache.folder().join(link)).unwrap();
+        }
+        let (_, provenance) = cache.tree(&mesh, &set, DEFAULT_LEAF_SIZE);
+        assert_eq!(provenance, Provenance::Built);
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "not a tree");
+        let (_, provenance) = cache.tree(&mesh, &set, DEFAULT_LEAF_SIZE);
+        assert_eq!(provenance, Provenance::Read, "stored beside the links");
+        let names = std::fs::read_dir(cache.folder()).unwrap().count();
+        assert_eq!(
+            names,
+            1024 + 1,
+            "the links and the tree, no temporary file left"
+        );
     }
 
     #[test]
