@@ -181,6 +181,9 @@ pub struct InputStats {
     pub joints_rejected_anatomy: u64,
     /// Hand-joints samples rejected for naming a side the scene has no hand for (or no side).
     pub joints_rejected_no_such_hand: u64,
+    /// Samples of any stream rejected for a timestamp more than
+    /// [`MAX_TIMESTAMP_AHEAD_NS`](crate::MAX_TIMESTAMP_AHEAD_NS) beyond the server's clock.
+    pub rejected_ahead: u64,
 }
 
 impl InputStats {
@@ -191,6 +194,7 @@ impl InputStats {
             + self.tracker_rejected_out_of_range
             + self.glove_rejected_non_finite
             + self.joints_rejected()
+            + self.rejected_ahead
     }
 
     /// Rejected hand-joints samples.
@@ -248,7 +252,7 @@ pub const MAX_HANDS: usize = 2;
 /// One flat type for every request kind: the fields a kind does not use are zero. Every response
 /// carries the scene summary and the input counters, so any request doubles as a status query.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("vas::control::ControlResponse::v5")]
+#[type_name("vas::control::ControlResponse::v6")]
 #[repr(C)]
 pub struct ControlResponse {
     /// A [`ControlStatus`] code.

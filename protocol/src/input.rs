@@ -10,6 +10,7 @@ use iceoryx2::prelude::ZeroCopySend;
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
+use crate::number::Readable;
 use crate::output::InputStamp;
 use crate::pose::WirePose;
 
@@ -28,6 +29,12 @@ pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-3;
 /// cart and the hand combined, a segment placed on the hand) stays finite, also in the single
 /// precision of the collision structures.
 pub const MAX_POSITION_M: f64 = 1e6;
+
+/// How far beyond the server's clock (the system clock, [`wall_clock_ns`](crate::wall_clock_ns))
+/// a sample's timestamp may be: one second, far more than any sender on the machine is ahead.
+/// The server times tracking by the samples' own stamps in lockstep, so that one sample from
+/// the far future would make every later sample look old.
+pub const MAX_TIMESTAMP_AHEAD_NS: u64 = 1_000_000_000;
 
 /// One 6-DOF tracker report: the hand root and the cart (navigation) pose.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
@@ -155,7 +162,7 @@ pub enum InputRejection {
         field: &'static str,
     },
     /// A position coordinate is finite but beyond [`MAX_POSITION_M`].
-    #[error("{field} is beyond {MAX_POSITION_M} m (found {value})")]
+    #[error("{field} is beyond {MAX_POSITION_M} m (found {})", Readable(*value))]
     OutOfRange {
         /// The offending field, `hand.position` or `cart.position`.
         field: &'static str,
@@ -163,12 +170,22 @@ pub enum InputRejection {
         value: f64,
     },
     /// A rotation is not a unit quaternion within [`UNIT_QUATERNION_TOLERANCE`].
-    #[error("{field} is not a unit quaternion (norm {norm})")]
+    #[error("{field} is not a unit quaternion (norm {})", Readable(*norm))]
     NotUnitQuaternion {
         /// The offending field, `hand.rotation` or `cart.rotation`.
         field: &'static str,
         /// The norm received.
         norm: f64,
+    },
+    /// The timestamp is more than [`MAX_TIMESTAMP_AHEAD_NS`] beyond the server's clock.
+    #[error(
+        "timestamp_ns is {} s ahead of the server's clock, more than the {} s allowed",
+        Readable(*ahead_ns as f64 * 1e-9),
+        MAX_TIMESTAMP_AHEAD_NS as f64 * 1e-9
+    )]
+    Ahead {
+        /// How far ahead, in nanoseconds.
+        ahead_ns: u64,
     },
 }
 

@@ -49,6 +49,7 @@ mod clock;
 mod control;
 mod geometry;
 mod input;
+mod number;
 mod output;
 mod pose;
 pub mod services;
@@ -66,9 +67,10 @@ pub use geometry::{
 pub use input::{
     FLEX_COUNT, FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, GloveSample, GloveTarget, HAND_JOINT_COUNT,
     HandJointsSample, InputRejection, JOINT_ORIENTATION_TRACKED, JOINT_ORIENTATION_VALID,
-    JOINT_POSITION_TRACKED, JOINT_POSITION_VALID, JointLocation, MAX_POSITION_M, TrackerSample,
-    TrackerTarget, UNIT_QUATERNION_TOLERANCE,
+    JOINT_POSITION_TRACKED, JOINT_POSITION_VALID, JointLocation, MAX_POSITION_M,
+    MAX_TIMESTAMP_AHEAD_NS, TrackerSample, TrackerTarget, UNIT_QUATERNION_TOLERANCE,
 };
+pub use number::Readable;
 pub use output::{
     EventKind, ForceFrame, GraspType, HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame, HandSegment,
     HandSide, InputStamp, PART_GRASPED, PART_SLIDING, PART_TOUCHING, PartState, PartsFrameHeader,

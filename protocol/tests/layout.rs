@@ -54,14 +54,14 @@ fn control_types_keep_their_layout() {
     assert_layout::<WireText<MAX_PATH_BYTES>>(516, 4);
     assert_layout::<WireText<MAX_STATUS_MESSAGE_BYTES>>(260, 4);
     assert_layout::<ControlRequest>(524, 4);
-    assert_layout::<InputStats>(120, 8);
+    assert_layout::<InputStats>(128, 8);
     assert_layout::<PartDescription>(728, 8);
     assert_layout::<HandDescription>(72, 4);
-    assert_layout::<ControlResponse>(1976, 8);
+    assert_layout::<ControlResponse>(1984, 8);
     assert_eq!(offset_of!(ControlResponse, part), 600);
     assert_eq!(offset_of!(ControlResponse, stats), 1328);
-    assert_eq!(offset_of!(ControlResponse, hands), 1752);
-    assert_eq!(offset_of!(ControlResponse, generation), 1968);
+    assert_eq!(offset_of!(ControlResponse, hands), 1760);
+    assert_eq!(offset_of!(ControlResponse, generation), 1976);
 }
 
 #[test]
@@ -105,7 +105,7 @@ fn payload_type_names_are_versioned() {
             "vas::output::ForceFrame::v2",
             "vas::scene::GeometryHeader::v1",
             "vas::control::ControlRequest::v1",
-            "vas::control::ControlResponse::v5",
+            "vas::control::ControlResponse::v6",
         ]
     );
 }

@@ -14,7 +14,8 @@
 
 use nalgebra::{Isometry3, Point3, Quaternion};
 use vas_protocol::{
-    FLEX_COUNT, HAND_JOINT_COUNT, HandJointsSample, HandSide, InputStamp, JointLocation,
+    FLEX_COUNT, HAND_JOINT_COUNT, HandJointsSample, HandSide, InputRejection, InputStamp,
+    JointLocation,
 };
 
 use super::geometry::wire_side;
@@ -36,6 +37,10 @@ pub enum JointsRejection {
     /// with bones of impossible length.
     #[error(transparent)]
     Joints(JointsError),
+    /// The sample is refused before its joints are read (a timestamp ahead of the server's
+    /// clock).
+    #[error(transparent)]
+    Sample(InputRejection),
 }
 
 /// What an accepted hand-joints sample says.

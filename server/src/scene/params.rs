@@ -111,7 +111,10 @@ fn within(key: &str, value: f64, (min, max): (f64, f64), unit: &str) -> Result<(
     } else {
         Err(Problem {
             key: key.to_owned(),
-            reason: format!("must be between {min} and {max} {unit}, not {value}"),
+            reason: format!(
+                "must be between {min} and {max} {unit}, not {}",
+                vas_protocol::Readable(value)
+            ),
         })
     }
 }

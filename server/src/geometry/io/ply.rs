@@ -373,7 +373,11 @@ impl<'a> Body<'a> {
     fn integer(&mut self, scalar: Scalar, at: &dyn Fn() -> String) -> Result<i64, String> {
         let value = self.number(scalar, at)?;
         if value.fract() != 0.0 || !value.is_finite() || value.abs() > 2f64.powi(53) {
-            return Err(format!("{}: {value} is not a whole number", at()));
+            return Err(format!(
+                "{}: {} is not a whole number",
+                at(),
+                vas_protocol::Readable(value)
+            ));
         }
         Ok(value as i64)
     }

@@ -2,6 +2,7 @@
 //! every root, when the file names no default scene), each with its world transform.
 
 use nalgebra::{Matrix4, Quaternion, Translation3, UnitQuaternion, Vector3};
+use vas_protocol::Readable;
 
 use super::document::{Document, Node};
 
@@ -119,6 +120,7 @@ fn local_transform(node: &Node) -> Result<Matrix4<f64>, String> {
     let quaternion = Quaternion::new(w, x, y, z);
     let norm = quaternion.norm();
     if !(norm.is_finite() && norm > 0.5) {
+        let [x, y, z, w] = [x, y, z, w].map(Readable);
         return Err(format!(
             "its rotation [{x}, {y}, {z}, {w}] is not a unit quaternion"
         ));
