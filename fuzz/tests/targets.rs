@@ -5,7 +5,7 @@
 //!
 //! Seeds live in `tests/__fuzz__/<target>/corpus/seed-*`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Isometry3, Vector3};
@@ -16,16 +16,16 @@ use vas_fuzz::{
 };
 use vas_protocol::{
     ControlRequest, ControlRequestKind, ControlStatus, FLEX_LIMITS_RAD, GloveSample,
-    HandJointsSample, PartDescription, TrackerSample,
+    HandJointsSample, PartDescription, TrackerSample, WireText,
 };
-use vas_server::collision::dop_tree::{DEFAULT_LEAF_SIZE, TreeCache};
+use vas_server::collision::dop_tree::{DEFAULT_LEAF_SIZE, TreeCache, reseal};
 use vas_server::collision::orientation::{DEFAULT_K, SUPPORTED_K};
 use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
 use vas_server::geometry::shapes;
 use vas_server::geometry::{FileLimits, GltfFile, TriMesh, load_mesh, mesh_from_bytes};
 use vas_server::grasping::retarget::{Capture, Retargeter};
 use vas_server::grasping::{HandModel, Side};
-use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer};
+use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer, loaded};
 use vas_server::runtime::inputs::Inputs;
 use vas_server::scene::{Scene, TrackingParams};
 
@@ -370,33 +370,139 @@ fn dop_tree_against_brute_force() {
         });
 }
 
-/// A file of the tree cache (`--tree-cache`), seeded with a valid one: whatever the file holds,
-/// the cache serves a tree of the mesh (the file's if it is valid, else a fresh build) whose
-/// answers are the brute force's.
-#[test]
-fn tree_cache_file() {
-    let mesh = shapes::sphere(0.05, 200);
-    let other = shapes::cuboid(Vector3::new(0.04, 0.04, 0.04), 12);
-    let set = orientations(DEFAULT_K);
-    let folder = std::env::temp_dir().join(format!("vas-fuzz-tree-cache-{}", std::process::id()));
-    let cache = TreeCache::open(&folder).expect("a scratch folder");
-    let file = cache.file_of(&mesh, set, DEFAULT_LEAF_SIZE);
-    let other_tree = DopTree::with_options(&other, set, DEFAULT_LEAF_SIZE);
-    let poses: Vec<_> = [0.0, 0.03, 0.06, 0.1]
-        .map(|x| Isometry3::new(Vector3::new(x, 0.01, 0.0), Vector3::new(0.3, 0.2, 0.1)))
-        .into();
-    let expected: Vec<_> = (poses.iter())
-        .map(|pose| brute_force_pairs(&mesh, &other, pose))
-        .collect();
-    bolero::check!().for_each(|bytes: &[u8]| {
-        std::fs::write(&file, bytes).expect("write the file");
-        let (tree, _) = cache.tree(&mesh, set, DEFAULT_LEAF_SIZE);
+/// A tree cache over a small sphere, its file, and the brute force's answers against a cube
+/// at a few poses: what every tree the cache serves for the sphere must answer.
+struct CachedSphere {
+    mesh: TriMesh,
+    cache: TreeCache,
+    file: PathBuf,
+    other_tree: DopTree,
+    poses: Vec<Isometry3<f64>>,
+    expected: Vec<Vec<[u32; 2]>>,
+}
+
+impl CachedSphere {
+    /// The case of fuzz target `target`, in a scratch folder of its own (the targets run at once
+    /// under `cargo test`).
+    fn new(target: &str) -> CachedSphere {
+        let mesh = shapes::sphere(0.05, 200);
+        let other = shapes::cuboid(Vector3::new(0.04, 0.04, 0.04), 12);
+        let set = orientations(DEFAULT_K);
+        let folder = std::env::temp_dir().join(format!("vas-fuzz-{target}-{}", std::process::id()));
+        let cache = TreeCache::open(&folder).expect("a scratch folder");
+        let file = cache.file_of(&mesh, set, DEFAULT_LEAF_SIZE);
+        let poses: Vec<_> = [0.0, 0.03, 0.06, 0.1]
+            .map(|x| Isometry3::new(Vector3::new(x, 0.01, 0.0), Vector3::new(0.3, 0.2, 0.1)))
+            .into();
+        let expected = (poses.iter())
+            .map(|pose| brute_force_pairs(&mesh, &other, pose))
+            .collect();
+        CachedSphere {
+            other_tree: DopTree::with_options(&other, set, DEFAULT_LEAF_SIZE),
+            mesh,
+            cache,
+            file,
+            poses,
+            expected,
+        }
+    }
+
+    /// The bytes of a valid file of the sphere's tree.
+    fn valid_file(&self) -> Vec<u8> {
+        (self.cache).tree(&self.mesh, orientations(DEFAULT_K), DEFAULT_LEAF_SIZE);
+        std::fs::read(&self.file).expect("the cache stored the tree")
+    }
+
+    /// With `bytes` as the sphere's file, the cache serves a tree (the file's if it is valid,
+    /// else a fresh build) whose answers are the brute force's.
+    fn serves_from(&self, bytes: &[u8]) {
+        std::fs::write(&self.file, bytes).expect("write the file");
+        let set = orientations(DEFAULT_K);
+        let (tree, _) = self.cache.tree(&self.mesh, set, DEFAULT_LEAF_SIZE);
         let mut stats = Default::default();
-        for (pose, expected) in poses.iter().zip(&expected) {
+        for (pose, expected) in self.poses.iter().zip(&self.expected) {
             let mut pairs = Vec::new();
-            tree.intersecting_pairs(&other_tree, pose, &mut pairs, &mut stats);
+            tree.intersecting_pairs(&self.other_tree, pose, &mut pairs, &mut stats);
             pairs.sort_unstable();
             assert_eq!(&pairs, expected, "pairs at {pose}");
+        }
+    }
+}
+
+/// A file of the tree cache (`--tree-cache`), seeded with a valid one: whatever the file holds,
+/// the cache serves a tree of the mesh whose answers are the brute force's.
+#[test]
+fn tree_cache_file() {
+    let case = CachedSphere::new("tree_cache_file");
+    bolero::check!().for_each(|bytes: &[u8]| case.serves_from(bytes));
+}
+
+/// The tree cache's reader past its checksum: a valid file with fuzzed bytes written over it
+/// (at offsets taken modulo its length) and its checksum made to match, so that the damage
+/// reaches the checks of the node counts, the structure, the triangle ids and the bounds, which
+/// raw bytes (`tree_cache_file`) almost never get past the checksum to. Whatever the damage, the
+/// cache serves a tree whose answers are the brute force's.
+#[test]
+fn tree_cache_reader() {
+    let case = CachedSphere::new("tree_cache_reader");
+    let valid = case.valid_file();
+    bolero::check!()
+        .with_type::<Vec<(u32, u8)>>()
+        .for_each(|edits: &Vec<(u32, u8)>| {
+            let mut bytes = valid.clone();
+            for &(at, value) in edits {
+                let length = bytes.len();
+                bytes[at as usize % length] = value;
+            }
+            reseal(&mut bytes);
+            case.serves_from(&bytes);
+        });
+}
+
+/// A `LoadScene` request naming a file of fuzzed bytes, carried out as the server does (the
+/// answer asks for a load, the loader reads the scene, the answer reports it): a scene is
+/// served, or the load is refused with a message that names the file and quotes none of its
+/// lines (issue 50: a load once answered with a file's first line).
+#[test]
+fn control_load_requests() {
+    let folder = std::env::temp_dir().join(format!("vas-fuzz-load-{}", std::process::id()));
+    std::fs::create_dir_all(&folder).expect("a scratch folder");
+    let file = folder.join("fuzz.toml");
+    let path = WireText::new(&file.display().to_string()).expect("a short path");
+    let mut session = Session {
+        scene: Arc::clone(demo_scene()),
+        inputs: Inputs::default(),
+        epoch: 1,
+        catalogue: SceneCatalogue::of(folder.clone()),
+    };
+    bolero::check!().for_each(|bytes: &[u8]| {
+        if let Ok(table) = std::str::from_utf8(bytes)
+            .unwrap_or("")
+            .parse::<toml::Table>()
+            && triangles_asked(&toml::Value::Table(table)) > SCENE_TRIANGLE_BUDGET
+        {
+            return;
+        }
+        std::fs::write(&file, bytes).expect("write the file");
+        let Reply::Load(asked) = answer(&mut session, &ControlRequest::load_scene(path), false)
+        else {
+            panic!("a load-scene request asks for a load");
+        };
+        assert_eq!(asked, file);
+        let outcome = Scene::load(&asked).map_err(|error| error.to_string());
+        let refused = outcome.is_err();
+        let (response, change) = loaded(&mut session, outcome);
+        let status = ControlStatus::try_from(response.status).expect("a known status");
+        assert_eq!(status == ControlStatus::Ok, change.is_some());
+        if !refused {
+            return;
+        }
+        let message = response.message.as_str().expect("UTF-8");
+        assert!(message.contains("fuzz.toml"), "{message}");
+        // Lines long enough that no message of the server's own words holds one by chance.
+        let text = String::from_utf8_lossy(bytes);
+        for line in text.lines().map(str::trim).filter(|line| line.len() >= 32) {
+            assert!(!message.contains(line), "{line:?} quoted in {message:?}");
         }
     });
 }

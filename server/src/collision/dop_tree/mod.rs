@@ -33,6 +33,7 @@ mod traverse;
 mod tree;
 
 pub use cache::{Provenance, TreeCache};
+pub use persist::reseal;
 pub use tree::{DEFAULT_LEAF_SIZE, DopTree};
 
 // The traversal is generic over how B's nodes are re-aligned, so that another method (the

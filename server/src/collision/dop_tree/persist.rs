@@ -144,6 +144,34 @@ pub(super) fn write(tree: &DopTree, key: &BuildKey, out: &mut impl Write) -> io:
     Ok(())
 }
 
+/// Sets the checksum in the header of the tree file `bytes` to that of its arrays, so that
+/// damage to them reaches the checks of the structure and the bounds (fuzzing, tests); false,
+/// and nothing changed, if the arrays the header announces do not fit in `bytes`.
+pub fn reseal(bytes: &mut [u8]) -> bool {
+    let Some((header, arrays)) = bytes.split_at_mut_checked(size_of::<Header>()) else {
+        return false;
+    };
+    let mut sealed: Header = bytemuck::pod_read_unaligned(header);
+    let lengths = [
+        Some(size_of::<Node>() as u64),
+        sealed.key.k.checked_mul(4),
+        Some(size_of::<NodeBox>() as u64),
+    ]
+    .map(|each| (each?.checked_mul(sealed.nodes)).and_then(|length| usize::try_from(length).ok()));
+    let mut parts: [&[u8]; 4] = [&[]; 4];
+    let mut rest: &[u8] = arrays;
+    for (part, length) in parts.iter_mut().zip(lengths) {
+        let Some((head, tail)) = length.and_then(|n| rest.split_at_checked(n)) else {
+            return false;
+        };
+        (*part, rest) = (head, tail);
+    }
+    parts[3] = rest;
+    sealed.checksum = checksum(parts);
+    header.copy_from_slice(bytemuck::bytes_of(&sealed));
+    true
+}
+
 /// Reads the tree of `length` bytes from `input`, if it was built from `key` for `mesh` with
 /// `set` and bounds `mesh`'s triangles. Nothing is allocated before the header and the length
 /// agree with `key`.
