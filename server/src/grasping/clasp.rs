@@ -346,141 +346,221 @@ where
     F: FnMut(SegmentId, &SegmentPlacement) -> ObjectSet,
 {
     let (path, clipped) = Path::new(model, valid, target, params.max_motion);
-    // Per variable, the tolerance in the units of `path.motion` (metres of hand motion).
-    let tolerance: [f64; VARIABLE_COUNT] = std::array::from_fn(|v| {
-        if v == ROOT_VARIABLE {
-            params.root_tolerance
-        } else {
-            params.flex_tolerance * model.lever(v)
-        }
-    });
-    let mut lo = [0.0f64; VARIABLE_COUNT];
-    let mut hi = [1.0f64; VARIABLE_COUNT];
-    let mut flags = [ObjectSet::EMPTY; SEGMENT_COUNT];
-    let mut touching = [ObjectSet::EMPTY; SEGMENT_COUNT];
-    let mut poses = [Isometry3::identity(); SEGMENT_COUNT];
-    let mut steps = 0;
-    let mut checks = 0;
-
+    let mut run = Minimisation::new(model, plan, &path, params);
     let root = VariableSet::single(ROOT_VARIABLE);
     for stage in [root, VariableSet::ALL.without(root)] {
+        run.stage(stage, &mut collides);
+    }
+    let reached_target =
+        !clipped && (0..VARIABLE_COUNT).all(|v| run.lo[v] == 1.0 || path.motion[v] == 0.0);
+    ClaspOutcome {
+        pose: path.at(&run.lo),
+        touching: run.touching,
+        steps: run.steps,
+        checks: run.checks,
+        reached_target,
+    }
+}
+
+/// One clasp minimisation under way: per variable, the valid (`lo`) and colliding (`hi`) end of
+/// its interval along the path; per segment, its collision flags and its touch flags.
+struct Minimisation<'a> {
+    model: &'a HandModel,
+    plan: &'a ClaspPlan,
+    path: &'a Path,
+    params: &'a ClaspParams,
+    /// Per variable, the tolerance in the units of `path.motion` (metres of hand motion).
+    tolerance: [f64; VARIABLE_COUNT],
+    lo: [f64; VARIABLE_COUNT],
+    hi: [f64; VARIABLE_COUNT],
+    flags: [ObjectSet; SEGMENT_COUNT],
+    touching: [ObjectSet; SEGMENT_COUNT],
+    poses: [Isometry3<f64>; SEGMENT_COUNT],
+    steps: u32,
+    checks: u32,
+}
+
+impl<'a> Minimisation<'a> {
+    fn new(
+        model: &'a HandModel,
+        plan: &'a ClaspPlan,
+        path: &'a Path,
+        params: &'a ClaspParams,
+    ) -> Self {
+        Minimisation {
+            model,
+            plan,
+            path,
+            params,
+            tolerance: std::array::from_fn(|v| {
+                if v == ROOT_VARIABLE {
+                    params.root_tolerance
+                } else {
+                    params.flex_tolerance * model.lever(v)
+                }
+            }),
+            lo: [0.0; VARIABLE_COUNT],
+            hi: [1.0; VARIABLE_COUNT],
+            flags: [ObjectSet::EMPTY; SEGMENT_COUNT],
+            touching: [ObjectSet::EMPTY; SEGMENT_COUNT],
+            poses: [Isometry3::identity(); SEGMENT_COUNT],
+            steps: 0,
+            checks: 0,
+        }
+    }
+
+    /// Minimises the variables of `stage` until each is fixed: trial values, a check of the
+    /// segments that move, the intervals narrowed, then what is close enough fixed.
+    fn stage<F>(&mut self, stage: VariableSet, collides: &mut F)
+    where
+        F: FnMut(SegmentId, &SegmentPlacement) -> ObjectSet,
+    {
         // A stage whose variables do not move would only re-check the valid configuration.
-        let mut unfixed = if stage.iter().all(|v| path.motion[v] == 0.0) {
+        let mut unfixed = if stage.iter().all(|v| self.path.motion[v] == 0.0) {
             VariableSet::EMPTY
         } else {
             stage
         };
-        let mut tried = false;
+        let mut first_trial = true;
         let mut near_step_pending = VariableSet::EMPTY;
         let mut stage_steps = 0;
         while !unfixed.is_empty() {
-            // 1. Trial values.
-            let mut trial = lo;
-            for v in unfixed.iter() {
-                trial[v] = if !tried {
-                    1.0
-                } else if near_step_pending.contains(v) {
-                    // Just short of the tolerance past the valid value: if this collides, the
-                    // variable is fixed at once.
-                    let near = lo[v] + 0.9 * tolerance[v] / path.motion[v];
-                    near.min(0.5 * (lo[v] + hi[v]))
-                } else {
-                    0.5 * (lo[v] + hi[v])
-                };
-            }
-            let first_trial = !tried;
-            tried = true;
-            near_step_pending = VariableSet::EMPTY;
-
-            // 2. Check the segments that move.
-            let pose = path.at(&trial);
-            model.forward_kinematics(&pose.flex, &mut poses);
-            // A segment none of whose variables leaves its valid value is where the valid
-            // configuration has it: free, no need to check.
-            let moved = unfixed
-                .iter()
-                .filter(|&v| trial[v] != lo[v] && path.motion[v] > 0.0)
-                .fold(VariableSet::EMPTY, |acc, v| acc.or(VariableSet::single(v)));
-            let flex_valid = !moved.intersects(VariableSet::ALL.without(root));
-            let mut colliding = VariableSet::EMPTY;
-            for &s in &plan.checking_order {
-                // Checking a segment whose moving variables are all blamed already could change
-                // nothing but its own touch flag: skip it (fingertips, checked early, collide
-                // most often and spare their fingers' other segments).
-                let moving = plan.depends[s].and(moved);
-                if moving.is_empty() || moving.without(colliding).is_empty() {
-                    continue;
-                }
-                checks += 1;
-                let hit = collides(
-                    s,
-                    &SegmentPlacement {
-                        root: pose.root,
-                        local: poses[s],
-                        flex_valid,
-                    },
-                );
-                if !hit.is_empty() {
-                    flags[s] = flags[s].union(hit);
-                    colliding = colliding.or(plan.depends[s]);
-                }
-            }
-            colliding = colliding.and(unfixed);
-
-            // 3. Raise the valid end where the new configuration of valid values was checked
-            //    whole.
-            let mut raised = unfixed.without(colliding);
-            loop {
-                let before = raised;
-                for depends in &plan.depends {
-                    let moving = depends.and(unfixed);
-                    if moving.intersects(raised) && !moving.without(raised).is_empty() {
-                        raised = raised.without(moving);
-                    }
-                }
-                if raised == before {
-                    break;
-                }
-            }
-            for v in colliding.iter() {
-                hi[v] = trial[v];
-                if first_trial {
-                    near_step_pending = near_step_pending.or(VariableSet::single(v));
-                }
-            }
-            for v in raised.iter() {
-                lo[v] = trial[v];
-            }
-            steps += 1;
+            let trial = self.trial(unfixed, first_trial, near_step_pending);
+            let colliding = self.check(&trial, unfixed, collides);
+            near_step_pending = self.narrow(&trial, unfixed, colliding, first_trial);
+            first_trial = false;
+            self.steps += 1;
             stage_steps += 1;
-
-            // 4. Fix what is close enough (everything at the cap), fingertips first.
-            let at_cap = stage_steps >= params.max_steps;
-            for &v in &plan.fixing_order {
-                if !unfixed.contains(v)
-                    || !(at_cap || (hi[v] - lo[v]) * path.motion[v] <= tolerance[v])
-                {
-                    continue;
-                }
-                unfixed = unfixed.without(VariableSet::single(v));
-                for s in bits(plan.owners[v]) {
-                    touching[s] = touching[s].union(flags[s]);
-                }
-                for s in bits(plan.dependents[v]) {
-                    flags[s] = ObjectSet::EMPTY;
-                }
-            }
+            unfixed = self.fix(unfixed, stage_steps >= self.params.max_steps);
         }
     }
 
-    let reached_target =
-        !clipped && (0..VARIABLE_COUNT).all(|v| lo[v] == 1.0 || path.motion[v] == 0.0);
-    ClaspOutcome {
-        pose: path.at(&lo),
-        touching,
-        steps,
-        checks,
-        reached_target,
+    /// 1. The trial values: the target first, then the middle of each unfixed interval (just
+    /// short of the tolerance past the valid value, for a variable whose target collided).
+    fn trial(
+        &self,
+        unfixed: VariableSet,
+        first_trial: bool,
+        near_step_pending: VariableSet,
+    ) -> [f64; VARIABLE_COUNT] {
+        let (lo, hi) = (&self.lo, &self.hi);
+        let mut trial = *lo;
+        for v in unfixed.iter() {
+            trial[v] = if first_trial {
+                1.0
+            } else if near_step_pending.contains(v) {
+                // If this collides, the variable is fixed at once.
+                let near = lo[v] + 0.9 * self.tolerance[v] / self.path.motion[v];
+                near.min(0.5 * (lo[v] + hi[v]))
+            } else {
+                0.5 * (lo[v] + hi[v])
+            };
+        }
+        trial
+    }
+
+    /// 2. Checks the segments that move at `trial`; the unfixed variables they blame.
+    fn check<F>(
+        &mut self,
+        trial: &[f64; VARIABLE_COUNT],
+        unfixed: VariableSet,
+        collides: &mut F,
+    ) -> VariableSet
+    where
+        F: FnMut(SegmentId, &SegmentPlacement) -> ObjectSet,
+    {
+        let (plan, path) = (self.plan, self.path);
+        let pose = path.at(trial);
+        self.model.forward_kinematics(&pose.flex, &mut self.poses);
+        // A segment none of whose variables leaves its valid value is where the valid
+        // configuration has it: free, no need to check.
+        let moved = unfixed
+            .iter()
+            .filter(|&v| trial[v] != self.lo[v] && path.motion[v] > 0.0)
+            .fold(VariableSet::EMPTY, |acc, v| acc.or(VariableSet::single(v)));
+        let flex_valid =
+            !moved.intersects(VariableSet::ALL.without(VariableSet::single(ROOT_VARIABLE)));
+        let mut colliding = VariableSet::EMPTY;
+        for &s in &plan.checking_order {
+            // Checking a segment whose moving variables are all blamed already could change
+            // nothing but its own touch flag: skip it (fingertips, checked early, collide
+            // most often and spare their fingers' other segments).
+            let moving = plan.depends[s].and(moved);
+            if moving.is_empty() || moving.without(colliding).is_empty() {
+                continue;
+            }
+            self.checks += 1;
+            let hit = collides(
+                s,
+                &SegmentPlacement {
+                    root: pose.root,
+                    local: self.poses[s],
+                    flex_valid,
+                },
+            );
+            if !hit.is_empty() {
+                self.flags[s] = self.flags[s].union(hit);
+                colliding = colliding.or(plan.depends[s]);
+            }
+        }
+        colliding.and(unfixed)
+    }
+
+    /// 3. Lowers the colliding end of the blamed variables and raises the valid end where the
+    /// new configuration of valid values was checked whole; the variables whose first trial
+    /// collided, for a near step next.
+    fn narrow(
+        &mut self,
+        trial: &[f64; VARIABLE_COUNT],
+        unfixed: VariableSet,
+        colliding: VariableSet,
+        first_trial: bool,
+    ) -> VariableSet {
+        let mut raised = unfixed.without(colliding);
+        loop {
+            let before = raised;
+            for depends in &self.plan.depends {
+                let moving = depends.and(unfixed);
+                if moving.intersects(raised) && !moving.without(raised).is_empty() {
+                    raised = raised.without(moving);
+                }
+            }
+            if raised == before {
+                break;
+            }
+        }
+        let mut near_step_pending = VariableSet::EMPTY;
+        for v in colliding.iter() {
+            self.hi[v] = trial[v];
+            if first_trial {
+                near_step_pending = near_step_pending.or(VariableSet::single(v));
+            }
+        }
+        for v in raised.iter() {
+            self.lo[v] = trial[v];
+        }
+        near_step_pending
+    }
+
+    /// 4. Fixes what is close enough (everything `at_cap`), fingertips first: a fixed variable's
+    /// segments take their collision flags as touch flags, and the segments it carries forget
+    /// theirs. The variables still unfixed.
+    fn fix(&mut self, mut unfixed: VariableSet, at_cap: bool) -> VariableSet {
+        let plan = self.plan;
+        for &v in &plan.fixing_order {
+            let close = (self.hi[v] - self.lo[v]) * self.path.motion[v] <= self.tolerance[v];
+            if !unfixed.contains(v) || !(at_cap || close) {
+                continue;
+            }
+            unfixed = unfixed.without(VariableSet::single(v));
+            for s in bits(plan.owners[v]) {
+                self.touching[s] = self.touching[s].union(self.flags[s]);
+            }
+            for s in bits(plan.dependents[v]) {
+                self.flags[s] = ObjectSet::EMPTY;
+            }
+        }
+        unfixed
     }
 }
 

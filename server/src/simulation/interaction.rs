@@ -31,7 +31,6 @@
 //!
 //! This is plain state, no threads and no ports: the runtime's loops drive it.
 
-
 use nalgebra::Isometry3;
 
 use super::frames::{HandTarget, HeldPart};

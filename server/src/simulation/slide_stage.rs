@@ -34,7 +34,6 @@ struct HeldSlide {
     rest: RestReason,
 }
 
-
 /// The sliding half of a frame: the visible part poses and the held parts' machines.
 pub struct SlideStage {
     parts: Vec<SlidePart>,

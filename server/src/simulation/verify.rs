@@ -20,10 +20,11 @@ use std::sync::Arc;
 use nalgebra::Isometry3;
 use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOUCHING};
 
-use super::hand_bodies::HandBodies;
 use super::frames::{
-    CandidateFrame, ContactAt, Event, VerifiedFrame, VerifiedHand, VerifiedPart, wire_grasp,
+    CandidateFrame, ContactAt, Event, ProposedHand, VerifiedFrame, VerifiedHand, VerifiedPart,
+    wire_grasp,
 };
+use super::hand_bodies::HandBodies;
 use crate::collision::DopTree;
 use crate::collision::pipeline::{
     CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
@@ -345,37 +346,28 @@ impl Verifier {
     /// The frame to publish: verified poses, part flags, grasp, release, hand-over and contact
     /// events (a hand-over after the other hand's grasp that caused it).
     fn frame(&mut self, candidate: CandidateFrame, accepted: &[bool]) -> VerifiedFrame {
-        let mut events = Vec::new();
-        let mut hand_overs = Vec::new();
-        for (hand, proposed) in candidate.hands.iter().enumerate() {
-            for event in &proposed.events {
-                let (kind, grasp, part) = match *event {
-                    GraspEvent::Grasp { part, grasp, .. } => {
-                        (EventKind::Grasp, wire_grasp(Some(grasp)), part)
-                    }
-                    GraspEvent::Release { part, .. } if proposed.handed_over.contains(&part) => {
-                        (EventKind::HandOver, wire_grasp(None), part)
-                    }
-                    GraspEvent::Release { part, .. } => {
-                        (EventKind::Release, wire_grasp(None), part)
-                    }
-                };
-                let event = Event {
-                    kind,
-                    hand,
-                    grasp,
-                    part,
-                    other: HAND_PART_ID,
-                    at: None,
-                };
-                if kind == EventKind::HandOver {
-                    hand_overs.push(event);
-                } else {
-                    events.push(event);
-                }
-            }
+        let mut events = grasp_events(&candidate);
+        let contacts = self.contacts_of(&candidate, accepted);
+        self.contact_events(&contacts, &mut events);
+        self.flag_parts(&candidate, &contacts);
+        self.contacts = contacts;
+        let hands = self.verified_hands(candidate.hands);
+        VerifiedFrame {
+            stamps: candidate.stamps,
+            epoch: candidate.epoch,
+            hands,
+            parts: self.verified.clone(),
+            events,
         }
-        events.append(&mut hand_overs);
+    }
+
+    /// The frame's contacts, by (part, other, hand): each accepted hand's touches, a refused
+    /// hand's last verified ones (it stays where it was), and the held parts' contacts.
+    fn contacts_of(
+        &self,
+        candidate: &CandidateFrame,
+        accepted: &[bool],
+    ) -> BTreeMap<(PartId, u32, usize), ContactAt> {
         let mut contacts = BTreeMap::new();
         for (hand, proposed) in candidate.hands.iter().enumerate() {
             if accepted[hand] || self.hands[hand].objects.is_none() {
@@ -392,7 +384,6 @@ impl Verifier {
                     }
                 }
             } else {
-                // The hand stays where it was verified: so do its contacts.
                 contacts.extend(
                     self.contacts
                         .iter()
@@ -405,12 +396,21 @@ impl Verifier {
                 );
             }
         }
+        contacts
+    }
+
+    /// Appends the contacts that ended since the last frame, then those that began.
+    fn contact_events(
+        &self,
+        contacts: &BTreeMap<(PartId, u32, usize), ContactAt>,
+        events: &mut Vec<Event>,
+    ) {
         for (&(part, other, hand), &at) in &self.contacts {
             if !contacts.contains_key(&(part, other, hand)) {
                 events.push(contact_event(EventKind::ContactEnd, hand, part, other, at));
             }
         }
-        for (&(part, other, hand), &at) in &contacts {
+        for (&(part, other, hand), &at) in contacts {
             if !self.contacts.contains_key(&(part, other, hand)) {
                 events.push(contact_event(
                     EventKind::ContactBegin,
@@ -421,6 +421,14 @@ impl Verifier {
                 ));
             }
         }
+    }
+
+    /// Sets every part's grasped, touching and sliding flags.
+    fn flag_parts(
+        &mut self,
+        candidate: &CandidateFrame,
+        contacts: &BTreeMap<(PartId, u32, usize), ContactAt>,
+    ) {
         let held: Vec<Option<PartId>> = (candidate.hands.iter())
             .map(|hand| hand.held.as_ref().map(|held| held.part))
             .collect();
@@ -440,8 +448,12 @@ impl Verifier {
             } | if touching { PART_TOUCHING } else { 0 }
                 | if sliding { PART_SLIDING } else { 0 };
         }
-        self.contacts = contacts;
-        let hands = (candidate.hands.into_iter())
+    }
+
+    /// Each hand as verified, with the wrench of the part it holds (zero on the frame that
+    /// releases it).
+    fn verified_hands(&mut self, proposed: Vec<ProposedHand>) -> Vec<VerifiedHand> {
+        (proposed.into_iter())
             .zip(&mut self.hands)
             .map(|(proposed, checked)| {
                 let now = proposed.held.as_ref().map(|held| held.part);
@@ -462,15 +474,43 @@ impl Verifier {
                     },
                 }
             })
-            .collect();
-        VerifiedFrame {
-            stamps: candidate.stamps,
-            epoch: candidate.epoch,
-            hands,
-            parts: self.verified.clone(),
-            events,
+            .collect()
+    }
+}
+
+/// The grasps, releases and hand-overs the hands propose, hand-overs last (after the other
+/// hand's grasp that caused them).
+fn grasp_events(candidate: &CandidateFrame) -> Vec<Event> {
+    let mut events = Vec::new();
+    let mut hand_overs = Vec::new();
+    for (hand, proposed) in candidate.hands.iter().enumerate() {
+        for event in &proposed.events {
+            let (kind, grasp, part) = match *event {
+                GraspEvent::Grasp { part, grasp, .. } => {
+                    (EventKind::Grasp, wire_grasp(Some(grasp)), part)
+                }
+                GraspEvent::Release { part, .. } if proposed.handed_over.contains(&part) => {
+                    (EventKind::HandOver, wire_grasp(None), part)
+                }
+                GraspEvent::Release { part, .. } => (EventKind::Release, wire_grasp(None), part),
+            };
+            let event = Event {
+                kind,
+                hand,
+                grasp,
+                part,
+                other: HAND_PART_ID,
+                at: None,
+            };
+            if kind == EventKind::HandOver {
+                hand_overs.push(event);
+            } else {
+                events.push(event);
+            }
         }
     }
+    events.append(&mut hand_overs);
+    events
 }
 
 fn pairs(colliding: &[CollidingPair]) -> BTreeSet<(ObjectId, ObjectId)> {
@@ -489,147 +529,4 @@ fn contact_event(kind: EventKind, hand: usize, part: PartId, other: u32, at: Con
 }
 
 #[cfg(test)]
-mod tests {
-    use std::path::Path;
-
-    use nalgebra::{Translation3, Vector3};
-    use parry3d::query::intersection_test;
-    use parry3d::shape::TriMesh as ParryTriMesh;
-    use vas_protocol::GraspType as WireGraspType;
-
-    use super::*;
-    use crate::collision::orientation::DEFAULT_K;
-    use crate::simulation::frames::{ProposedHand, Stamps};
-    use crate::scene::PartTree;
-
-    fn peg_in_hole() -> Scene {
-        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/peg_in_hole.toml");
-        Scene::load(&file).expect("the scene loads")
-    }
-
-    /// parry's verdict on two parts of `scene` at the given poses, in millimetres (parry's
-    /// touching threshold is absolute).
-    fn oracle_intersects(scene: &Scene, poses: [Isometry3<f64>; 2]) -> bool {
-        let parry = |id: usize| {
-            let mesh = &scene.parts[id].mesh;
-            let vertices = mesh
-                .vertices()
-                .iter()
-                .map(|v| (v * 1000.0).cast::<f32>())
-                .collect();
-            ParryTriMesh::new(vertices, mesh.triangles().to_vec()).expect("a valid mesh")
-        };
-        let scaled = |pose: &Isometry3<f64>| {
-            let mut pose = pose.cast::<f32>();
-            pose.translation.vector *= 1000.0;
-            pose
-        };
-        intersection_test(&scaled(&poses[0]), &parry(0), &scaled(&poses[1]), &parry(1))
-            .expect("mesh pairs are supported")
-    }
-
-    fn candidate(poses: Vec<Isometry3<f64>>) -> CandidateFrame {
-        CandidateFrame {
-            stamps: Stamps::default(),
-            epoch: 1,
-            hands: vec![ProposedHand {
-                root: Isometry3::identity(),
-                flex: [0.0; vas_protocol::FLEX_COUNT],
-                touching: Vec::new(),
-                grasp: WireGraspType::None,
-                tracked: true,
-                joints: Default::default(),
-                held: None,
-                events: Vec::new(),
-                handed_over: Vec::new(),
-            }],
-            part_poses: poses,
-        }
-    }
-
-    #[test]
-    fn moves_into_free_space_pass_and_moves_into_a_part_are_refused() {
-        let scene = peg_in_hole();
-        let mut verifier = Verifier::new(&scene, &[]);
-        let block = scene.parts[0].pose;
-        let start = scene.parts[1].pose;
-        let mut checked = [0, 0];
-        // Straight down into the hole (free: 1 % clearance), then sideways into the wall.
-        for step in 0..40 {
-            let down = Translation3::new(0.0, 0.0, -0.002 * f64::from(step)) * start;
-            let side = Translation3::new(0.0004 * f64::from(step), 0.0, 0.0) * down;
-            for proposed in [down, side] {
-                let before = verifier.part_poses()[1];
-                let (frame, refused) = verifier.verify(candidate(vec![block, proposed]));
-                let collides = oracle_intersects(&scene, [block, proposed]);
-                if collides {
-                    assert_eq!(refused, vec![(1, before)], "step {step}: refused");
-                    assert_eq!(frame.parts[1].pose, before, "step {step}: stays");
-                } else {
-                    assert!(refused.is_empty(), "step {step}: {proposed:?} is free");
-                    assert_eq!(frame.parts[1].pose, proposed);
-                }
-                assert!(!oracle_intersects(&scene, [block, frame.parts[1].pose]));
-                checked[usize::from(collides)] += 1;
-            }
-        }
-        assert!(
-            checked[0] > 10 && checked[1] > 10,
-            "both kinds: {checked:?}"
-        );
-        assert_eq!(verifier.refused_moves(), checked[1] as u64);
-    }
-
-    #[test]
-    fn the_hand_is_refused_inside_a_part_and_kept_where_it_was() {
-        // The default orientations, and another count, which every tree of the scene (the
-        // parts' and the hand's) must then use.
-        for k in [DEFAULT_K, 26] {
-            let mut scene = peg_in_hole();
-            scene.params.dop_orientations = k;
-            for part in &mut scene.parts {
-                part.tree = PartTree::new(k, None);
-            }
-            hand_refused_inside_a_part(&scene);
-        }
-    }
-
-    fn hand_refused_inside_a_part(scene: &Scene) {
-        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/hands/right.toml");
-        let model = Arc::new(HandModel::load(&file).expect("the hand loads"));
-        let hand = crate::grasping::GraspingHand::new(
-            Arc::clone(&model),
-            scene.params.grasp(),
-            crate::grasping::HandPose {
-                root: Isometry3::identity(),
-                flex: [0.0; vas_protocol::FLEX_COUNT],
-            },
-        )
-        .expect("the segments build");
-        let k = scene.params.dop_orientations;
-        assert_eq!(hand.geometry().tree(0).orientations().k(), k);
-        assert_eq!(scene.parts[0].tree().orientations().k(), k);
-        let mut verifier = Verifier::new(scene, &[HandBodies::of(model, &hand)]);
-        // One group more than the scene's, for the hand: the matrix stays tiny (a group id near
-        // u16::MAX once made it 4 GiB of address space).
-        assert_eq!(
-            verifier.pipeline.interest().group_count(),
-            scene.groups.names.len() + 1
-        );
-        let poses: Vec<_> = scene.parts.iter().map(|part| part.pose).collect();
-        let above = Isometry3::from(Translation3::new(0.0, 0.0, 0.3));
-        let mut free = candidate(poses.clone());
-        free.hands[0].root = above;
-        let (frame, _) = verifier.verify(free);
-        assert_eq!(frame.hands[0].root, above, "free space: accepted");
-        let mut inside = candidate(poses);
-        inside.hands[0].root = Isometry3::from(Translation3::from(Vector3::new(0.0, 0.0, 0.025)));
-        let (frame, refused) = verifier.verify(inside);
-        assert!(refused.is_empty(), "no part moved");
-        assert_eq!(
-            frame.hands[0].root, above,
-            "inside the block: the hand stays"
-        );
-        assert_eq!(verifier.refused_moves(), 1);
-    }
-}
+mod tests;

@@ -2,7 +2,12 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 
 use super::*;
+use serde::Deserialize;
+
+use super::resolution::torus_resolution;
 use crate::geometry::adjacency::EdgeAdjacency;
+use crate::geometry::mesh::Point;
+use crate::geometry::weld::weld;
 
 const ALL: [ShapeKind; 8] = ShapeKind::ALL;
 
