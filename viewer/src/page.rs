@@ -7,8 +7,11 @@
 //! ready for one and no backlog builds up in the socket or the browser. A page has at most one
 //! command waiting for the server; another sent meanwhile is answered with a refusal. Hand
 //! joints from a WebXR session go to the link thread as they come (see [`Hub::submit_hand_joints`]).
+//! A page that sends nothing for the idle time-out, not even the pong a browser answers the
+//! viewer's pings with, is gone or hostile: it is closed, so that it does not hold a place.
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use axum::extract::ws::{CloseFrame, Message, WebSocket, close_code};
 use tokio::sync::broadcast::error::RecvError;
@@ -52,21 +55,36 @@ impl InFlight {
 }
 
 /// Why a page's connection ended.
-enum End {
+#[derive(Debug, PartialEq)]
+pub enum End {
     /// The page closed it, or it broke.
     Gone,
+    /// The page sent nothing for the idle time-out.
+    Idle,
     /// The page sent something that is not a command.
     Refused(Refusal),
 }
 
-/// Serves one page until it goes away or is refused.
-pub async fn serve(mut socket: WebSocket, hub: Arc<Hub>) {
+/// Serves one page until it goes away, is refused or stays silent for `idle`.
+pub async fn serve(mut socket: WebSocket, hub: Arc<Hub>, idle: Duration) {
     Stats::count(&hub.stats.pages_served);
     Stats::count(&hub.stats.pages_open);
-    let end = run(&mut socket, &hub).await;
+    let end = run(&mut socket, &hub, idle).await;
     hub.stats
         .pages_open
         .fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
+    if end == End::Idle {
+        Stats::count(&hub.stats.timed_out_pages);
+        tracing::info!(
+            ?idle,
+            "a page sent nothing for the idle time-out; closed it"
+        );
+        let close = CloseFrame {
+            code: close_code::AWAY,
+            reason: "idle: nothing received for the idle time-out".into(),
+        };
+        let _ = socket.send(Message::Close(Some(close))).await;
+    }
     if let End::Refused(refusal) = end {
         Stats::count(match refusal {
             Refusal::Malformed => &hub.stats.refused_malformed,
@@ -87,7 +105,7 @@ pub async fn serve(mut socket: WebSocket, hub: Arc<Hub>) {
     }
 }
 
-async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
+async fn run(socket: &mut WebSocket, hub: &Hub, idle: Duration) -> End {
     let mut scene = hub.scene.subscribe();
     let mut frame = hub.frame.subscribe();
     let mut status = hub.status.subscribe();
@@ -98,6 +116,13 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
     status.mark_changed();
     let mut waiting: Option<(&'static str, tokio::sync::oneshot::Receiver<_>)> = None;
     let mut in_flight = InFlight::default();
+    // Pinged twice per idle time-out: a live browser answers each ping, so only a page that is
+    // gone or does not read stays silent for the whole of it.
+    let mut ping = tokio::time::interval(idle / 2);
+    ping.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    ping.tick().await;
+    let silence = tokio::time::sleep(idle);
+    tokio::pin!(silence);
 
     loop {
         // Biased: the status and scene go before the frames that refer to them, and answers
@@ -143,7 +168,9 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
                 }
             }
             received = socket.recv() => match received {
-                Some(Ok(message)) => match judge(&message) {
+                Some(Ok(message)) => {
+                    silence.as_mut().reset(tokio::time::Instant::now() + idle);
+                    match judge(&message) {
                     Judged::Ack => match in_flight.acked() {
                         Ok(()) => true,
                         Err(refusal) => return End::Refused(refusal),
@@ -163,15 +190,34 @@ async fn run(socket: &mut WebSocket, hub: &Hub) -> End {
                     Judged::Refused(refusal) => return End::Refused(refusal),
                     Judged::Nothing => true,
                     Judged::Closed => return End::Gone,
-                },
+                    }
+                }
                 None => return End::Gone,
-                // A broken frame, or one beyond `MAX_READ_BYTES`.
-                Some(Err(_)) => return End::Refused(Refusal::Malformed),
+                Some(Err(error)) => return ended_by(error),
             },
+            () = &mut silence => return End::Idle,
+            _ = ping.tick() => send_all(socket, Some(Message::Ping(Default::default()))).await,
         };
         if !sent {
             return End::Gone;
         }
+    }
+}
+
+/// Why reading from a page failed: a connection dropped without a close frame (a tab closed, a
+/// network gone) is no bad message; a frame beyond [`MAX_READ_BYTES`] is oversized, and any other
+/// broken frame malformed.
+pub fn ended_by(error: axum::Error) -> End {
+    use tungstenite::error::{Error, ProtocolError};
+    match error.into_inner().downcast::<Error>().map(|error| *error) {
+        Ok(
+            Error::Io(_)
+            | Error::ConnectionClosed
+            | Error::AlreadyClosed
+            | Error::Protocol(ProtocolError::ResetWithoutClosingHandshake),
+        ) => End::Gone,
+        Ok(Error::Capacity(_)) => End::Refused(Refusal::Oversized),
+        _ => End::Refused(Refusal::Malformed),
     }
 }
 

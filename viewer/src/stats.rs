@@ -35,6 +35,19 @@ pub struct Stats {
     pub hand_joints_dropped: AtomicU64,
     /// Hand-joints samples published on the server's hand-joints service.
     pub hand_joints_published: AtomicU64,
+    /// Requests refused because their `Host` names another site (DNS rebinding): 421.
+    pub refused_host: AtomicU64,
+    /// Requests refused for want of the access token (or a session it opened): 401.
+    pub refused_token: AtomicU64,
+    /// Pages refused because as many as the cap were open: 503.
+    pub refused_pages: AtomicU64,
+    /// Connections closed on accepting them because as many as the cap were open.
+    pub refused_connections: AtomicU64,
+    /// Pages closed for sending nothing, not even an answer to a ping, for the idle time-out.
+    pub timed_out_pages: AtomicU64,
+    /// Connections closed for not sending a whole request head (or TLS handshake) within the
+    /// header time-out: half-sent requests, and keep-alive connections left idle.
+    pub timed_out_requests: AtomicU64,
     /// Whether a vas server answers now.
     pub server: AtomicBool,
 }
@@ -59,6 +72,16 @@ impl Stats {
             "dropped": get(&self.hand_joints_dropped),
             "published": get(&self.hand_joints_published),
         });
+        let refused_requests = json!({
+            "host": get(&self.refused_host),
+            "token": get(&self.refused_token),
+            "pages": get(&self.refused_pages),
+            "connections": get(&self.refused_connections),
+        });
+        let timed_out = json!({
+            "pages": get(&self.timed_out_pages),
+            "requests": get(&self.timed_out_requests),
+        });
         json!({
             "server": self.server.load(Ordering::Relaxed),
             "pages_open": get(&self.pages_open),
@@ -69,6 +92,8 @@ impl Stats {
             "frames": get(&self.frames),
             "scenes": get(&self.scenes),
             "hand_joints": hand_joints,
+            "refused_requests": refused_requests,
+            "timed_out": timed_out,
         })
     }
 }

@@ -4,8 +4,12 @@
 //! the browser tests fail and say what to install.
 
 mod harness;
+mod hosts;
+mod limits;
 mod pages;
+mod remote;
 mod replay;
+mod requests;
 mod serving;
 mod websocket;
 mod xr;

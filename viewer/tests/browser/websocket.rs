@@ -1,6 +1,7 @@
 //! The WebSocket: a page that sends something other than a command or an acknowledgement is
 //! closed and counted, while another page keeps getting frames and its commands answered; a page
-//! that does not acknowledge its frames is sent no more of them, and then the newest.
+//! that does not acknowledge its frames is sent no more of them, and then the newest; a page
+//! that drops its connection without a close frame sent no bad message.
 
 use std::time::Instant;
 
@@ -10,7 +11,7 @@ use tokio::net::TcpStream;
 use tokio_tungstenite::tungstenite::Message;
 use tokio_tungstenite::tungstenite::protocol::frame::coding::CloseCode;
 use tokio_tungstenite::{MaybeTlsStream, WebSocketStream};
-use vas_testkit::{PATIENCE, Server, configs_dir};
+use vas_testkit::{PATIENCE, Server, configs_dir, forget_prefix, unique_prefix};
 
 use crate::harness::Viewer;
 
@@ -179,4 +180,26 @@ async fn a_page_that_does_not_acknowledge_is_sent_no_more_frames_then_the_newest
         next >= newest,
         "after the ack the page got frame {next}; the newest it could have had is {newest} or later"
     );
+}
+
+#[tokio::test]
+async fn a_page_that_drops_its_connection_sent_no_bad_message() {
+    let prefix = unique_prefix("viewer_dropped");
+    let viewer = Viewer::start(&prefix);
+    const PAGES: u64 = 20;
+    for _ in 0..PAGES {
+        // Dropped at once: its TCP connection ends without a WebSocket close frame, as when a
+        // tab is killed or the network goes.
+        drop(connect(&viewer).await);
+    }
+    let stats = viewer
+        .wait_for_stats("the pages gone", |stats| {
+            stats["pages_served"] == PAGES && stats["pages_open"] == 0
+        })
+        .await;
+    assert_eq!(stats["refused"]["malformed"], 0, "{stats}");
+    assert_eq!(stats["refused"]["oversized"], 0, "{stats}");
+    drop(viewer);
+    // SAFETY: the viewer, the only process on this prefix, has ended.
+    unsafe { forget_prefix(&prefix) };
 }
