@@ -5,10 +5,10 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, bail};
+use vas_client::Frame;
 use vas_client::recording::InputSample;
-use vas_client::{Client, Frame};
 use vas_protocol::{
-    FLEX_COUNT, GloveSample, HandFrame, HandJointsSample, TrackerSample, WirePose, wall_clock_ns,
+    FLEX_COUNT, GloveSample, HandJointsSample, InputStats, TrackerSample, WirePose, wall_clock_ns,
 };
 
 /// Arguments of `vas-client send-tracker`.
@@ -91,7 +91,8 @@ pub struct HandJointsArgs {
 /// Waiting for the hand frame that answers the sample.
 #[derive(Debug, clap::Args)]
 struct AnswerArgs {
-    /// Wait for the answering hand frame and print it as JSON; fail if none comes in time.
+    /// Wait for the answering hand frame and print it as JSON; fail with the reason if the
+    /// server rejects the sample, or if no frame comes in time.
     #[arg(long)]
     answer: bool,
     /// How long to wait for the answer, in milliseconds.
@@ -108,11 +109,7 @@ pub fn tracker(prefix: Option<&str>, args: &TrackerArgs) -> anyhow::Result<()> {
         cart: pose(&args.cart_position, &args.cart_rotation).context("cart pose")?,
         sensor_id: args.sensor,
     };
-    let mut client = super::connect(prefix)?;
-    client.send_tracker(&sample)?;
-    client.flush_inputs(super::CONTROL_TIMEOUT)?;
-    let stamp = sample.stamp();
-    report_answer(&mut client, &args.answer, |frame| frame.tracker == stamp)
+    send(prefix, &InputSample::Tracker(sample), &args.answer)
 }
 
 /// Sends one glove sample, stamped now.
@@ -126,11 +123,7 @@ pub fn glove(prefix: Option<&str>, args: &GloveArgs) -> anyhow::Result<()> {
         timestamp_ns: wall_clock_ns(),
         flex,
     };
-    let mut client = super::connect(prefix)?;
-    client.send_glove(&sample)?;
-    client.flush_inputs(super::CONTROL_TIMEOUT)?;
-    let stamp = sample.stamp();
-    report_answer(&mut client, &args.answer, |frame| frame.glove == stamp)
+    send(prefix, &InputSample::Glove(sample), &args.answer)
 }
 
 /// Sends one hand-joints sample read from JSON, numbered `--seq` and stamped now.
@@ -152,11 +145,65 @@ pub fn hand_joints(prefix: Option<&str>, args: &HandJointsArgs) -> anyhow::Resul
         ..read
     })
     .with_timestamp(wall_clock_ns());
+    send(prefix, &sample, &args.answer)
+}
+
+/// Sends `sample` and waits until the server has taken it in; with `--answer`, prints the hand
+/// frame that answers it, or fails with its rejection and the reason.
+///
+/// A rejected sample has no answering frame: the server only counts it (`vas-client info`). So
+/// the input counters are read before the send and again by the round trip that flushes it (the
+/// server takes in input before it answers a control request), and a rejection counter that
+/// moved is this sample's. The counters exist for every stream and need nothing new on the
+/// wire, where an event per rejection would let a broken sender flood every reader's events; a
+/// sample rejected for another sender between the two reads would be taken for this one's,
+/// which a script sending one sample at a time does not meet.
+fn send(prefix: Option<&str>, sample: &InputSample, args: &AnswerArgs) -> anyhow::Result<()> {
     let mut client = super::connect(prefix)?;
-    client.send_input(&sample)?;
-    client.flush_inputs(super::CONTROL_TIMEOUT)?;
-    report_answer(&mut client, &args.answer, |frame| {
-        sample.is_answered_by(frame)
+    if !args.answer {
+        client.send_input(sample)?;
+        return Ok(client.flush_inputs(super::CONTROL_TIMEOUT)?);
+    }
+    let before = client.input_stats(super::CONTROL_TIMEOUT)?;
+    client.send_input(sample)?;
+    let after = client.input_stats(super::CONTROL_TIMEOUT)?;
+    if after.rejected() > before.rejected() {
+        bail!(
+            "the server rejected the sample: {}",
+            rejection(sample, &before, &after)?
+        );
+    }
+    let timeout = Duration::from_millis(args.answer_timeout_ms);
+    let frame = client
+        .wait_for_hand_frame(timeout, |frame| sample.is_answered_by(frame), drop)?
+        .with_context(|| format!("no hand frame answered the sample within {timeout:?}"))?;
+    let mut out = std::io::stdout().lock();
+    serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
+    writeln!(out)?;
+    Ok(())
+}
+
+/// Why `sample` was rejected: the protocol's own check of a tracker or glove sample (the one
+/// the server runs) where it fails, and the counters that moved from `before` to `after`.
+fn rejection(
+    sample: &InputSample,
+    before: &InputStats,
+    after: &InputStats,
+) -> anyhow::Result<String> {
+    let (before, after) = (serde_json::to_value(before)?, serde_json::to_value(after)?);
+    let moved: Vec<&str> = (after.as_object().into_iter().flatten())
+        .filter(|(name, count)| name.contains("rejected") && before[name.as_str()] != **count)
+        .map(|(name, _)| name.as_str())
+        .collect();
+    let reason = match sample {
+        InputSample::Tracker(sample) => sample.validate().err().map(|e| e.to_string()),
+        InputSample::Glove(sample) => sample.validate().err().map(|e| e.to_string()),
+        InputSample::HandJoints(_) => None,
+    };
+    let counted = format!("counted in {}", moved.join(", "));
+    Ok(match reason {
+        Some(reason) => format!("{reason} ({counted})"),
+        None => counted,
     })
 }
 
@@ -171,23 +218,4 @@ fn pose(position: &[f64], rotation: &[f64]) -> anyhow::Result<WirePose> {
         );
     };
     Ok(WirePose { position, rotation })
-}
-
-/// With `--answer`, waits for the hand frame `answers` accepts and prints it.
-fn report_answer(
-    client: &mut Client,
-    args: &AnswerArgs,
-    answers: impl Fn(&HandFrame) -> bool,
-) -> anyhow::Result<()> {
-    if !args.answer {
-        return Ok(());
-    }
-    let timeout = Duration::from_millis(args.answer_timeout_ms);
-    let frame = client
-        .wait_for_hand_frame(timeout, answers, drop)?
-        .with_context(|| format!("no hand frame answered the sample within {timeout:?}"))?;
-    let mut out = std::io::stdout().lock();
-    serde_json::to_writer(&mut out, &Frame::Hand(frame))?;
-    writeln!(out)?;
-    Ok(())
 }

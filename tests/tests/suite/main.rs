@@ -8,5 +8,6 @@ mod examples;
 mod faults;
 mod fixtures;
 mod hand_joints;
+mod hostile_input;
 mod replays;
 mod retarget;
