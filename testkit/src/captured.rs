@@ -13,7 +13,7 @@
 //! it. With tracking losses, the samples of the lost stretches say so (no valid joint).
 //!
 //! Samples come at [`RATE_HZ`], numbered from 1 and stamped from zero, their values
-//! [rounded](crate::hands::rounded); two runs write identical files.
+//! [rounded](crate::hands::rounded()); two runs write identical files.
 
 use std::fmt;
 

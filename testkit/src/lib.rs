@@ -217,7 +217,7 @@ impl Spawned {
     }
 
     /// Stops the process with SIGTERM, so that it removes its shared-memory resources, and kills
-    /// it if it does not stop within [`STOP_GRACE`]. (A SIGKILLed node's resources stay until
+    /// it if it does not stop within `STOP_GRACE`. (A SIGKILLed node's resources stay until
     /// another process on its prefix cleans up dead nodes, and a test's prefix is never used
     /// again.)
     pub fn stop(&mut self) {

@@ -19,11 +19,11 @@ use vas_client::recording::{InputSample, Recording};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
 use vas_server::collision::parry_mesh::{ORACLE_SCALE, millimetre_pose, millimetre_trimesh};
 use vas_server::grasping::{GraspEvent, GraspingHand, HandModel, HandPose};
-use vas_server::simulation::frames::{HandTarget, wire_grasp};
 use vas_server::runtime::inputs::Inputs;
-use vas_server::simulation::interaction::Interaction;
-use vas_server::simulation::hand_bodies::HandBodies;
 use vas_server::scene::Scene;
+use vas_server::simulation::frames::{HandTarget, wire_grasp};
+use vas_server::simulation::hand_bodies::HandBodies;
+use vas_server::simulation::interaction::Interaction;
 
 /// A penetration deeper than this (millimetres) is reported: parry computes in `f32`, whose
 /// rounding at these sizes stays well below it.

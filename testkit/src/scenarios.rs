@@ -8,9 +8,9 @@
 use std::fmt;
 use std::path::PathBuf;
 
+use crate::script::RecordedScenario;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use vas_protocol::{EventKind, GraspType};
-use crate::script::RecordedScenario;
 
 use crate::captured::CapturedMotion;
 

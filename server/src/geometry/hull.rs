@@ -70,12 +70,12 @@ impl ConvexHull {
     /// The convex hull of `mesh` (its referenced vertices), or its bounding box if parry cannot
     /// compute a usable hull. Never fails: a valid [`TriMesh`] always has an enclosing polytope.
     ///
-    /// A mesh of many vertices gets the hull of a bounded sample of them ([`hull_candidates`]):
+    /// A mesh of many vertices gets the hull of a bounded sample of them (`hull_candidates`):
     /// the pre-check needs a hull that is tight, not exact, and parry's hull grows faster than
     /// linearly in its input. The vertices the sample misses are covered by the tolerance.
     ///
     /// Cost: linear in the mesh's vertices (the sample, the tolerance's face climb per vertex)
-    /// plus the hull of at most [`SAMPLE_CELLS`] points.
+    /// plus the hull of at most `SAMPLE_CELLS` points.
     pub fn of(mesh: &TriMesh) -> ConvexHull {
         let used = referenced_vertices(mesh);
         let (lo, hi) = bounds(&used);
@@ -296,7 +296,7 @@ fn bounds(points: &[Point]) -> (Point, Point) {
         .fold((points[0], points[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)))
 }
 
-/// The number of direction cells [`hull_candidates`] keeps a point of: a cube map of
+/// The number of direction cells `hull_candidates` keeps a point of: a cube map of
 /// `SAMPLE_CELLS_PER_EDGE²` cells on each of its six faces.
 const SAMPLE_CELLS: usize = 6 * SAMPLE_CELLS_PER_EDGE * SAMPLE_CELLS_PER_EDGE;
 
@@ -328,7 +328,7 @@ impl CubeFrame {
     }
 }
 
-/// The points whose hull is computed: all of them when there are at most [`SAMPLE_CELLS`],
+/// The points whose hull is computed: all of them when there are at most `SAMPLE_CELLS`,
 /// else, for each cell of a cube map of directions in the [`CubeFrame`], the point of that cell
 /// farthest along the cell's central direction. Every hull vertex is then near a sampled one, so
 /// the sampled hull is tight; what it misses, the tolerance covers.

@@ -1,10 +1,10 @@
 //! The runtime: the iceoryx2 ports, the three loops and their rendezvous, clean start and stop.
 //!
-//! This is the only module that knows about threads and IPC. The interaction manager ([`io_thread`])
+//! This is the only module that knows about threads and IPC. The interaction manager (`io_thread`)
 //! owns every port on the main thread: it validates input, hands targets to the grasping loop,
 //! publishes what the collision loop verified and answers control requests. The grasping,
-//! sliding and collision loops ([`loops`]) each run on their own thread and meet only at the
-//! hand-offs of [`rendezvous`].
+//! sliding and collision loops (`loops`) each run on their own thread and meet only at the
+//! hand-offs of `rendezvous`.
 //!
 //! Input services: `vas/input/tracker`, `vas/input/glove` and `vas/input/hand_joints`, each
 //! validated and counted on the I/O thread ([`inputs`]); hand-joints samples are retargeted
@@ -23,11 +23,11 @@ pub mod hand_joints;
 pub mod inputs;
 mod io_thread;
 mod loader;
-pub mod loops;
+pub(crate) mod loops;
 mod ports;
 pub mod priority;
-pub mod rendezvous;
-pub mod wakeup;
+pub(crate) mod rendezvous;
+pub(crate) mod wakeup;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

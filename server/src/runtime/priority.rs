@@ -6,8 +6,8 @@
 //! the threads they start (a scene loader, rayon's tree builders) run at the normal policy, so
 //! seconds of building a loaded scene's trees never hold a core against the renderer.
 //!
-//! A realtime thread that waits awake for an announced frame ([`super::rendezvous`]) yields only
-//! to realtime threads, so for at most [`super::rendezvous::ANNOUNCED_WAIT`] it keeps its core
+//! A realtime thread that waits awake for an announced frame (`rendezvous`) yields only
+//! to realtime threads, so for at most `ANNOUNCED_WAIT` it keeps its core
 //! from the renderer; the kernel's realtime throttling (by default 5 % of every second left to
 //! other threads) bounds any longer run.
 

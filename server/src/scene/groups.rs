@@ -10,7 +10,7 @@ pub struct Groups {
     pub names: Vec<String>,
     /// Pairs of groups that are not of interest, each sorted, as the config lists them.
     pub not_of_interest: Vec<[String; 2]>,
-    /// Pairs of parts (indices into [`Scene::parts`], smaller first) that are not of interest:
+    /// Pairs of parts (indices into [`Scene::parts`](super::Scene::parts), smaller first) that are not of interest:
     /// parts that touch by design, such as a screw and its thread.
     pub parts_not_of_interest: Vec<[usize; 2]>,
 }

@@ -56,7 +56,6 @@ mod part;
 mod part_tree;
 mod summary;
 
-
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 

@@ -65,7 +65,7 @@ impl Part {
 /// a noticeable time.
 const LARGE_PART_TRIANGLES: usize = 100_000;
 
-/// What [`Scene::prepare_parts`] calls to log `parts` of scene `scene` as they become ready,
+/// What [`Scene::prepare_parts`](super::Scene::prepare_parts) calls to log `parts` of scene `scene` as they become ready,
 /// with how many are and the percentage of their triangles done: large parts at info level, so
 /// that a long start-up says where it is, the others at debug level.
 pub fn log_prepared<'a>(scene: &'a str, parts: &[Part]) -> impl Fn(&Part, f64) + Sync + use<'a> {

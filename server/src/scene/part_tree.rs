@@ -23,7 +23,7 @@ pub struct PartTree {
 }
 
 impl PartTree {
-    /// A tree of `orientations` directions (one of [`DOP_ORIENTATION_COUNTS`]), not built yet;
+    /// A tree of `orientations` directions (one of [`DOP_ORIENTATION_COUNTS`](super::DOP_ORIENTATION_COUNTS)), not built yet;
     /// `cache` keeps it once built.
     pub fn new(orientations: usize, cache: Option<Arc<TreeCache>>) -> PartTree {
         PartTree {

@@ -134,7 +134,7 @@ pub struct ProposedHand {
 pub struct CandidateFrame {
     /// The samples it answers.
     pub stamps: Stamps,
-    /// The configuration a [`Change::Restart`] started, so that frames of an older one are known.
+    /// The configuration a [`Change::Restart`](super::restart::Change::Restart) started, so that frames of an older one are known.
     pub epoch: u64,
     /// Every hand, in the scene's order.
     pub hands: Vec<ProposedHand>,

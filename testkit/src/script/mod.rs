@@ -332,7 +332,6 @@ impl ScriptedGrasp {
     }
 }
 
-
 /// A screw along x: a shaft of radius 3 mm and length 16 mm with a head of radius 5 mm, 3 mm
 /// long, at its +x end; about `triangles` triangles, 4 in 7 on the shaft.
 fn screw(triangles: usize) -> TriMesh {

@@ -136,7 +136,7 @@ impl RecordedScenario {
         }
     }
 
-    /// The trajectory in `scene`, to be sampled with [`sample`]; the cart starts at the world's
+    /// The trajectory in `scene`, to be sampled with [`sample`](super::sample); the cart starts at the world's
     /// origin.
     pub fn keyframes(self, scene: &Scene) -> Result<Vec<Keyframe>, MissingPart> {
         let part = |name: &'static str| {

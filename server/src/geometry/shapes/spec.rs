@@ -18,14 +18,14 @@ use crate::geometry::mesh::TriMesh;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum ShapeSpec {
-    /// See [`sphere`].
+    /// See [`sphere`](super::sphere).
     Sphere {
         /// Radius.
         radius: f64,
         /// Approximate triangle count.
         triangles: usize,
     },
-    /// A torus around z; see [`torus`].
+    /// A torus around z; see [`torus`](super::torus).
     Torus {
         /// Distance from the axis to the centre of the tube.
         major_radius: f64,
@@ -34,7 +34,7 @@ pub enum ShapeSpec {
         /// Approximate triangle count.
         triangles: usize,
     },
-    /// See [`hyperboloid`].
+    /// See [`hyperboloid`](super::hyperboloid).
     Hyperboloid {
         /// Radius at the waist (z = 0).
         waist_radius: f64,
@@ -45,14 +45,14 @@ pub enum ShapeSpec {
         /// Approximate triangle count.
         triangles: usize,
     },
-    /// See [`cuboid`].
+    /// See [`cuboid`](super::cuboid).
     Box {
         /// Edge lengths along x, y and z.
         size: [f64; 3],
         /// Approximate triangle count.
         triangles: usize,
     },
-    /// See [`cylinder`].
+    /// See [`cylinder`](super::cylinder).
     Cylinder {
         /// Radius.
         radius: f64,
@@ -61,7 +61,7 @@ pub enum ShapeSpec {
         /// Approximate triangle count.
         triangles: usize,
     },
-    /// See [`box_with_hole`].
+    /// See [`box_with_hole`](super::box_with_hole).
     BoxWithHole {
         /// Edge length of the square cross-section (x and y).
         width: f64,
@@ -72,7 +72,7 @@ pub enum ShapeSpec {
         /// Approximate triangle count.
         triangles: usize,
     },
-    /// See [`sheet_with_hole`].
+    /// See [`sheet_with_hole`](super::sheet_with_hole).
     SheetWithHole {
         /// Edge length of the square sheet.
         width: f64,
@@ -81,7 +81,7 @@ pub enum ShapeSpec {
         /// Approximate triangle count.
         triangles: usize,
     },
-    /// See [`pipe`].
+    /// See [`pipe`](super::pipe).
     Pipe {
         /// Radius of the bore.
         inner_radius: f64,
@@ -105,7 +105,7 @@ pub struct ShapeSpecError {
 }
 
 impl ShapeSpec {
-    /// The unit-size shape of `kind` that [`build`] makes: centred at the origin, fitting in
+    /// The unit-size shape of `kind` that [`build`](super::build) makes: centred at the origin, fitting in
     /// [-1, 1]^3. The torus has the proportions of benchmark B1 (R = 1, r = 0.35) scaled by
     /// 1 / 1.35 to fit.
     pub fn unit(kind: ShapeKind, triangles: usize) -> ShapeSpec {

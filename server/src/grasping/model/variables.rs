@@ -2,7 +2,7 @@
 
 use super::VARIABLE_COUNT;
 
-/// A set of clasp variables as a bit mask: bit `v` is flex value `v`, bit [`ROOT_VARIABLE`] the
+/// A set of clasp variables as a bit mask: bit `v` is flex value `v`, bit [`ROOT_VARIABLE`](super::ROOT_VARIABLE) the
 /// hand root.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct VariableSet(pub u32);

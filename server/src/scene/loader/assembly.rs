@@ -33,9 +33,9 @@ use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Deserialize;
 
 use super::Loader;
+use crate::geometry::{GltfFile, read_mesh_file};
 use crate::scene::file::default_group;
 use crate::scene::{Part, SceneError};
-use crate::geometry::{GltfFile, read_mesh_file};
 
 /// An `[[assemblies]]` table as written.
 #[derive(Debug, Deserialize)]

@@ -151,7 +151,12 @@ impl Loader<'_> {
 
     /// Adds part `name`'s `count` triangles to the scene's, refusing the part (at `key`) if the
     /// scene would have more than its limit.
-    pub(super) fn count_triangles(&mut self, key: &str, name: &str, count: u64) -> Result<(), SceneError> {
+    pub(super) fn count_triangles(
+        &mut self,
+        key: &str,
+        name: &str,
+        count: u64,
+    ) -> Result<(), SceneError> {
         if count > self.triangles_left() {
             return Err(self.too_many_triangles(key, name, count));
         }

@@ -11,15 +11,11 @@ use std::sync::Arc;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
 use super::file::{GroupsFile, PartFile, SceneFile};
-use super::params::Problem;
 use super::groups::sorted_pair;
-use super::{
-    Groups, Part, PartTree, QUATERNION_NORM_TOLERANCE, Scene, SceneError, SceneHand,
-};
+use super::params::Problem;
+use super::{Groups, Part, PartTree, QUATERNION_NORM_TOLERANCE, Scene, SceneError, SceneHand};
 use crate::collision::dop_tree::TreeCache;
-use crate::geometry::{
-    FileLimits, GeometryError, TriMesh, describe_toml_error, read_regular_text,
-};
+use crate::geometry::{FileLimits, GeometryError, TriMesh, describe_toml_error, read_regular_text};
 use crate::grasping::HandModel;
 
 pub(super) use assembly::AssemblyFile;

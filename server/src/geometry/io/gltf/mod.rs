@@ -94,7 +94,7 @@ impl<'a> GltfFile<'a> {
     }
 
     /// The mesh nodes of the scene as parts, in the order of the scene graph's walk (depth
-    /// first, roots and children in order), named by [`parts::unique_names`] (`<file
+    /// first, roots and children in order), named by `unique_names` (`<file
     /// stem>/node<index>` for a node without a name). Nodes whose mesh has no triangle
     /// primitive, and nodes scaled to nothing (a zero scale) or beyond any size, are left out
     /// with a warning.

@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuatern
 /// A mesh node of a glTF file as a part: where it is and what its mesh becomes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GltfPart {
-    /// The node's name, unique within the file: see [`unique_names`].
+    /// The node's name, unique within the file: see `unique_names`.
     pub name: String,
     /// The node's index in the file.
     pub node: usize,
