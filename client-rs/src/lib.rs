@@ -16,10 +16,14 @@
 //! loop {
 //!     if client.wait(Duration::from_millis(100))? == Wake::Ready {
 //!         client.poll()?;
-//!         if let Some(frame) = client.latest_parts() {
-//!             for part in &frame.parts {
-//!                 // draw scene.parts[part.id].mesh_source at part.position, part.rotation
-//!             }
+//!         // The meshes come from the geometry service (a new scene brings a new generation).
+//!         let (Some(geometry), Some(frame)) = (client.geometry(), client.latest_parts()) else {
+//!             continue;
+//!         };
+//!         for part in &frame.parts {
+//!             let Some(mesh) = geometry.parts.get(part.id as usize) else { continue };
+//!             // draw mesh.positions and mesh.triangles at part.position, part.rotation
+//!             let _ = (mesh, part.position, part.rotation);
 //!         }
 //!     }
 //! }
