@@ -25,7 +25,7 @@ use vas_server::geometry::{TriMesh, shapes};
 use vas_server::scene::Scene;
 use vas_server::sliding::world::{Obstacle, PairwiseWorld, SlideBody, WorldStats};
 use vas_server::sliding::{
-    Event, Metaphor, Pose, RestReason, SlideMachine, SlideParams, SlideState, SlideStats,
+    Event, SlidingMetaphor, Pose, RestReason, SlideMachine, SlideParams, SlideState, SlideStats,
 };
 
 /// One obstacle of a scenario.
@@ -221,7 +221,7 @@ fn at(x: f64, y: f64, z: f64) -> Pose {
     Pose::translation(x, y, z)
 }
 
-fn params(metaphor: Metaphor) -> SlideParams {
+fn params(metaphor: SlidingMetaphor) -> SlideParams {
     SlideParams {
         metaphor,
         ..SlideParams::default()
@@ -233,7 +233,7 @@ fn params(metaphor: Metaphor) -> SlideParams {
 pub fn block_scene(
     walls: usize,
     ghost_end: [f64; 3],
-    metaphor: Metaphor,
+    metaphor: SlidingMetaphor,
     triangles: usize,
 ) -> Scenario {
     let slab = |size: [f64; 3]| shapes::cuboid(Vector3::from(size), 200);
@@ -305,7 +305,7 @@ pub fn peg_in_hole(triangles: usize) -> Scenario {
         ],
         start,
         ghosts,
-        params: params(Metaphor::RubberBand),
+        params: params(SlidingMetaphor::RubberBand),
     }
 }
 
@@ -343,7 +343,7 @@ pub fn pipe_through_sheet(triangles: usize, from_below: bool) -> Scenario {
         obstacles: vec![ScenarioObstacle::new(sheet, Pose::identity())],
         start,
         ghosts: straight_path(&start, &end, 200),
-        params: params(Metaphor::RubberBand),
+        params: params(SlidingMetaphor::RubberBand),
     }
 }
 
@@ -396,7 +396,7 @@ pub fn slide_in_unit(allowance: bool) -> Scenario {
         obstacles,
         start,
         ghosts: straight_path(&start, &at(0.0, 0.0, 0.0), 100),
-        params: params(Metaphor::RubberBand),
+        params: params(SlidingMetaphor::RubberBand),
     }
 }
 
@@ -542,7 +542,7 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
     scenarios.push(block_scene(
         1,
         [0.5, 0.2, -0.05],
-        Metaphor::RubberBand,
+        SlidingMetaphor::RubberBand,
         1_200,
     ));
     scenarios.extend(config_scenarios(&args.configs)?);
@@ -637,9 +637,9 @@ mod tests {
     #[test]
     fn a_block_dragged_diagonally_into_a_plane_ends_above_the_ghost_under_every_metaphor() {
         for metaphor in [
-            Metaphor::RubberBand,
-            Metaphor::SpiralSpring,
-            Metaphor::Incremental,
+            SlidingMetaphor::RubberBand,
+            SlidingMetaphor::SpiralSpring,
+            SlidingMetaphor::Incremental,
         ] {
             let result = run_clean(&block_scene(0, [0.2, 0.1, -0.05], metaphor, 1_200));
             assert_ends_near(&result, [0.2, 0.1, 0.05], 3.0 * result.tolerance);
@@ -651,7 +651,7 @@ mod tests {
         let result = run_clean(&block_scene(
             1,
             [0.5, 0.2, -0.05],
-            Metaphor::RubberBand,
+            SlidingMetaphor::RubberBand,
             1_200,
         ));
         assert_ends_near(&result, [0.25, 0.2, 0.05], 4.0 * result.tolerance);
@@ -662,7 +662,7 @@ mod tests {
         let result = run_clean(&block_scene(
             2,
             [0.5, 0.5, -0.05],
-            Metaphor::RubberBand,
+            SlidingMetaphor::RubberBand,
             1_200,
         ));
         assert_ends_near(&result, [0.25, 0.25, 0.05], 5.0 * result.tolerance);

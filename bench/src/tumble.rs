@@ -18,10 +18,10 @@ use serde::Serialize;
 use crate::args::OutputArgs;
 use crate::baselines::{KdopBruteForceTree, ObbTree};
 use crate::report::{LinePlot, Series, Table, TimingSummary, format_number, timer_overhead};
-use vas_testkit::tumble::tumble_pose;
 use vas_server::collision::{DopTree, MeshCollider, OrientationSet, ParryMesh, QueryStats};
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{TriMesh, bounding_sphere_of, parse_mesh_spec};
+use vas_testkit::tumble::tumble_pose;
 
 /// The default distances of B1.
 pub const DEFAULT_DISTANCES: [f64; 9] = [3.0, 2.5, 2.0, 1.75, 1.5, 1.25, 1.0, 0.75, 0.5];

@@ -47,8 +47,8 @@ enum Command {
     /// Choose how grasped parts follow the hand.
     SetMetaphor {
         /// The sliding metaphor.
-        #[arg(value_enum)]
-        metaphor: cli::control::Metaphor,
+        #[arg(value_parser = cli::control::metaphor_parser())]
+        metaphor: vas_client::SlidingMetaphor,
     },
 }
 

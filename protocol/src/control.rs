@@ -48,14 +48,64 @@ wire_code_enum! {
 
 wire_code_enum! {
     /// How a grasped part follows the ghost that the hand holds (the paper's three metaphors).
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    ///
+    /// One spelling everywhere a person reads it: `rubber-band`, `spiral-spring`, `incremental`
+    /// (scene configs, the command line, the viewer's messages and page, logs).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
     pub enum SlidingMetaphor {
         /// The position is pulled towards the ghost; the orientation comes from the simulation.
+        #[default]
         RubberBand = 1,
-        /// Position and orientation are both pulled towards the ghost.
-        RubberBandSpiralSpring = 2,
+        /// Rubber band and spiral spring: position and orientation are both pulled towards the
+        /// ghost.
+        SpiralSpring = 2,
         /// The part repeats the ghost's motion increment.
-        IncrementalMotion = 3,
+        Incremental = 3,
+    }
+}
+
+impl SlidingMetaphor {
+    /// Every metaphor, in code order.
+    pub const ALL: [SlidingMetaphor; 3] = [
+        SlidingMetaphor::RubberBand,
+        SlidingMetaphor::SpiralSpring,
+        SlidingMetaphor::Incremental,
+    ];
+
+    /// The metaphor's name: `rubber-band`, `spiral-spring` or `incremental`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SlidingMetaphor::RubberBand => "rubber-band",
+            SlidingMetaphor::SpiralSpring => "spiral-spring",
+            SlidingMetaphor::Incremental => "incremental",
+        }
+    }
+
+    /// Whether sliding under this metaphor may turn the part.
+    pub fn rotates(self) -> bool {
+        self != SlidingMetaphor::RubberBand
+    }
+}
+
+impl std::fmt::Display for SlidingMetaphor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A name that is no sliding metaphor.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("no sliding metaphor is called {0:?}: rubber-band, spiral-spring or incremental")]
+pub struct UnknownMetaphor(pub String);
+
+impl std::str::FromStr for SlidingMetaphor {
+    type Err = UnknownMetaphor;
+
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        (SlidingMetaphor::ALL.into_iter())
+            .find(|metaphor| metaphor.name() == name)
+            .ok_or_else(|| UnknownMetaphor(name.to_owned()))
     }
 }
 

@@ -59,7 +59,7 @@ pub use clock::wall_clock_ns;
 pub use control::{
     ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, HandDescription,
     InputStats, MAX_HANDS, MAX_NAME_BYTES, MAX_PATH_BYTES, MAX_STATUS_MESSAGE_BYTES, PART_MOVABLE,
-    PartDescription, SlidingMetaphor,
+    PartDescription, SlidingMetaphor, UnknownMetaphor,
 };
 pub use geometry::{
     GeometryDecodeError, GeometryHeader, HandGeometry, MAX_MESH_NAME_BYTES, MeshData, SceneGeometry,

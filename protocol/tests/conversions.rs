@@ -253,10 +253,10 @@ fn control_requests_carry_their_kind_and_argument() {
         Ok(ControlRequestKind::PartInfo)
     );
     assert_eq!(request.argument, 12);
-    let metaphor = ControlRequest::set_metaphor(SlidingMetaphor::IncrementalMotion);
+    let metaphor = ControlRequest::set_metaphor(SlidingMetaphor::Incremental);
     assert_eq!(
         SlidingMetaphor::try_from(metaphor.argument),
-        Ok(SlidingMetaphor::IncrementalMotion)
+        Ok(SlidingMetaphor::Incremental)
     );
     let path = WireText::new("configs/demo.toml").expect("fits");
     assert_eq!(

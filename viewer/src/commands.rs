@@ -29,7 +29,7 @@ pub enum Command {
     /// Slide grasped parts with another metaphor.
     SetMetaphor {
         /// Which one.
-        metaphor: Metaphor,
+        metaphor: SlidingMetaphor,
     },
 }
 
@@ -40,39 +40,6 @@ impl Command {
             Self::Reset {} => "reset",
             Self::LoadScene { .. } => "load_scene",
             Self::SetMetaphor { .. } => "set_metaphor",
-        }
-    }
-}
-
-/// The grasp metaphors as the page names them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Metaphor {
-    /// The rubber band: position pulled to the ghost.
-    RubberBand,
-    /// Rubber band and spiral spring: position and orientation pulled to the ghost.
-    SpiralSpring,
-    /// Incremental motion: the part repeats the ghost's increments.
-    Incremental,
-}
-
-impl Metaphor {
-    /// The metaphor in words, as the page shows it.
-    pub fn words(self) -> &'static str {
-        match self {
-            Self::RubberBand => "rubber band",
-            Self::SpiralSpring => "rubber band and spiral spring",
-            Self::Incremental => "incremental motion",
-        }
-    }
-}
-
-impl From<Metaphor> for SlidingMetaphor {
-    fn from(metaphor: Metaphor) -> Self {
-        match metaphor {
-            Metaphor::RubberBand => Self::RubberBand,
-            Metaphor::SpiralSpring => Self::RubberBandSpiralSpring,
-            Metaphor::Incremental => Self::IncrementalMotion,
         }
     }
 }
@@ -150,9 +117,9 @@ mod tests {
             }
         );
         assert_eq!(
-            command(r#"{"type":"set_metaphor","metaphor":"spiral_spring"}"#),
+            command(r#"{"type":"set_metaphor","metaphor":"spiral-spring"}"#),
             Command::SetMetaphor {
-                metaphor: Metaphor::SpiralSpring
+                metaphor: SlidingMetaphor::SpiralSpring
             }
         );
         assert_eq!(parse(r#"{"type":"ack"}"#), Ok(PageMessage::Ack));

@@ -3,7 +3,7 @@
 //! It waits for a server, passes the scene and every frame and event on to the [`Hub`], carries
 //! out the pages' commands, and publishes a headset's hand joints on the server's hand-joints
 //! service (numbered per side, stamped with the wall-clock time they reached the viewer). In lockstep a server publishes only when it gets input, so
-//! silence alone says nothing; after [`QUIET`] without a frame the link asks the server for its
+//! silence alone says nothing; after `QUIET` without a frame the link asks the server for its
 //! counters, and a server that does not answer is taken as gone: the pages are told "no
 //! server", and the link waits for one on the same prefix and starts afresh (new ports, so that
 //! the new server's scene arrives as a late joiner's history).
@@ -245,8 +245,8 @@ fn carry_out(client: &Client, command: &Command) -> Result<String, String> {
             .reset(CONTROL_TIMEOUT)
             .map(|_| "scene reset".to_owned()),
         Command::SetMetaphor { metaphor } => client
-            .set_metaphor((*metaphor).into(), CONTROL_TIMEOUT)
-            .map(|_| format!("grasp metaphor: {}", metaphor.words())),
+            .set_metaphor(*metaphor, CONTROL_TIMEOUT)
+            .map(|_| format!("sliding metaphor: {metaphor}")),
         Command::LoadScene { name } => client
             .load_named_scene(name, LOAD_TIMEOUT)
             .map(|_| format!("loaded {name}")),

@@ -25,15 +25,12 @@ pub struct LoadSceneArgs {
     name: Option<String>,
 }
 
-/// A sliding metaphor on the command line.
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum Metaphor {
-    /// The part is pulled towards the hand; its orientation comes from the simulation.
-    RubberBand,
-    /// Position and orientation are both pulled towards the hand.
-    SpiralSpring,
-    /// The part repeats the hand's motion increments.
-    Incremental,
+/// The metaphors by their names (`rubber-band`, `spiral-spring`, `incremental`), listed in
+/// `--help` and in the error for any other name.
+pub fn metaphor_parser() -> impl clap::builder::TypedValueParser<Value = SlidingMetaphor> {
+    use clap::builder::{PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(SlidingMetaphor::ALL.map(SlidingMetaphor::name))
+        .map(|name| name.parse().expect("the parser lets only the listed names through"))
 }
 
 /// `vas-client reset`.
@@ -69,13 +66,8 @@ pub fn scenes(prefix: Option<&str>) -> anyhow::Result<()> {
 }
 
 /// `vas-client set-metaphor`.
-pub fn set_metaphor(prefix: Option<&str>, metaphor: Metaphor) -> anyhow::Result<()> {
+pub fn set_metaphor(prefix: Option<&str>, metaphor: SlidingMetaphor) -> anyhow::Result<()> {
     let client = super::connect(prefix)?;
-    let metaphor = match metaphor {
-        Metaphor::RubberBand => SlidingMetaphor::RubberBand,
-        Metaphor::SpiralSpring => SlidingMetaphor::RubberBandSpiralSpring,
-        Metaphor::Incremental => SlidingMetaphor::IncrementalMotion,
-    };
     print(&client.set_metaphor(metaphor, super::CONTROL_TIMEOUT)?)
 }
 

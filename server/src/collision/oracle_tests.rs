@@ -9,9 +9,9 @@ use rand_chacha::ChaCha8Rng;
 
 use super::brute_force::posed_triangles;
 use super::triangle::triangles_intersect;
-use vas_testkit::tumble::tumble_pose;
 use super::*;
 use crate::geometry::{TriMesh, shapes};
+use vas_testkit::tumble::tumble_pose;
 
 /// A soup of `n` random triangles of about `size` inside the box [-1, 1]^3.
 pub(crate) fn random_soup(rng: &mut ChaCha8Rng, n: usize, size: f64) -> TriMesh {

@@ -12,7 +12,6 @@ use vas_protocol::{
 use super::geometry::wire_side;
 use super::inputs::Inputs;
 use crate::scene::{Part, Scene};
-use crate::sliding::Metaphor;
 use crate::simulation::restart::{Change, HandSetupError, Restart};
 
 /// What the I/O thread serves: the scene, the input state and the count of restarts.
@@ -310,14 +309,10 @@ fn scene_path(request: &ControlRequest, loading: bool) -> Result<PathBuf, Refusa
 }
 
 fn set_metaphor(code: u32) -> Result<(PartDescription, Option<Change>), Refusal> {
-    let metaphor = match SlidingMetaphor::try_from(code) {
-        Ok(SlidingMetaphor::RubberBand) => Metaphor::RubberBand,
-        Ok(SlidingMetaphor::RubberBandSpiralSpring) => Metaphor::SpiralSpring,
-        Ok(SlidingMetaphor::IncrementalMotion) => Metaphor::Incremental,
-        Err(unknown) => return Err((ControlStatus::InvalidRequest, unknown.to_string())),
-    };
+    let metaphor = SlidingMetaphor::try_from(code)
+        .map_err(|unknown| (ControlStatus::InvalidRequest, unknown.to_string()))?;
     tracing::info!(%metaphor, "sliding metaphor set on request");
-    Ok((PartDescription::default(), Some(Change::Metaphor(metaphor))))
+    Ok((PartDescription::default(), Some(Change::SlidingMetaphor(metaphor))))
 }
 
 #[cfg(test)]
@@ -498,12 +493,12 @@ mod tests {
     #[test]
     fn reset_restarts_the_same_scene_and_the_metaphor_is_passed_on() {
         let mut session = session();
-        let request = ControlRequest::set_metaphor(SlidingMetaphor::IncrementalMotion);
+        let request = ControlRequest::set_metaphor(SlidingMetaphor::Incremental);
         let (response, change) = now(&mut session, &request);
         assert_eq!(status(&response), ControlStatus::Ok);
         assert!(matches!(
             change,
-            Some(Change::Metaphor(Metaphor::Incremental))
+            Some(Change::SlidingMetaphor(SlidingMetaphor::Incremental))
         ));
         let name = session.scene.name.clone();
         let (response, change) = now(&mut session, &ControlRequest::reset());

@@ -497,7 +497,7 @@ impl SlidingLoop {
                 self.epoch = restart.epoch;
                 self.last = None;
             }
-            Change::Metaphor(metaphor) => {
+            Change::SlidingMetaphor(metaphor) => {
                 if let Some(stage) = &mut self.stage {
                     stage.set_metaphor(*metaphor);
                 }
@@ -653,7 +653,7 @@ impl CollisionLoop {
                     self.epoch = restart.epoch;
                     meter.log();
                 }
-                Received::Work(Work::Control(Change::Metaphor(_))) => {}
+                Received::Work(Work::Control(Change::SlidingMetaphor(_))) => {}
                 Received::Timeout => {}
                 Received::Closed => break,
             }

@@ -9,7 +9,7 @@ use vas_protocol::FLEX_COUNT;
 use super::hand_bodies::HandBodies;
 use crate::grasping::{GraspingHand, HandPose};
 use crate::scene::Scene;
-use crate::sliding::Metaphor;
+use crate::sliding::SlidingMetaphor;
 
 /// A change of the simulation, sent down the loops between frames.
 pub enum Change {
@@ -17,7 +17,7 @@ pub enum Change {
     /// state from it and takes the parts of the hand it needs.
     Restart(Box<Restart>),
     /// Held and later grasped parts follow the hand by this metaphor.
-    Metaphor(Metaphor),
+    SlidingMetaphor(SlidingMetaphor),
 }
 
 /// What a restart carries.
@@ -82,7 +82,7 @@ impl std::fmt::Debug for Change {
                 .field("hands", &restart.hands.len())
                 .field("epoch", &restart.epoch)
                 .finish(),
-            Change::Metaphor(metaphor) => f.debug_tuple("Metaphor").field(metaphor).finish(),
+            Change::SlidingMetaphor(metaphor) => f.debug_tuple("SlidingMetaphor").field(metaphor).finish(),
         }
     }
 }

@@ -11,7 +11,7 @@ use crate::grasping::{GraspEvent, HandFrame, PartId};
 use crate::scene::Part;
 use crate::sliding::force::ForceModel;
 use crate::sliding::world::{Obstacle as SlideObstacle, PairwiseWorld, SlideBody};
-use crate::sliding::{Metaphor, RestReason, SlideMachine, SlideParams};
+use crate::sliding::{SlidingMetaphor, RestReason, SlideMachine, SlideParams};
 
 /// A part as the sliding stage needs it.
 struct SlidePart {
@@ -81,7 +81,7 @@ impl SlideStage {
     }
 
     /// Selects how grasped parts follow the hand, from the next frame on (held parts too).
-    pub fn set_metaphor(&mut self, metaphor: Metaphor) {
+    pub fn set_metaphor(&mut self, metaphor: SlidingMetaphor) {
         self.params.metaphor = metaphor;
         for held in self.held.iter_mut().flatten() {
             held.machine.set_metaphor(metaphor);

@@ -30,7 +30,8 @@ use super::bisection::Bisection;
 use super::contact::{Contact, reduce_contacts};
 use super::direction::{FreeSpace, project_onto_free_space};
 use super::motion::{Motion, Pose, pose_distance};
-use super::params::{Metaphor, SlideParams};
+use super::SlidingMetaphor;
+use super::params::SlideParams;
 use crate::geometry::Point;
 
 /// What the machine needs from collision detection: the grasped part's collision copy tested
@@ -178,7 +179,7 @@ impl Remembered {
 #[derive(Debug, Clone)]
 pub struct SlideMachine {
     params: SlideParams,
-    metaphor: Metaphor,
+    metaphor: SlidingMetaphor,
     tolerance: f64,
     /// The pivot in the part's mesh frame.
     pivot: Vector3<f64>,
@@ -248,7 +249,7 @@ impl SlideMachine {
     }
 
     /// Switches the grasping metaphor at run time; the current frame ends.
-    pub fn set_metaphor(&mut self, metaphor: Metaphor) {
+    pub fn set_metaphor(&mut self, metaphor: SlidingMetaphor) {
         self.metaphor = metaphor;
         self.consumed_ghost = self.ghost;
         self.target = self.visible;
@@ -258,7 +259,7 @@ impl SlideMachine {
     }
 
     /// The current metaphor.
-    pub fn metaphor(&self) -> Metaphor {
+    pub fn metaphor(&self) -> SlidingMetaphor {
         self.metaphor
     }
 
@@ -333,7 +334,7 @@ impl SlideMachine {
         self.stats.frames += 1;
         self.cycles_this_frame = 0;
         self.stalled_cycles = 0;
-        if self.metaphor == Metaphor::Incremental {
+        if self.metaphor == SlidingMetaphor::Incremental {
             // What the last frame did not achieve is dropped: the user is in control again.
             self.target = self.visible;
         }
@@ -381,7 +382,7 @@ impl SlideMachine {
     /// The target of the current frame under the metaphor, refreshed from the newest ghost.
     fn refresh_target(&mut self) {
         if self.ghost_pending {
-            if self.metaphor == Metaphor::Incremental {
+            if self.metaphor == SlidingMetaphor::Incremental {
                 self.target =
                     Motion::between(&self.consumed_ghost, &self.ghost).apply(&self.target);
             }
@@ -389,11 +390,11 @@ impl SlideMachine {
             self.ghost_pending = false;
         }
         match self.metaphor {
-            Metaphor::RubberBand => {
+            SlidingMetaphor::RubberBand => {
                 self.target = Pose::from_parts(self.ghost.translation, self.visible.rotation);
             }
-            Metaphor::SpiralSpring => self.target = self.ghost,
-            Metaphor::Incremental => {}
+            SlidingMetaphor::SpiralSpring => self.target = self.ghost,
+            SlidingMetaphor::Incremental => {}
         }
     }
 

@@ -1,42 +1,10 @@
 //! The sliding parameters a scene sets: metaphor, tolerances, stopping criterion, force output and
 //! slide-in allowances.
 
-use std::fmt;
-
 use serde::{Deserialize, Serialize};
 
 use super::force::ForceParams;
-
-/// How the visible part follows its ghost (the paper's three non-rigid grasping metaphors).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Metaphor {
-    /// The part is pulled towards the ghost's position; its orientation is left as it is.
-    #[default]
-    RubberBand,
-    /// Rubber band and spiral spring: the orientation is pulled towards the ghost's too.
-    SpiralSpring,
-    /// Each motion of the ghost is repeated, as far as it goes, from the part's current pose.
-    Incremental,
-}
-
-impl Metaphor {
-    /// Whether sliding under this metaphor may rotate the part.
-    pub fn rotates(self) -> bool {
-        !matches!(self, Metaphor::RubberBand)
-    }
-}
-
-/// The name as a config spells it (`rubber-band`), for summaries and logs.
-impl fmt::Display for Metaphor {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Metaphor::RubberBand => "rubber-band",
-            Metaphor::SpiralSpring => "spiral-spring",
-            Metaphor::Incremental => "incremental",
-        })
-    }
-}
+use vas_protocol::SlidingMetaphor;
 
 /// A slide-in unit: two parts that may overlap by design, up to `depth` metres.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -53,7 +21,7 @@ pub struct Allowance {
 #[serde(deny_unknown_fields, default)]
 pub struct SlideParams {
     /// The grasping metaphor; it can also be switched at run time.
-    pub metaphor: Metaphor,
+    pub metaphor: SlidingMetaphor,
     /// Contact tolerance in metres: bisection stops when the interval between the free and the
     /// colliding pose is shorter, and a target nearer than it counts as reached. Unset: 1e-4 of
     /// the grasped part's size.
@@ -79,7 +47,7 @@ pub struct SlideParams {
 impl Default for SlideParams {
     fn default() -> Self {
         SlideParams {
-            metaphor: Metaphor::default(),
+            metaphor: SlidingMetaphor::default(),
             contact_tolerance: None,
             lift: 0.5,
             max_iterations: 24,
@@ -201,7 +169,7 @@ mod tests {
         )
         .unwrap();
         params.validate().unwrap();
-        assert_eq!(params.metaphor, Metaphor::Incremental);
+        assert_eq!(params.metaphor, SlidingMetaphor::Incremental);
         assert_eq!(params.tolerance_for(1.0), 1e-5);
         assert_eq!(params.force.stiffness, 800.0);
         assert_eq!(params.force.damping, ForceParams::default().damping);
@@ -229,9 +197,9 @@ mod tests {
     #[test]
     fn metaphor_names_match_the_config_spelling() {
         for metaphor in [
-            Metaphor::RubberBand,
-            Metaphor::SpiralSpring,
-            Metaphor::Incremental,
+            SlidingMetaphor::RubberBand,
+            SlidingMetaphor::SpiralSpring,
+            SlidingMetaphor::Incremental,
         ] {
             let quoted = serde_json::to_string(&metaphor).unwrap();
             assert_eq!(quoted, format!("\"{metaphor}\""));

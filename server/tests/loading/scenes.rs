@@ -10,7 +10,7 @@ use nalgebra::{Point2, Point3};
 use vas_server::geometry::{TriMesh, load_mesh};
 use vas_server::grasping::Side;
 use vas_server::scene::{Scene, SceneError, default_scene_path};
-use vas_server::sliding::Metaphor;
+use vas_server::sliding::SlidingMetaphor;
 
 fn configs() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs")
@@ -273,7 +273,7 @@ movable = true
     assert!(!std::ptr::eq(one.tree(), three.tree()));
     assert_eq!(one.tree().orientations().k(), 26);
     assert_eq!(three.tree().triangle_count(), original.triangles().len());
-    assert_eq!(scene.params.sliding.metaphor, Metaphor::SpiralSpring);
+    assert_eq!(scene.params.sliding.metaphor, SlidingMetaphor::SpiralSpring);
     assert_eq!(scene.params.sliding.contact_tolerance, None, "default kept");
     assert_eq!(
         (scene.rates.publish_hz, scene.rates.collision_hz),

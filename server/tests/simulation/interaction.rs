@@ -19,7 +19,7 @@ use vas_server::simulation::frames::HandTarget;
 use vas_server::simulation::interaction::{Interaction, InteractionFrame};
 use vas_server::sliding::motion::pose_distance;
 use vas_server::sliding::world::SlideBody;
-use vas_server::sliding::{Metaphor, RestReason, SlideParams};
+use vas_server::sliding::{SlidingMetaphor, RestReason, SlideParams};
 use vas_testkit::hand_models::right_hand;
 use vas_testkit::script::{Keyframe, ScriptedGrasp, open_hand, sample};
 
@@ -101,7 +101,7 @@ impl Run {
         )
         .expect("the right hand's segment meshes build");
         let params = SlideParams {
-            metaphor: Metaphor::SpiralSpring,
+            metaphor: SlidingMetaphor::SpiralSpring,
             ..SlideParams::default()
         };
         let interaction = Interaction::new(vec![hand], &parts, params, 1.0 / RATE);
@@ -342,9 +342,9 @@ fn opening_the_hand_leaves_the_handle_at_its_last_valid_pose() {
 /// event, and the left pushes the handle into the block's hole and lets go.
 #[test]
 fn the_left_hand_takes_the_handle_over_from_the_right_and_inserts_it() {
-    use vas_testkit::script::hand_over::{self, MILESTONES};
-    use vas_testkit::script::HANDLE_RADIUS;
     use vas_protocol::EventKind;
+    use vas_testkit::script::HANDLE_RADIUS;
+    use vas_testkit::script::hand_over::{self, MILESTONES};
     const RATE: f64 = 200.0;
     let start = hand_over::handle_pose();
     let parts = vec![

@@ -446,7 +446,7 @@ fn control_requests_load_scenes_reset_and_set_the_metaphor() {
     assert_eq!(info.parts.len(), expected.parts.len());
     client.reset(PATIENCE).expect("reset");
     client
-        .set_metaphor(SlidingMetaphor::RubberBandSpiralSpring, PATIENCE)
+        .set_metaphor(SlidingMetaphor::SpiralSpring, PATIENCE)
         .expect("set metaphor");
 }
 

@@ -6,11 +6,11 @@ use std::fs;
 
 use vas_client::recording::Recording;
 use vas_server::scene::Scene;
-use vas_testkit::script::RecordedScenario;
 use vas_testkit::captured::CapturedMotion;
 use vas_testkit::fixtures::write_fixture;
 use vas_testkit::offline::{self, OfflineRun};
 use vas_testkit::scenarios::{EXPECTED, Motion, Scenario};
+use vas_testkit::script::RecordedScenario;
 
 fn replay(scenario: &Scenario) -> (Scene, OfflineRun) {
     let scene = Scene::load(&scenario.scene_path()).expect("the scenario's scene loads");

@@ -16,8 +16,8 @@ use super::tree::{DopTree, Node};
 use crate::collision::oracle_tests::brute_force_hit;
 use crate::collision::oracle_tests::{random_pose, random_soup, torus};
 use crate::collision::orientation::OrientationSet;
-use vas_testkit::tumble::tumble_pose;
 use crate::collision::{MeshCollider, QueryStats};
+use vas_testkit::tumble::tumble_pose;
 
 /// Every corner of every node's triangles, with the node.
 fn node_corners(tree: &DopTree) -> impl Iterator<Item = (usize, Point3<f64>)> + '_ {

@@ -2,10 +2,10 @@
 //! whose overlap ended, and the pairs of interest whose overlap started, tested by the back end.
 
 use super::back_end::{BackEnd, Tally};
+use super::interest::InterestMatrix;
 use super::objects::Slot;
 use super::{ExactTest, PairEntry, PairKey, is_interesting, ordered};
 use crate::collision::broad_phase::{Aabb, SweepAndPrune};
-use super::interest::InterestMatrix;
 use std::time::{Duration, Instant};
 
 /// The bounding-box stage of a frame, with what it reads: the half of

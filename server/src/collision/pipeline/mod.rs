@@ -35,10 +35,10 @@ pub use report::{CollidingPair, Detail, FrameReport, FrameStats, StageCounters};
 
 use super::QueryStats;
 use super::broad_phase::{Aabb, SweepAndPrune};
-use interest::{InterestKey, InterestMatrix};
 use super::separating_plane::{PlaneSearch, SeparatingPlane};
 use back_end::{BackEnd, Tally};
 use box_stage::{BoxStage, BoxUpdate};
+use interest::{InterestKey, InterestMatrix};
 use nalgebra::Isometry3;
 use objects::{Object, Slot, check_pose, live, models, relative_pose};
 use pool::{PoolWarmer, help_until};

@@ -2,8 +2,8 @@
 //! them, and the checks on what callers pass in.
 
 use super::PairKey;
-use crate::collision::broad_phase::Aabb;
 use super::interest::{GroupId, InterestKey};
+use crate::collision::broad_phase::Aabb;
 use crate::geometry::ConvexHull;
 use nalgebra::{Isometry3, Vector3};
 use std::sync::Arc;

@@ -1,8 +1,8 @@
 //! The pipeline against brute force: every pair of the scene tested exactly, each frame.
 
 use super::back_end::PAIRS_PER_TASK;
-use super::*;
 use super::interest::GroupId;
+use super::*;
 use crate::collision::{DopTree, ParryMesh};
 use crate::geometry::{ConvexHull, Point, TriMesh};
 use nalgebra::{Translation3, UnitQuaternion, Vector3};

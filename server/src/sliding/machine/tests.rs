@@ -61,7 +61,7 @@ fn at(x: f64, y: f64, z: f64) -> Pose {
     Pose::translation(x, y, z)
 }
 
-fn params(metaphor: Metaphor) -> SlideParams {
+fn params(metaphor: SlidingMetaphor) -> SlideParams {
     SlideParams {
         metaphor,
         contact_tolerance: Some(1e-4),
@@ -112,7 +112,7 @@ fn a_block_dragged_into_the_floor_ends_above_the_ghost() {
         &at(0., 0., 1.),
         Vector3::zeros(),
         0.87,
-        params(Metaphor::RubberBand),
+        params(SlidingMetaphor::RubberBand),
     );
     let ghosts: Vec<Pose> = (1..=20)
         .map(|i| at(0.1 * i as f64, 0.05 * i as f64, 1.0 - 0.1 * i as f64))
@@ -135,7 +135,7 @@ fn into_a_crease_the_block_slides_along_it_and_into_a_corner_it_stops() {
         &at(0., 0., 1.),
         Vector3::zeros(),
         0.87,
-        params(Metaphor::RubberBand),
+        params(SlidingMetaphor::RubberBand),
     );
     assert_eq!(drive(&mut machine, &mut world, &ghost), RestReason::Blocked);
     assert_near(&machine.visible_pose(), [0.5, 2.0, 0.5], 3e-4);
@@ -145,7 +145,7 @@ fn into_a_crease_the_block_slides_along_it_and_into_a_corner_it_stops() {
         &at(0., 0., 1.),
         Vector3::zeros(),
         0.87,
-        params(Metaphor::RubberBand),
+        params(SlidingMetaphor::RubberBand),
     );
     assert_eq!(drive(&mut machine, &mut world, &ghost), RestReason::Blocked);
     assert_near(&machine.visible_pose(), [0.5, 0.5, 0.5], 3e-4);
@@ -155,9 +155,9 @@ fn into_a_crease_the_block_slides_along_it_and_into_a_corner_it_stops() {
 fn without_contact_every_metaphor_follows_the_ghost() {
     let ghost = Pose::new(Vector3::new(0.3, -0.2, 0.5), Vector3::new(0.0, 0.4, 0.1));
     for metaphor in [
-        Metaphor::RubberBand,
-        Metaphor::SpiralSpring,
-        Metaphor::Incremental,
+        SlidingMetaphor::RubberBand,
+        SlidingMetaphor::SpiralSpring,
+        SlidingMetaphor::Incremental,
     ] {
         let mut world = HalfSpaces::unit_cube(&[]);
         let mut machine =
@@ -183,7 +183,7 @@ fn the_spiral_spring_tilts_the_block_only_as_far_as_the_floor_allows() {
         &at(0., 0., 0.5005),
         Vector3::zeros(),
         0.87,
-        params(Metaphor::SpiralSpring),
+        params(SlidingMetaphor::SpiralSpring),
     );
     // The ghost tilts about x while staying at the same height: a corner would dig in.
     let ghost = Pose::new(Vector3::new(0.0, 0.0, 0.5005), Vector3::new(0.3, 0.0, 0.0));
@@ -208,7 +208,7 @@ fn incremental_motion_repeats_the_ghost_delta_from_where_the_part_is() {
         &at(0., 0., 1.),
         Vector3::zeros(),
         0.87,
-        params(Metaphor::Incremental),
+        params(SlidingMetaphor::Incremental),
     );
     // Down into the floor: the part stops on it while the ghost goes 1 deeper.
     drive(&mut machine, &mut world, &[at(0.5, 0.0, -0.5)]);
@@ -220,7 +220,7 @@ fn incremental_motion_repeats_the_ghost_delta_from_where_the_part_is() {
     );
     assert_near(&machine.visible_pose(), [0.5, 0.0, 0.8], 3e-4);
     // Switching to the rubber band pulls it back down to the ghost's projection.
-    machine.set_metaphor(Metaphor::RubberBand);
+    machine.set_metaphor(SlidingMetaphor::RubberBand);
     drive(&mut machine, &mut world, &[at(0.5, 0.0, -0.2)]);
     assert_near(&machine.visible_pose(), [0.5, 0.0, 0.5], 3e-4);
 }
@@ -232,7 +232,7 @@ fn a_ghost_pushed_into_the_floor_gives_the_hand_an_upward_force() {
         &at(0., 0., 1.),
         Vector3::zeros(),
         0.87,
-        params(Metaphor::RubberBand),
+        params(SlidingMetaphor::RubberBand),
     );
     let mut force = crate::sliding::ForceModel::new(crate::sliding::ForceParams::default());
     machine.set_ghost(&at(0.0, 0.0, 0.49));
@@ -265,7 +265,7 @@ fn a_contact_left_behind_is_forgotten_at_the_next_frame() {
         &at(0., 0., 1.),
         Vector3::zeros(),
         0.87,
-        params(Metaphor::RubberBand),
+        params(SlidingMetaphor::RubberBand),
     );
     drive(&mut machine, &mut world, &[at(0.5, 0.0, -1.0)]);
     assert!(machine.contacts().count() > 0);
