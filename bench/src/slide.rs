@@ -25,7 +25,7 @@ use vas_server::geometry::{TriMesh, shapes};
 use vas_server::scene::Scene;
 use vas_server::sliding::world::{Obstacle, PairwiseWorld, SlideBody, WorldStats};
 use vas_server::sliding::{
-    Event, SlidingMetaphor, Pose, RestReason, SlideMachine, SlideParams, SlideState, SlideStats,
+    Event, Pose, RestReason, SlideMachine, SlideParams, SlideState, SlideStats, SlidingMetaphor,
 };
 
 /// One obstacle of a scenario.

@@ -6,10 +6,10 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use nalgebra::{Isometry3, Vector3};
+use vas_protocol::HandSide;
 use vas_protocol::{
     FLEX_COUNT, GloveSample, HandJointsSample, TrackerSample, WirePose, wall_clock_ns,
 };
-use vas_server::grasping::Side;
 use vas_server::grasping::retarget::{Capture, HandJoints, Joint};
 use vas_server::runtime::hand_joints::wire_joints;
 
@@ -62,7 +62,7 @@ fn hands() -> &'static [HandJoints; 2] {
     HANDS.get_or_init(|| {
         let capture = Capture::from_json(Path::new("webxr_relaxed.json"), RELAXED)
             .expect("the built-in capture is a hand");
-        [Side::Right, Side::Left].map(|side| {
+        [HandSide::Right, HandSide::Left].map(|side| {
             let joints = capture.joints_of(side);
             let wrist = joints.joints[Joint::Wrist.index()].position.coords;
             joints.transformed(&Isometry3::translation(-wrist.x, -wrist.y, -wrist.z))
@@ -111,12 +111,12 @@ mod tests {
         for seq in (1..4_000).step_by(333) {
             let sample = hand_joints(seq);
             let (side, expected) = if !seq.is_multiple_of(2) {
-                (Side::Right, HandSide::Right)
+                (HandSide::Right, HandSide::Right)
             } else {
-                (Side::Left, HandSide::Left)
+                (HandSide::Left, HandSide::Left)
             };
             assert_eq!(sample.side, expected as u32);
-            let fit = retargeters[usize::from(side == Side::Left)]
+            let fit = retargeters[usize::from(side == HandSide::Left)]
                 .fit(&read_joints(&sample, side))
                 .expect("a valid, tracked hand");
             roots.push(fit.root.translation.vector);

@@ -14,6 +14,7 @@ use vas_fuzz::{
     CollisionCase, check_hand, check_mesh, check_tree, configs_dir, is_finite, orientations,
     values_from_bytes,
 };
+use vas_protocol::HandSide;
 use vas_protocol::{
     ControlRequest, ControlRequestKind, ControlStatus, FLEX_LIMITS_RAD, GloveSample,
     HandJointsSample, PartDescription, TrackerSample, WireText,
@@ -23,8 +24,8 @@ use vas_server::collision::orientation::{DEFAULT_K, SUPPORTED_K};
 use vas_server::collision::{DopTree, MeshCollider, brute_force_pairs};
 use vas_server::geometry::shapes;
 use vas_server::geometry::{FileLimits, GltfFile, TriMesh, load_mesh, mesh_from_bytes};
+use vas_server::grasping::HandModel;
 use vas_server::grasping::retarget::{Capture, Retargeter};
-use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime::control::{Reply, SceneCatalogue, Session, answer, loaded};
 use vas_server::runtime::inputs::Inputs;
 use vas_server::scene::{Scene, TrackingParams};
@@ -513,15 +514,15 @@ fn control_load_requests() {
 #[test]
 fn hand_capture_json() {
     let path = Path::new("fuzz.json");
-    let retargeter = |side: Side| {
+    let retargeter = |side: HandSide| {
         let file = match side {
-            Side::Left => "hands/left.toml",
-            Side::Right => "hands/right.toml",
+            HandSide::Left => "hands/left.toml",
+            HandSide::Right => "hands/right.toml",
         };
         let model = HandModel::load(&configs_dir().join(file)).expect("the shipped hand");
         Retargeter::new(model).expect("the shipped hand retargets")
     };
-    let (left, right) = (retargeter(Side::Left), retargeter(Side::Right));
+    let (left, right) = (retargeter(HandSide::Left), retargeter(HandSide::Right));
     bolero::check!().for_each(|bytes: &[u8]| {
         let Ok(text) = std::str::from_utf8(bytes) else {
             return;
@@ -530,7 +531,7 @@ fn hand_capture_json() {
             return;
         };
         let joints = &capture.joints;
-        let retargeter = if joints.side == Side::Left {
+        let retargeter = if joints.side == HandSide::Left {
             &left
         } else {
             &right

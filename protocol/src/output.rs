@@ -84,6 +84,14 @@ wire_code_enum! {
 }
 
 impl HandSide {
+    /// The other hand.
+    pub fn mirrored(self) -> HandSide {
+        match self {
+            Self::Right => Self::Left,
+            Self::Left => Self::Right,
+        }
+    }
+
     /// The side in words.
     pub fn name(self) -> &'static str {
         match self {

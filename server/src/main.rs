@@ -9,11 +9,12 @@ use std::sync::Arc;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
+use vas_protocol::HandSide;
 use vas_server::collision::dop_tree::{Provenance, TreeCache};
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{FileLimits, write_obj};
+use vas_server::grasping::HandModel;
 use vas_server::grasping::retarget::{Capture, HandJoints, Retargeter};
-use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime;
 use vas_server::runtime::priority::RealtimePriority;
 use vas_server::scene::{LoadOptions, Scene, default_scene_path};
@@ -252,8 +253,8 @@ fn retarget(args: &RetargetArgs) -> anyhow::Result<()> {
     let joints = read(&args.capture)?;
     let hand = args.hand.clone().unwrap_or_else(|| {
         let file = match joints.side {
-            Side::Left => "left.toml",
-            Side::Right => "right.toml",
+            HandSide::Left => "left.toml",
+            HandSide::Right => "right.toml",
         };
         default_scene_path().with_file_name("hands").join(file)
     });
@@ -267,7 +268,7 @@ fn retarget(args: &RetargetArgs) -> anyhow::Result<()> {
         fit = retargeter.fit(std::hint::black_box(&joints))?;
     }
     let per_sample_us = started.elapsed().as_secs_f64() * 1e6 / f64::from(args.repeat);
-    let error = retargeter.fingertip_error(&fit, &joints);
+    let error = retargeter.fingertip_distances(&fit, &joints);
 
     let mut text = format!(
         "{}: {:?} hand, model {}{}\nangles (degrees):\n",

@@ -21,7 +21,6 @@ use anyhow::{Context, bail};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use vas_client::recording::InputSample;
 use vas_protocol::{HAND_JOINT_COUNT, HandJointsSample, HandSide, JointLocation};
-use vas_server::grasping::Side;
 use vas_server::grasping::retarget::{HandJoints, Joint, Retargeter};
 use vas_server::runtime::hand_joints::wire_joints;
 use vas_server::scene::Scene;
@@ -237,7 +236,7 @@ fn sampled(keys: &[Key]) -> Vec<Key> {
 
 /// A sample of a hand whose tracking is lost: every joint's flags 0 (neither valid nor tracked),
 /// its pose zero, as a WebXR producer sends a frame without hand poses.
-fn untracked(side: Side, seq: u64, timestamp_ns: u64) -> HandJointsSample {
+fn untracked(side: HandSide, seq: u64, timestamp_ns: u64) -> HandJointsSample {
     let nowhere = JointLocation {
         position: [0.0; 3],
         rotation: [0.0, 0.0, 0.0, 1.0],
@@ -249,8 +248,8 @@ fn untracked(side: Side, seq: u64, timestamp_ns: u64) -> HandJointsSample {
         timestamp_ns,
         joints: [nowhere; HAND_JOINT_COUNT],
         side: match side {
-            Side::Right => HandSide::Right as u32,
-            Side::Left => HandSide::Left as u32,
+            HandSide::Right => HandSide::Right as u32,
+            HandSide::Left => HandSide::Left as u32,
         },
     }
 }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use nalgebra::Quaternion;
-use vas_server::grasping::Side;
+use vas_protocol::HandSide;
 use vas_server::grasping::retarget::{Capture, CaptureError, HandJoints, JointPose};
 
 /// The captured pinch: thumb and index tips together.
@@ -19,7 +19,7 @@ pub fn capture_path(name: &str) -> PathBuf {
 
 /// The capture `name` as a hand of `side` (the captures are left hands; a right hand is their
 /// mirror image).
-pub fn captured(name: &str, side: Side) -> Result<HandJoints, CaptureError> {
+pub fn captured(name: &str, side: HandSide) -> Result<HandJoints, CaptureError> {
     Ok(Capture::read(&capture_path(name))?.joints_of(side))
 }
 

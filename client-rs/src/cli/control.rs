@@ -29,8 +29,10 @@ pub struct LoadSceneArgs {
 /// `--help` and in the error for any other name.
 pub fn metaphor_parser() -> impl clap::builder::TypedValueParser<Value = SlidingMetaphor> {
     use clap::builder::{PossibleValuesParser, TypedValueParser};
-    PossibleValuesParser::new(SlidingMetaphor::ALL.map(SlidingMetaphor::name))
-        .map(|name| name.parse().expect("the parser lets only the listed names through"))
+    PossibleValuesParser::new(SlidingMetaphor::ALL.map(SlidingMetaphor::name)).map(|name| {
+        name.parse()
+            .expect("the parser lets only the listed names through")
+    })
 }
 
 /// `vas-client reset`.

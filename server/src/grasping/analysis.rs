@@ -105,10 +105,11 @@ pub enum PrecisionKind {
     Other,
 }
 
-/// The grasp a hand has on a part.
+/// The class the grasp analysis gives a hand's hold on a part: the paper's taxonomy, precision
+/// grasps by kind. The wire carries it as a flat `vas_protocol::GraspType` code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum GraspType {
+pub enum GraspClass {
     /// Touching without holding: the part can be pushed, not carried.
     Push,
     /// Thumb and fingers, without the palm.
@@ -123,38 +124,38 @@ pub enum GraspType {
     Gravity,
 }
 
-impl fmt::Display for GraspType {
+impl fmt::Display for GraspClass {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
-            GraspType::Push => "push",
-            GraspType::Precision(PrecisionKind::TipPinch) => "precision:tip_pinch",
-            GraspType::Precision(PrecisionKind::ThreeJawChuck) => "precision:three_jaw_chuck",
-            GraspType::Precision(PrecisionKind::Key) => "precision:key",
-            GraspType::Precision(PrecisionKind::Other) => "precision",
-            GraspType::ThreePointPinch => "three_point_pinch",
-            GraspType::Cigarette => "cigarette",
-            GraspType::Power => "power",
-            GraspType::Gravity => "gravity",
+            GraspClass::Push => "push",
+            GraspClass::Precision(PrecisionKind::TipPinch) => "precision:tip_pinch",
+            GraspClass::Precision(PrecisionKind::ThreeJawChuck) => "precision:three_jaw_chuck",
+            GraspClass::Precision(PrecisionKind::Key) => "precision:key",
+            GraspClass::Precision(PrecisionKind::Other) => "precision",
+            GraspClass::ThreePointPinch => "three_point_pinch",
+            GraspClass::Cigarette => "cigarette",
+            GraspClass::Power => "power",
+            GraspClass::Gravity => "gravity",
         })
     }
 }
 
-impl GraspType {
+impl GraspClass {
     /// True for every type that holds the part (all but push).
     pub fn holds(self) -> bool {
-        self != GraspType::Push
+        self != GraspClass::Push
     }
 
     /// How firmly the type holds, to choose between parts touched at once: power, 3-point,
     /// precision, cigarette, gravity, push.
     pub fn firmness(self) -> u8 {
         match self {
-            GraspType::Power => 5,
-            GraspType::ThreePointPinch => 4,
-            GraspType::Precision(_) => 3,
-            GraspType::Cigarette => 2,
-            GraspType::Gravity => 1,
-            GraspType::Push => 0,
+            GraspClass::Power => 5,
+            GraspClass::ThreePointPinch => 4,
+            GraspClass::Precision(_) => 3,
+            GraspClass::Cigarette => 2,
+            GraspClass::Gravity => 1,
+            GraspClass::Push => 0,
         }
     }
 }
@@ -206,7 +207,7 @@ pub fn classify(
     touches: &[Touch],
     centre_of_mass: &Point3<f64>,
     params: &AnalysisParams,
-) -> Option<GraspType> {
+) -> Option<GraspClass> {
     if touches.is_empty() {
         return None;
     }
@@ -214,15 +215,15 @@ pub fn classify(
         .iter()
         .any(|t| t.contact.side == ContactSide::Dorsal)
     {
-        return Some(GraspType::Push);
+        return Some(GraspClass::Push);
     }
     let palm = touches.iter().any(|t| t.finger == Finger::Palm);
     let thumb = touches.iter().any(|t| t.finger == Finger::Thumb);
     if palm && !thumb && rests_on_hand(touches, centre_of_mass, params) {
-        return Some(GraspType::Gravity);
+        return Some(GraspClass::Gravity);
     }
     if touches.len() == 1 {
-        return Some(GraspType::Push);
+        return Some(GraspClass::Push);
     }
     let fingers: Vec<Finger> = distinct(
         touches
@@ -244,29 +245,29 @@ pub fn classify(
             .iter()
             .any(|t| matches!(t.level, JointLevel::Middle | JointLevel::Outer));
         if beyond_inner && opposed(Finger::Palm, &|t| t.finger != Finger::Palm) {
-            GraspType::Power
+            GraspClass::Power
         } else {
-            GraspType::Push
+            GraspClass::Push
         }
     } else if thumb && !fingers.is_empty() {
         if opposed(Finger::Thumb, &|t| t.finger != Finger::Thumb) {
             precision(touches, &fingers)
         } else {
-            GraspType::Push
+            GraspClass::Push
         }
     } else if is_cigarette(touches, &fingers) {
-        GraspType::Cigarette
+        GraspClass::Cigarette
     } else {
-        GraspType::Push
+        GraspClass::Push
     };
     Some(grasp)
 }
 
 /// Thumb and fingers without the palm: which precision grasp (or 3-point pinch).
-fn precision(touches: &[Touch], fingers: &[Finger]) -> GraspType {
+fn precision(touches: &[Touch], fingers: &[Finger]) -> GraspClass {
     let tips_only = touches.iter().all(|t| t.level == JointLevel::Outer);
     match fingers {
-        [_] if tips_only => GraspType::Precision(PrecisionKind::TipPinch),
+        [_] if tips_only => GraspClass::Precision(PrecisionKind::TipPinch),
         [Finger::Index] => {
             let index_side = touches.iter().any(|t| {
                 t.finger == Finger::Index
@@ -274,16 +275,16 @@ fn precision(touches: &[Touch], fingers: &[Finger]) -> GraspType {
                     && t.contact.side == ContactSide::Lateral
             });
             if index_side {
-                GraspType::Precision(PrecisionKind::Key)
+                GraspClass::Precision(PrecisionKind::Key)
             } else {
-                GraspType::Precision(PrecisionKind::Other)
+                GraspClass::Precision(PrecisionKind::Other)
             }
         }
         [Finger::Index, Finger::Middle] if tips_only => {
-            GraspType::Precision(PrecisionKind::ThreeJawChuck)
+            GraspClass::Precision(PrecisionKind::ThreeJawChuck)
         }
-        [_, _] => GraspType::ThreePointPinch,
-        _ => GraspType::Precision(PrecisionKind::Other),
+        [_, _] => GraspClass::ThreePointPinch,
+        _ => GraspClass::Precision(PrecisionKind::Other),
     }
 }
 

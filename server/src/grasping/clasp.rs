@@ -435,7 +435,7 @@ impl<'a> Minimisation<'a> {
         }
     }
 
-    /// 1. The trial values: the target first, then the middle of each unfixed interval (just
+    /// Step 1, the trial values: the target first, then the middle of each unfixed interval (just
     /// short of the tolerance past the valid value, for a variable whose target collided).
     fn trial(
         &self,
@@ -459,7 +459,7 @@ impl<'a> Minimisation<'a> {
         trial
     }
 
-    /// 2. Checks the segments that move at `trial`; the unfixed variables they blame.
+    /// Step 2: checks the segments that move at `trial`; the unfixed variables they blame.
     fn check<F>(
         &mut self,
         trial: &[f64; VARIABLE_COUNT],
@@ -506,7 +506,7 @@ impl<'a> Minimisation<'a> {
         colliding.and(unfixed)
     }
 
-    /// 3. Lowers the colliding end of the blamed variables and raises the valid end where the
+    /// Step 3: lowers the colliding end of the blamed variables and raises the valid end where the
     /// new configuration of valid values was checked whole; the variables whose first trial
     /// collided, for a near step next.
     fn narrow(
@@ -542,7 +542,7 @@ impl<'a> Minimisation<'a> {
         near_step_pending
     }
 
-    /// 4. Fixes what is close enough (everything `at_cap`), fingertips first: a fixed variable's
+    /// Step 4: fixes what is close enough (everything `at_cap`), fingertips first: a fixed variable's
     /// segments take their collision flags as touch flags, and the segments it carries forget
     /// theirs. The variables still unfixed.
     fn fix(&mut self, mut unfixed: VariableSet, at_cap: bool) -> VariableSet {

@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
 use serde::Serialize;
 
-use super::analysis::{AnalysisParams, Contact, GraspType, Touch, classify};
+use super::analysis::{AnalysisParams, Contact, GraspClass, Touch, classify};
 use super::clasp::{
     ClaspParams, ClaspPlan, HandPose, ObjectSet, SEGMENT_COUNT, SegmentPlacement, clasp,
 };
@@ -97,7 +97,7 @@ pub struct Held {
     /// The part's pose in the hand root's frame, fixed at the grasp.
     pub hand_to_part: Isometry3<f64>,
     /// The latest grasp type the analysis found on it.
-    pub grasp: GraspType,
+    pub grasp: GraspClass,
 }
 
 /// Grasp and release, for the sliding module's hand-over and the event stream.
@@ -108,7 +108,7 @@ pub enum GraspEvent {
         /// The part.
         part: PartId,
         /// The grasp type.
-        grasp: GraspType,
+        grasp: GraspClass,
         /// The part's pose in the hand root's frame.
         hand_to_part: Isometry3<f64>,
     },
@@ -142,9 +142,10 @@ pub struct SegmentContact {
     pub normal: Unit<Vector3<f64>>,
 }
 
-/// The outcome of one input sample.
+/// What one step of a grasping hand gives, for one input sample: the visible hand, its grasp
+/// and events (the wire carries the published hand as a `vas_protocol::HandFrame`).
 #[derive(Debug, Clone, PartialEq)]
-pub struct HandFrame {
+pub struct HandStep {
     /// The visible hand: always a valid (collision-free) configuration.
     pub pose: HandPose,
     /// What the hand is doing.
@@ -152,7 +153,7 @@ pub struct HandFrame {
     /// Per segment, the parts it touches (confirmed by a contact); empty unless clasping.
     pub touching: [Vec<SegmentContact>; SEGMENT_COUNT],
     /// The grasp on the held part, or else the firmest grasp found on a touched part.
-    pub grasp: Option<GraspType>,
+    pub grasp: Option<GraspClass>,
     /// The held part and its pose in the world.
     pub held: Option<(PartId, Isometry3<f64>)>,
     /// Grasps and releases of this frame.
@@ -275,7 +276,7 @@ impl GraspingHand {
 
     /// Processes one input sample against the parts near the hand (which must include the held
     /// part; at most 64 are considered).
-    pub fn step(&mut self, input: &HandInput, obstacles: &[Obstacle]) -> HandFrame {
+    pub fn step(&mut self, input: &HandInput, obstacles: &[Obstacle]) -> HandStep {
         let (flex, flex_report) = sanitize_flex(&self.model, &input.flex, &self.last_flex);
         self.flex_totals.accumulate(flex_report);
         self.last_flex = flex;
@@ -286,7 +287,7 @@ impl GraspingHand {
             .iter()
             .chain(root.rotation.coords.iter())
             .all(|c| c.is_finite());
-        let mut frame = HandFrame {
+        let mut frame = HandStep {
             pose: self.visible,
             mode: self.mode,
             touching: Default::default(),
@@ -458,7 +459,7 @@ struct CachedContact {
 /// The grasp the analysis found on one touched part this frame.
 struct Analysed {
     part: PartId,
-    grasp: GraspType,
+    grasp: GraspClass,
     /// The part's pose in the world.
     pose: Isometry3<f64>,
 }
@@ -573,7 +574,7 @@ mod tests {
         GraspingHand::new(Arc::new(right_hand()), GraspParams::default(), rest).unwrap()
     }
 
-    fn analysed(part: PartId, grasp: GraspType) -> Analysed {
+    fn analysed(part: PartId, grasp: GraspClass) -> Analysed {
         Analysed {
             part,
             grasp,
@@ -586,12 +587,12 @@ mod tests {
         let mut hand = hand();
         let params = GraspParams::default();
         let mut events = Vec::new();
-        let power = [analysed(3, GraspType::Power)];
+        let power = [analysed(3, GraspClass::Power)];
         // Interrupted runs of holding frames do not grasp.
         for _ in 0..params.grasp_frames - 1 {
             hand.update_hold(&power, &mut events);
         }
-        hand.update_hold(&[analysed(3, GraspType::Push)], &mut events);
+        hand.update_hold(&[analysed(3, GraspClass::Push)], &mut events);
         for _ in 0..params.grasp_frames - 1 {
             hand.update_hold(&power, &mut events);
         }
@@ -601,7 +602,7 @@ mod tests {
             events,
             vec![GraspEvent::Grasp {
                 part: 3,
-                grasp: GraspType::Power,
+                grasp: GraspClass::Power,
                 hand_to_part: Isometry3::translation(0.0, 0.0, -0.05),
             }]
         );
@@ -612,17 +613,17 @@ mod tests {
                 hand.update_hold(&[], &mut events);
             }
             hand.update_hold(
-                &[analysed(3, GraspType::Precision(PrecisionKind::TipPinch))],
+                &[analysed(3, GraspClass::Precision(PrecisionKind::TipPinch))],
                 &mut events,
             );
         }
         assert!(events.is_empty());
         assert_eq!(
             hand.held().unwrap().grasp,
-            GraspType::Precision(PrecisionKind::TipPinch)
+            GraspClass::Precision(PrecisionKind::TipPinch)
         );
         for _ in 0..params.release_frames {
-            hand.update_hold(&[analysed(3, GraspType::Push)], &mut events);
+            hand.update_hold(&[analysed(3, GraspClass::Push)], &mut events);
         }
         assert_eq!(events.len(), 1);
         assert!(matches!(events[0], GraspEvent::Release { part: 3, .. }));
@@ -634,9 +635,9 @@ mod tests {
         let mut hand = hand();
         let mut events = Vec::new();
         let both = [
-            analysed(1, GraspType::Gravity),
-            analysed(2, GraspType::Power),
-            analysed(4, GraspType::Push),
+            analysed(1, GraspClass::Gravity),
+            analysed(2, GraspClass::Power),
+            analysed(4, GraspClass::Push),
         ];
         for _ in 0..GraspParams::default().grasp_frames {
             hand.update_hold(&both, &mut events);

@@ -99,13 +99,13 @@ pub mod model;
 pub mod retarget;
 pub mod segment_mesh;
 
-pub use analysis::{GraspType, PrecisionKind};
+pub use analysis::{GraspClass, PrecisionKind};
 pub use clasp::{ClaspParamError, ClaspParams, HandPose};
 pub use collider::{Obstacle, PartGeometry, PartId};
 pub use hand::{
-    GraspEvent, GraspParams, GraspingHand, HandFrame, HandInput, HandMode, SegmentContact,
+    GraspEvent, GraspParams, GraspingHand, HandInput, HandMode, HandStep, SegmentContact,
 };
 pub use model::{
     FLEX_COUNT, Finger, FlexVector, HandConfigError, HandModel, JointLevel, ROOT_VARIABLE,
-    SegmentId, Side, VARIABLE_COUNT, VariableSet,
+    SegmentId, VARIABLE_COUNT, VariableSet,
 };

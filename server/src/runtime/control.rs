@@ -9,7 +9,6 @@ use vas_protocol::{
     MAX_NAME_BYTES, PART_MOVABLE, PartDescription, SlidingMetaphor, WirePose, WireText,
 };
 
-use super::geometry::wire_side;
 use super::inputs::Inputs;
 use crate::scene::{Part, Scene};
 use crate::simulation::restart::{Change, HandSetupError, Restart};
@@ -199,7 +198,7 @@ fn respond(
     // A scene has at most one hand of each side: MAX_HANDS.
     for (described, hand) in hands.iter_mut().zip(&scene.hands) {
         *described = HandDescription {
-            side: wire_side(hand.model.side()) as u32,
+            side: hand.model.side() as u32,
             model: WireText::truncated(hand.model.name()).0,
         };
     }
@@ -312,7 +311,10 @@ fn set_metaphor(code: u32) -> Result<(PartDescription, Option<Change>), Refusal>
     let metaphor = SlidingMetaphor::try_from(code)
         .map_err(|unknown| (ControlStatus::InvalidRequest, unknown.to_string()))?;
     tracing::info!(%metaphor, "sliding metaphor set on request");
-    Ok((PartDescription::default(), Some(Change::SlidingMetaphor(metaphor))))
+    Ok((
+        PartDescription::default(),
+        Some(Change::SlidingMetaphor(metaphor)),
+    ))
 }
 
 #[cfg(test)]

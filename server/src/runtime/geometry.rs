@@ -10,10 +10,9 @@
 use std::sync::Arc;
 
 use rayon::prelude::*;
-use vas_protocol::{HandGeometry, HandSide, MeshData, SceneGeometry};
+use vas_protocol::{HandGeometry, MeshData, SceneGeometry};
 
 use crate::geometry::TriMesh;
-use crate::grasping::Side;
 use crate::scene::Scene;
 use crate::simulation::restart::Restart;
 
@@ -28,7 +27,7 @@ impl ServedGeometry {
     /// The geometry of `restart`'s scene and hand, as generation `restart.epoch`.
     pub(super) fn of(restart: &Restart) -> Self {
         let hands = restart.hand_bodies.iter().map(|bodies| HandGeometry {
-            side: wire_side(bodies.model.side()),
+            side: bodies.model.side(),
             model: bodies.model.name().to_owned(),
             segments: bodies
                 .model
@@ -63,14 +62,6 @@ impl ServedGeometry {
     /// What to publish.
     pub(super) fn geometry(&self) -> &SceneGeometry {
         &self.geometry
-    }
-}
-
-/// A hand model's side as the wire names it.
-pub(super) fn wire_side(side: Side) -> HandSide {
-    match side {
-        Side::Right => HandSide::Right,
-        Side::Left => HandSide::Left,
     }
 }
 

@@ -18,7 +18,6 @@ use vas_protocol::{
     JointLocation,
 };
 
-use super::geometry::wire_side;
 use crate::grasping::HandModel;
 use crate::grasping::retarget::{
     HandJoints, JointFlags, JointPose, JointsError, RetargetError, Retargeter,
@@ -99,7 +98,7 @@ impl JointsHand {
 
     /// The hand's side, as the wire names it.
     pub fn side(&self) -> HandSide {
-        wire_side(self.retargeter.model().side())
+        self.retargeter.model().side()
     }
 
     /// The latest target, `None` before the first accepted sample.
@@ -153,7 +152,7 @@ impl JointsHand {
 }
 
 /// The joints of a wire sample, as a hand of `side`.
-pub fn read_joints(sample: &HandJointsSample, side: crate::grasping::Side) -> HandJoints {
+pub fn read_joints(sample: &HandJointsSample, side: vas_protocol::HandSide) -> HandJoints {
     HandJoints {
         side,
         joints: sample.joints.map(|joint| {
@@ -185,7 +184,7 @@ pub fn wire_joints(joints: &HandJoints, seq: u64, timestamp_ns: u64) -> HandJoin
         seq,
         timestamp_ns,
         joints: locations,
-        side: wire_side(joints.side) as u32,
+        side: joints.side as u32,
     }
 }
 
@@ -194,11 +193,10 @@ pub(crate) mod tests {
     use std::path::Path;
 
     use super::*;
-    use crate::grasping::Side;
     use crate::grasping::retarget::Capture;
 
     /// A captured hand of `side`, from the repository's fixtures.
-    pub(crate) fn captured(name: &str, side: Side) -> HandJoints {
+    pub(crate) fn captured(name: &str, side: HandSide) -> HandJoints {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../tests/fixtures/hands")
             .join(name);
@@ -209,11 +207,11 @@ pub(crate) mod tests {
 
     #[test]
     fn joints_travel_the_wire_unchanged_but_for_the_radius_precision() {
-        let joints = captured("webxr_pinch.json", Side::Right);
+        let joints = captured("webxr_pinch.json", HandSide::Right);
         let sample = wire_joints(&joints, 7, 70);
         assert_eq!((sample.seq, sample.timestamp_ns), (7, 70));
         assert_eq!(sample.side, HandSide::Right as u32);
-        let read = read_joints(&sample, Side::Right);
+        let read = read_joints(&sample, HandSide::Right);
         for (read, sent) in read.joints.iter().zip(&joints.joints) {
             assert_eq!(read.position, sent.position);
             assert_eq!(read.orientation, sent.orientation);
@@ -224,10 +222,10 @@ pub(crate) mod tests {
 
     #[test]
     fn only_openxr_location_bits_are_read() {
-        let mut sample = wire_joints(&captured("webxr_relaxed.json", Side::Left), 1, 1);
+        let mut sample = wire_joints(&captured("webxr_relaxed.json", HandSide::Left), 1, 1);
         sample.joints[3].flags = 0xffff_fff3;
         assert_eq!(
-            read_joints(&sample, Side::Left).joints[3].flags,
+            read_joints(&sample, HandSide::Left).joints[3].flags,
             JointFlags(3)
         );
     }

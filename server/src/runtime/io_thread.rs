@@ -23,7 +23,7 @@ use vas_protocol::{
 };
 
 use super::control::{self, Session};
-use super::geometry::{ServedGeometry, wire_side};
+use super::geometry::ServedGeometry;
 use super::inputs::TrackingClock;
 use super::loader::{Loaded, PendingRequest, SceneLoader};
 use super::loops::{Links, LoopWork, Loops};
@@ -628,9 +628,7 @@ fn hand_sides(scene: &crate::scene::Scene) -> Vec<HandSide> {
     if scene.hands.is_empty() {
         return vec![HandSide::Right];
     }
-    (scene.hands.iter())
-        .map(|hand| wire_side(hand.model.side()))
-        .collect()
+    (scene.hands.iter()).map(|hand| hand.model.side()).collect()
 }
 
 fn part_state(id: u32, pose: &nalgebra::Isometry3<f64>, flags: u32) -> PartState {

@@ -522,7 +522,7 @@ impl SlidingLoop {
         };
         self.outbox.announce();
         self.slid_at = Instant::now();
-        let frames: Vec<&crate::grasping::HandFrame> = frame
+        let frames: Vec<&crate::grasping::HandStep> = frame
             .hands
             .iter()
             .filter_map(|hand| hand.frame.as_ref())

@@ -2,9 +2,9 @@
 //! travel between frames.
 
 use nalgebra::{Isometry3, Point3, Vector3};
-use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGraspType, InputStamp};
+use vas_protocol::{EventKind, FLEX_COUNT, GraspType, InputStamp};
 
-use crate::grasping::{GraspEvent, GraspType, HandFrame, HandInput, PartId, SegmentContact};
+use crate::grasping::{GraspClass, GraspEvent, HandInput, HandStep, PartId, SegmentContact};
 use crate::sliding::{RestReason, Wrench};
 
 /// A frame that can absorb an older one it overtook in a queue between two loops.
@@ -74,7 +74,7 @@ pub struct GraspedHand {
     pub target: HandTarget,
     /// The grasping hand's frame; `None` in a scene without a hand model, where the hand is
     /// published where the tracker puts it.
-    pub frame: Option<HandFrame>,
+    pub frame: Option<HandStep>,
     /// The parts this hand let go of because the other hand grasped them; their release events
     /// are in the frame's.
     pub handed_over: Vec<PartId>,
@@ -116,7 +116,7 @@ pub struct ProposedHand {
     /// Per hand segment (in [`vas_protocol::HandSegment`] order), the parts it touches.
     pub touching: Vec<Vec<SegmentContact>>,
     /// The grasp the hand has or would have.
-    pub grasp: WireGraspType,
+    pub grasp: GraspType,
     /// Whether the input tracks the hand.
     pub tracked: bool,
     /// The hand's latest hand-joints sample.
@@ -197,7 +197,7 @@ pub struct Event {
     /// The hand it is about (or whose held part touched), by its place in the scene's hands.
     pub hand: usize,
     /// The grasp, for grasp events.
-    pub grasp: WireGraspType,
+    pub grasp: GraspType,
     /// The part.
     pub part: PartId,
     /// The other part of a contact, or [`vas_protocol::HAND_PART_ID`].
@@ -227,7 +227,7 @@ pub struct VerifiedHand {
     /// Bits of the segments touching a part.
     pub touching: u32,
     /// The grasp.
-    pub grasp: WireGraspType,
+    pub grasp: GraspType,
     /// Whether the input tracks the hand.
     pub tracked: bool,
     /// The hand's latest hand-joints sample.
@@ -253,18 +253,18 @@ pub struct VerifiedFrame {
 }
 
 /// The wire code of an analysed grasp.
-pub fn wire_grasp(grasp: Option<GraspType>) -> WireGraspType {
+pub fn wire_grasp(grasp: Option<GraspClass>) -> GraspType {
     use crate::grasping::PrecisionKind;
     match grasp {
-        None => WireGraspType::None,
-        Some(GraspType::Push) => WireGraspType::Push,
-        Some(GraspType::Precision(PrecisionKind::TipPinch)) => WireGraspType::TipPinch,
-        Some(GraspType::Precision(PrecisionKind::ThreeJawChuck)) => WireGraspType::ThreeJawChuck,
-        Some(GraspType::Precision(PrecisionKind::Key)) => WireGraspType::Key,
-        Some(GraspType::Precision(PrecisionKind::Other)) => WireGraspType::Precision,
-        Some(GraspType::ThreePointPinch) => WireGraspType::ThreePointPinch,
-        Some(GraspType::Cigarette) => WireGraspType::Cigarette,
-        Some(GraspType::Power) => WireGraspType::Power,
-        Some(GraspType::Gravity) => WireGraspType::Gravity,
+        None => GraspType::None,
+        Some(GraspClass::Push) => GraspType::Push,
+        Some(GraspClass::Precision(PrecisionKind::TipPinch)) => GraspType::TipPinch,
+        Some(GraspClass::Precision(PrecisionKind::ThreeJawChuck)) => GraspType::ThreeJawChuck,
+        Some(GraspClass::Precision(PrecisionKind::Key)) => GraspType::Key,
+        Some(GraspClass::Precision(PrecisionKind::Other)) => GraspType::Precision,
+        Some(GraspClass::ThreePointPinch) => GraspType::ThreePointPinch,
+        Some(GraspClass::Cigarette) => GraspType::Cigarette,
+        Some(GraspClass::Power) => GraspType::Power,
+        Some(GraspClass::Gravity) => GraspType::Gravity,
     }
 }

@@ -6,7 +6,7 @@ use nalgebra::{Isometry3, Vector3};
 use super::frames::HandTarget;
 use crate::grasping::collider::MAX_OBJECTS;
 use crate::grasping::{
-    GraspEvent, GraspingHand, HandFrame, HandInput, Obstacle as HandObstacle, PartGeometry, PartId,
+    GraspEvent, GraspingHand, HandInput, HandStep, Obstacle as HandObstacle, PartGeometry, PartId,
 };
 use crate::scene::Part;
 
@@ -14,7 +14,7 @@ use crate::scene::Part;
 #[derive(Debug, Clone, PartialEq)]
 pub struct SteppedHand {
     /// The hand's frame: visible hand, grasp, grasp and release events.
-    pub frame: HandFrame,
+    pub frame: HandStep,
     /// The parts it let go of because the other hand grasped them (their release events are
     /// in the frame's).
     pub handed_over: Vec<PartId>,

@@ -36,7 +36,7 @@ use nalgebra::Isometry3;
 use super::frames::{HandTarget, HeldPart};
 use super::grasp_stage::{GraspStage, SteppedHand};
 use super::slide_stage::SlideStage;
-use crate::grasping::{GraspingHand, HandFrame, PartId};
+use crate::grasping::{GraspingHand, HandStep, PartId};
 use crate::scene::Part;
 use crate::sliding::{SlideMachine, SlideParams};
 
@@ -45,7 +45,7 @@ use crate::sliding::{SlideMachine, SlideParams};
 pub struct InteractionFrame {
     /// The hand's frame: visible hand, grasp, grasp and release events. While a held part lags
     /// behind its ghost, the visible root is [`HeldPart::hand_root`].
-    pub hand: HandFrame,
+    pub hand: HandStep,
     /// The held part, if the hand holds a movable part.
     pub held: Option<HeldPart>,
     /// The parts the hand handed over to the other hand this frame.
@@ -103,7 +103,7 @@ impl Interaction {
     pub fn step(&mut self, targets: &[HandTarget]) -> Vec<InteractionFrame> {
         self.grasp.set_part_poses(self.slide.part_poses());
         let stepped = self.grasp.step(targets);
-        let frames: Vec<&HandFrame> = stepped.iter().map(|hand| &hand.frame).collect();
+        let frames: Vec<&HandStep> = stepped.iter().map(|hand| &hand.frame).collect();
         let held = self.slide.apply(&frames);
         stepped
             .into_iter()

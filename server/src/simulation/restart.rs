@@ -82,7 +82,9 @@ impl std::fmt::Debug for Change {
                 .field("hands", &restart.hands.len())
                 .field("epoch", &restart.epoch)
                 .finish(),
-            Change::SlidingMetaphor(metaphor) => f.debug_tuple("SlidingMetaphor").field(metaphor).finish(),
+            Change::SlidingMetaphor(metaphor) => {
+                f.debug_tuple("SlidingMetaphor").field(metaphor).finish()
+            }
         }
     }
 }

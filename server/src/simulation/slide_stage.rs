@@ -7,11 +7,11 @@ use nalgebra::Isometry3;
 
 use super::frames::{ContactAt, HeldPart};
 use crate::collision::DopTree;
-use crate::grasping::{GraspEvent, HandFrame, PartId};
+use crate::grasping::{GraspEvent, HandStep, PartId};
 use crate::scene::Part;
 use crate::sliding::force::ForceModel;
 use crate::sliding::world::{Obstacle as SlideObstacle, PairwiseWorld, SlideBody};
-use crate::sliding::{SlidingMetaphor, RestReason, SlideMachine, SlideParams};
+use crate::sliding::{RestReason, SlideMachine, SlideParams, SlidingMetaphor};
 
 /// A part as the sliding stage needs it.
 struct SlidePart {
@@ -108,7 +108,7 @@ impl SlideStage {
 
     /// Takes the hands' frames (in the hands' order): hands grasped parts over to sliding and
     /// back, and slides each held part one frame towards where its hand holds it.
-    pub fn apply(&mut self, frames: &[&HandFrame]) -> Vec<Option<HeldPart>> {
+    pub fn apply(&mut self, frames: &[&HandStep]) -> Vec<Option<HeldPart>> {
         // Releases first: in a hand-over the part leaves one hand before the other takes it.
         for (hand, frame) in frames.iter().enumerate() {
             for event in &frame.events {

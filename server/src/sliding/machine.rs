@@ -26,11 +26,11 @@
 
 use nalgebra::{Point3, Translation3, Unit, Vector3, Vector6};
 
+use super::SlidingMetaphor;
 use super::bisection::Bisection;
 use super::contact::{Contact, reduce_contacts};
 use super::direction::{FreeSpace, project_onto_free_space};
 use super::motion::{Motion, Pose, pose_distance};
-use super::SlidingMetaphor;
 use super::params::SlideParams;
 use crate::geometry::Point;
 

@@ -9,10 +9,10 @@ use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh, TriMeshFlags};
 
 use vas_server::geometry::TriMesh;
 use vas_server::geometry::shapes;
-use vas_server::grasping::analysis::GraspType;
+use vas_server::grasping::analysis::GraspClass;
 use vas_server::grasping::clasp::HandPose;
 use vas_server::grasping::collider::{Obstacle, PartGeometry, PartId};
-use vas_server::grasping::hand::{GraspEvent, GraspParams, GraspingHand, HandFrame, HandMode};
+use vas_server::grasping::hand::{GraspEvent, GraspParams, GraspingHand, HandMode, HandStep};
 use vas_server::grasping::model::{FLEX_COUNT, HandModel};
 use vas_testkit::hand_models::{hands_dir, right_hand};
 use vas_testkit::script::{Keyframe, ScriptedGrasp, fist, open_hand, posture, sample};
@@ -71,7 +71,7 @@ struct Run {
     hand: GraspingHand,
     parts: Vec<ScenePart>,
     segments: Vec<ConvexPolyhedron>,
-    frames: Vec<HandFrame>,
+    frames: Vec<HandStep>,
     events: Vec<(usize, GraspEvent)>,
     penetrations: Vec<String>,
 }
@@ -221,7 +221,7 @@ impl Run {
     }
 
     /// The grasp and release events, with their frame numbers.
-    fn grasps(&self) -> Vec<(usize, PartId, GraspType)> {
+    fn grasps(&self) -> Vec<(usize, PartId, GraspClass)> {
         self.events
             .iter()
             .filter_map(|&(i, e)| match e {
@@ -383,7 +383,7 @@ fn the_back_of_the_hand_pushes_a_box_and_grasps_nothing() {
     let pressed = Run::frame_at(0.2);
     assert_eq!(
         run.frames[pressed].grasp,
-        Some(GraspType::Push),
+        Some(GraspClass::Push),
         "{summary}"
     );
     assert!(run.touching(pressed).contains(&"palm"), "{summary}");
@@ -398,7 +398,7 @@ fn the_back_of_the_hand_pushes_a_box_and_grasps_nothing() {
     );
     assert_eq!(
         run.frames.last().unwrap().grasp,
-        Some(GraspType::Push),
+        Some(GraspClass::Push),
         "{summary}"
     );
     assert_eq!(run.parts[0].pose, at(box_centre));
@@ -566,6 +566,6 @@ fn the_grasping_scene_names_a_hand_that_grasps_its_handle() {
             handle_pose = pose;
         }
     }
-    assert_eq!(grasps, vec![(handle as PartId, GraspType::Power)]);
+    assert_eq!(grasps, vec![(handle as PartId, GraspClass::Power)]);
     assert!(distance(&handle_pose, &scene.parts[handle].pose) > 0.05);
 }

@@ -7,8 +7,8 @@ use std::process::Command;
 use std::sync::Arc;
 
 use nalgebra::{Point2, Point3};
+use vas_protocol::HandSide;
 use vas_server::geometry::{TriMesh, load_mesh};
-use vas_server::grasping::Side;
 use vas_server::scene::{Scene, SceneError, default_scene_path};
 use vas_server::sliding::SlidingMetaphor;
 
@@ -514,8 +514,8 @@ fn a_scene_has_at_most_one_hand_of_each_side() {
         &format!("name = \"s\"\nhands = [{right:?}, {left:?}]\n{PEG}"),
     );
     let scene = Scene::load(&path).unwrap();
-    let sides: Vec<Side> = scene.hands.iter().map(|hand| hand.model.side()).collect();
-    assert_eq!(sides, [Side::Right, Side::Left]);
+    let sides: Vec<HandSide> = scene.hands.iter().map(|hand| hand.model.side()).collect();
+    assert_eq!(sides, [HandSide::Right, HandSide::Left]);
     refused(
         "hand_and_hands",
         &format!("name = \"s\"\nhand = {right:?}\nhands = [{left:?}]\n{PEG}"),

@@ -12,14 +12,14 @@ use vas_server::collision::orientation::DEFAULT_K;
 use vas_server::collision::parry_mesh::{millimetre_pose, millimetre_trimesh};
 use vas_server::geometry::{TriMesh, shapes};
 use vas_server::grasping::{
-    FLEX_COUNT, GraspEvent, GraspParams, GraspType, GraspingHand, HandPose, PartId,
+    FLEX_COUNT, GraspClass, GraspEvent, GraspParams, GraspingHand, HandPose, PartId,
 };
 use vas_server::scene::{Part, PartTree};
 use vas_server::simulation::frames::HandTarget;
 use vas_server::simulation::interaction::{Interaction, InteractionFrame};
 use vas_server::sliding::motion::pose_distance;
 use vas_server::sliding::world::SlideBody;
-use vas_server::sliding::{SlidingMetaphor, RestReason, SlideParams};
+use vas_server::sliding::{RestReason, SlideParams, SlidingMetaphor};
 use vas_testkit::hand_models::right_hand;
 use vas_testkit::script::{Keyframe, ScriptedGrasp, open_hand, sample};
 
@@ -143,7 +143,7 @@ impl Run {
     }
 
     /// The handle's grasps: frame and grasp type.
-    fn grasps(&self) -> Vec<(usize, GraspType)> {
+    fn grasps(&self) -> Vec<(usize, GraspClass)> {
         self.handle_events()
             .filter_map(|(i, event)| match event {
                 GraspEvent::Grasp { grasp, .. } => Some((i, grasp)),
@@ -245,7 +245,7 @@ fn a_grasped_handle_follows_the_hand_where_nothing_is_in_the_way() {
     let (grasps, releases) = (run.grasps(), run.releases());
     assert_eq!(grasps.len(), 1, "one grasp: {grasps:?}");
     let (grasped_at, grasp) = grasps[0];
-    assert_eq!(grasp, GraspType::Power);
+    assert_eq!(grasp, GraspClass::Power);
     assert!(grasped_at as f64 <= milestones.grasped_by * RATE);
     assert!(releases.is_empty(), "released while carried: {releases:?}");
 
@@ -321,7 +321,7 @@ fn opening_the_hand_leaves_the_handle_at_its_last_valid_pose() {
     run.play(&keys);
 
     let (grasps, releases) = (run.grasps(), run.releases());
-    assert_eq!(grasps[0].1, GraspType::Power);
+    assert_eq!(grasps[0].1, GraspClass::Power);
     let (released_at, ghost) = *releases.first().expect("the open hand releases the handle");
     assert!(released_at as f64 > pressed.time * RATE);
     assert!(run.frames[released_at].held.is_none());

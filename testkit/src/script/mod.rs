@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use vas_server::geometry::TriMesh;
 use vas_server::geometry::shapes;
-use vas_server::grasping::analysis::{GraspType, PrecisionKind};
+use vas_server::grasping::analysis::{GraspClass, PrecisionKind};
 use vas_server::grasping::hand::HandInput;
 use vas_server::grasping::model::{FLEX_COUNT, FlexVector};
 
@@ -210,11 +210,11 @@ impl ScriptedGrasp {
     }
 
     /// The grasp the analysis must recognise.
-    pub fn expected(self) -> GraspType {
+    pub fn expected(self) -> GraspClass {
         match self {
-            ScriptedGrasp::PowerOnHandle => GraspType::Power,
-            ScriptedGrasp::TipPinchOfScrew => GraspType::Precision(PrecisionKind::TipPinch),
-            ScriptedGrasp::GravityUnderBlock => GraspType::Gravity,
+            ScriptedGrasp::PowerOnHandle => GraspClass::Power,
+            ScriptedGrasp::TipPinchOfScrew => GraspClass::Precision(PrecisionKind::TipPinch),
+            ScriptedGrasp::GravityUnderBlock => GraspClass::Gravity,
         }
     }
 

@@ -7,11 +7,11 @@ use std::time::{Duration, Instant};
 
 use vas_client::recording::{InputSample, Recording, RecordingHeader, RecordingWriter};
 use vas_client::{Client, ClientError, Frame, PartsFrame, Wake};
+use vas_protocol::HandSide;
 use vas_protocol::{
     ControlStatus, FLEX_COUNT, FLEX_LIMITS_RAD, GloveSample, HandFrame, InputStamp,
     SlidingMetaphor, TrackerSample, wall_clock_ns,
 };
-use vas_server::grasping::Side;
 use vas_server::runtime::hand_joints::wire_joints;
 use vas_server::runtime::priority::RealtimePriority;
 use vas_server::scene::{Scene, default_scene_path};
@@ -583,7 +583,7 @@ fn record_writes_the_samples_clients_send() {
         ..tracker(2, [0.2, 0.0, 0.0])
     };
     let joints = wire_joints(
-        &captured(PINCH, Side::Right).expect("the capture reads"),
+        &captured(PINCH, HandSide::Right).expect("the capture reads"),
         1,
         first.timestamp_ns + 3,
     );

@@ -10,8 +10,8 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use vas_client::Client;
 use vas_client::recording::InputSample;
 use vas_protocol::{HandFrame, HandJointsSample, HandSegment, HandSide, wall_clock_ns};
+use vas_server::grasping::HandModel;
 use vas_server::grasping::retarget::{HandJoints, Joint, Retargeter};
-use vas_server::grasping::{HandModel, Side};
 use vas_server::runtime::hand_joints::wire_joints;
 use vas_testkit::hands::{PINCH, RELAXED, captured};
 use vas_testkit::{PATIENCE, Server, configs_dir};
@@ -109,10 +109,10 @@ fn captured_hands_drive_the_hand_and_impossible_ones_are_counted() {
     let mut client = server.connect();
     let model = HandModel::load(&configs_dir().join("hands/right.toml")).expect("the right hand");
     let retargeter = Retargeter::new(model).expect("the right hand retargets");
-    let relaxed = captured(RELAXED, Side::Right)
+    let relaxed = captured(RELAXED, HandSide::Right)
         .expect("the capture reads")
         .transformed(&placement());
-    let pinch = captured(PINCH, Side::Right)
+    let pinch = captured(PINCH, HandSide::Right)
         .expect("the capture reads")
         .transformed(&placement());
     let mut sender = Sender { seq: 0 };
@@ -202,7 +202,7 @@ fn a_free_running_server_notices_a_hand_whose_samples_stop() {
     let mut server =
         Server::start_with("silent_hand", &["--scene", scene.to_str().expect("UTF-8")]);
     let mut client = server.connect();
-    let pinch = captured(PINCH, Side::Right)
+    let pinch = captured(PINCH, HandSide::Right)
         .expect("the capture reads")
         .transformed(&placement());
     let tracked = answer(&mut client, wire_joints(&pinch, 1, 0));

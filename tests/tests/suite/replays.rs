@@ -11,7 +11,7 @@ use nalgebra::Isometry3;
 use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Frame};
 use vas_protocol::{EventKind, GraspType, HandFrame, HandSide, wall_clock_ns};
-use vas_server::grasping::{HandModel, Side};
+use vas_server::grasping::HandModel;
 use vas_server::scene::Scene;
 use vas_server::simulation::restart::Restart;
 use vas_testkit::offline::{Oracle, VisibleHand};
@@ -296,10 +296,10 @@ fn check(scenario: &Scenario) -> Replay {
 }
 
 /// A hand model's side as the wire codes it.
-fn side_code(side: Side) -> u32 {
+fn side_code(side: HandSide) -> u32 {
     match side {
-        Side::Right => HandSide::Right as u32,
-        Side::Left => HandSide::Left as u32,
+        HandSide::Right => HandSide::Right as u32,
+        HandSide::Left => HandSide::Left as u32,
     }
 }
 

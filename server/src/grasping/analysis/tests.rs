@@ -49,7 +49,7 @@ fn flat_finger_under(finger: Finger, level: JointLevel, x: f64) -> Touch {
     )
 }
 
-fn classify_default(touches: &[Touch], com: [f64; 3]) -> Option<GraspType> {
+fn classify_default(touches: &[Touch], com: [f64; 3]) -> Option<GraspClass> {
     classify(touches, &Point3::from(com), &AnalysisParams::default())
 }
 
@@ -65,13 +65,13 @@ fn nothing_touching_is_no_grasp_and_the_back_of_the_hand_only_pushes() {
     );
     assert_eq!(
         classify_default(std::slice::from_ref(&back), [0., 0., 0.05]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // Even with fingers wrapped around the other side.
     let wrap = touch(Index, Outer, Palmar, [0., 0., -1.], &[[0., 0.05, 0.05]]);
     assert_eq!(
         classify_default(&[back, wrap], [0., 0., 0.05]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
 }
 
@@ -84,20 +84,20 @@ fn a_part_resting_on_the_open_hand_is_a_gravity_grasp() {
     ];
     assert_eq!(
         classify_default(&hand, [0.0, 0.02, 0.05]),
-        Some(GraspType::Gravity)
+        Some(GraspClass::Gravity)
     );
     assert_eq!(
         classify_default(&hand[..1], [0.01, -0.01, 0.03]),
-        Some(GraspType::Gravity)
+        Some(GraspClass::Gravity)
     );
     // Centre of mass beyond the hand's edge: it would tip off; the flat hand only pushes.
     assert_eq!(
         classify_default(&hand, [0.0, 0.2, 0.05]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     assert_eq!(
         classify_default(&hand[..1], [0.1, 0.0, 0.05]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // A palm pressed on the side of a part pushes it.
     let side = touch(
@@ -109,13 +109,13 @@ fn a_part_resting_on_the_open_hand_is_a_gravity_grasp() {
     );
     assert_eq!(
         classify_default(&[side], [0.05, 0.0, 0.0]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // With the thumb holding on it is no longer resting.
     let thumb = touch(Thumb, Outer, Palmar, [1., 0., 0.], &[[-0.05, 0.0, 0.02]]);
     assert_eq!(
         classify_default(&[palm_under(), thumb], [0., 0., 0.05]),
-        Some(GraspType::Power)
+        Some(GraspClass::Power)
     );
 }
 
@@ -125,7 +125,7 @@ fn the_paper_rules_for_push_and_power() {
     let tip = touch(Index, Outer, Tip, [0., 1., 0.], &[[0., 0.15, 0.]]);
     assert_eq!(
         classify_default(&[tip], [0., 0.2, 0.]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // Rule 2: fingers, no thumb, no palm, on one face.
     let fingers = [
@@ -135,7 +135,7 @@ fn the_paper_rules_for_push_and_power() {
     ];
     assert_eq!(
         classify_default(&fingers, [0., 0.2, 0.]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // Rule 4: the palm and wrapping outer segments (a handle below the palm, axis along x).
     let palm = touch(
@@ -165,7 +165,7 @@ fn the_paper_rules_for_push_and_power() {
     ];
     assert_eq!(
         classify_default(&wrap, [0., 0.06, -0.03]),
-        Some(GraspType::Power)
+        Some(GraspClass::Power)
     );
     // Rule 5: the palm and inner segments only.
     let inner = [
@@ -180,7 +180,7 @@ fn the_paper_rules_for_push_and_power() {
     ];
     assert_eq!(
         classify_default(&inner, [0., 0.06, -0.03]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // A flat hand pressed down on a face: outer segments touch but nothing opposes the palm.
     let flat = [
@@ -195,7 +195,7 @@ fn the_paper_rules_for_push_and_power() {
     ];
     assert_eq!(
         classify_default(&flat, [0., 0.1, -0.05]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
 }
 
@@ -219,27 +219,27 @@ fn precision_grasps_and_their_kinds() {
     let com = [-0.015, 0.125, -0.03];
     assert_eq!(
         classify_default(&[thumb_tip.clone(), index_tip.clone()], com),
-        Some(GraspType::Precision(PrecisionKind::TipPinch))
+        Some(GraspClass::Precision(PrecisionKind::TipPinch))
     );
     assert_eq!(
         classify_default(
             &[thumb_tip.clone(), index_tip.clone(), middle_tip.clone()],
             com
         ),
-        Some(GraspType::Precision(PrecisionKind::ThreeJawChuck))
+        Some(GraspClass::Precision(PrecisionKind::ThreeJawChuck))
     );
     // The middle finger's side instead of its tip: a 3-point pinch.
     let middle_side = touch(Middle, Mid, Lateral, [-1., 0., 0.], &[[0.0, 0.12, -0.03]]);
     assert_eq!(
         classify_default(&[thumb_tip.clone(), index_tip.clone(), middle_side], com),
-        Some(GraspType::ThreePointPinch)
+        Some(GraspClass::ThreePointPinch)
     );
     // The thumb pad on the side of the index's middle segment: a key grasp.
     let index_side = touch(Index, Mid, Lateral, [-1., 0., 0.], &[[-0.035, 0.14, 0.0]]);
     let thumb_pad = touch(Thumb, Outer, Palmar, [1., 0., 0.], &[[-0.045, 0.14, 0.0]]);
     assert_eq!(
         classify_default(&[thumb_pad, index_side], [-0.04, 0.14, 0.0]),
-        Some(GraspType::Precision(PrecisionKind::Key))
+        Some(GraspClass::Precision(PrecisionKind::Key))
     );
     // Thumb and four fingers around a disc.
     let all = [
@@ -263,13 +263,13 @@ fn precision_grasps_and_their_kinds() {
     ];
     assert_eq!(
         classify_default(&all, com),
-        Some(GraspType::Precision(PrecisionKind::Other))
+        Some(GraspClass::Precision(PrecisionKind::Other))
     );
     // Thumb and index both pressing on one face, side by side: no opposition, a push.
     let same_way = touch(Thumb, Outer, Tip, [-0.8, -0.6, 0.], &[[-0.02, 0.12, -0.03]]);
     assert_eq!(
         classify_default(&[same_way, index_tip], com),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
 }
 
@@ -279,26 +279,26 @@ fn a_cigarette_is_held_between_the_sides_of_neighbouring_fingers() {
     let middle = touch(Middle, Mid, Lateral, [-1., 0., 0.], &[[-0.019, 0.15, 0.0]]);
     assert_eq!(
         classify_default(&[index.clone(), middle], [-0.02, 0.15, 0.03]),
-        Some(GraspType::Cigarette)
+        Some(GraspClass::Cigarette)
     );
     // Pressing apart (the part outside the pair) is no cigarette grasp.
     let out_index = touch(Index, Mid, Lateral, [-1., 0., 0.], &[[-0.04, 0.15, 0.0]]);
     let out_middle = touch(Middle, Mid, Lateral, [1., 0., 0.], &[[0.0, 0.15, 0.0]]);
     assert_eq!(
         classify_default(&[out_index, out_middle], [-0.02, 0.15, 0.0]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // Fingers that are not neighbours.
     let ring = touch(Ring, Mid, Lateral, [-1., 0., 0.], &[[0.0, 0.15, 0.0]]);
     assert_eq!(
         classify_default(&[index.clone(), ring], [-0.01, 0.15, 0.0]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     // Pads instead of sides.
     let pad = touch(Middle, Mid, Palmar, [-1., 0., 0.], &[[-0.019, 0.15, 0.0]]);
     assert_eq!(
         classify_default(&[index, pad], [-0.02, 0.15, 0.0]),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
 }
 
@@ -318,11 +318,11 @@ fn a_held_part_keeps_its_grasp_with_relaxed_thresholds() {
     let com = Point3::new(0., 0.06, -0.03);
     assert_eq!(
         classify(&[palm.clone(), thumb.clone()], &com, &params),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     assert_eq!(
         classify(&[palm, thumb], &com, &params.for_held()),
-        Some(GraspType::Power)
+        Some(GraspClass::Power)
     );
     // Resting tilted 50 degrees: kept but not taken.
     let (s, c) = 50f64.to_radians().sin_cos();
@@ -336,27 +336,27 @@ fn a_held_part_keeps_its_grasp_with_relaxed_thresholds() {
     let above = Point3::new(0.0, 0.0, 0.02);
     assert_eq!(
         classify(std::slice::from_ref(&tilted), &above, &params),
-        Some(GraspType::Push)
+        Some(GraspClass::Push)
     );
     assert_eq!(
         classify(&[tilted], &above, &params.for_held()),
-        Some(GraspType::Gravity)
+        Some(GraspClass::Gravity)
     );
 }
 
 #[test]
 fn firmness_ranks_the_holding_types() {
     let order = [
-        GraspType::Push,
-        GraspType::Gravity,
-        GraspType::Cigarette,
-        GraspType::Precision(PrecisionKind::TipPinch),
-        GraspType::ThreePointPinch,
-        GraspType::Power,
+        GraspClass::Push,
+        GraspClass::Gravity,
+        GraspClass::Cigarette,
+        GraspClass::Precision(PrecisionKind::TipPinch),
+        GraspClass::ThreePointPinch,
+        GraspClass::Power,
     ];
     for pair in order.windows(2) {
         assert!(pair[0].firmness() < pair[1].firmness());
     }
-    assert!(!GraspType::Push.holds());
+    assert!(!GraspClass::Push.holds());
     assert!(order[1..].iter().all(|g| g.holds()));
 }

@@ -1,26 +1,6 @@
-//! What a segment is in the hand: its side, its finger and its joint's level.
+//! What a segment is in the hand: its finger and its joint's level.
 
 use serde::Deserialize;
-
-/// Which hand a model is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Side {
-    /// A right hand: the thumb is on the `-x` side of the palm.
-    Right,
-    /// A left hand: the thumb is on the `+x` side.
-    Left,
-}
-
-impl Side {
-    /// The other hand.
-    pub fn mirrored(self) -> Side {
-        match self {
-            Side::Right => Side::Left,
-            Side::Left => Side::Right,
-        }
-    }
-}
 
 /// Which part of the hand a segment belongs to (the analysis' semantics).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]

@@ -4,14 +4,16 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::{Finger, HandConfigError, JointLevel, Side};
+use vas_protocol::HandSide;
+
+use super::{Finger, HandConfigError, JointLevel};
 use crate::geometry::{ConfigFileError, FileLimits, describe_toml_error, read_config_text};
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct HandFile {
     pub(super) name: String,
-    pub(super) side: Side,
+    pub(super) side: HandSide,
     pub(super) mirror_of: Option<PathBuf>,
     #[serde(default)]
     pub(super) flex: Vec<FlexEntry>,

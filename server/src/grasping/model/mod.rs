@@ -20,9 +20,11 @@ mod segment;
 mod validate;
 mod variables;
 
+use vas_protocol::HandSide;
+
 use crate::geometry::ConfigFileError;
 
-pub use anatomy::{Finger, JointLevel, Side};
+pub use anatomy::{Finger, JointLevel};
 pub use segment::{Dof, FlexLimit, Segment, SweptHull};
 pub use variables::VariableSet;
 
@@ -59,7 +61,7 @@ pub type SegmentId = usize;
 #[derive(Debug, Clone, PartialEq)]
 pub struct HandModel {
     name: String,
-    side: Side,
+    side: HandSide,
     limits: Vec<FlexLimit>,
     segments: Vec<Segment>,
     /// For every variable, a bound on how far (metres) any point of the hand moves per radian
@@ -77,7 +79,7 @@ impl HandModel {
     }
 
     /// Right or left hand.
-    pub fn side(&self) -> Side {
+    pub fn side(&self) -> HandSide {
         self.side
     }
 

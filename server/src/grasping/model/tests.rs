@@ -42,7 +42,7 @@ fn both_hands_load_with_sixteen_segments() {
     let right = right_hand();
     let left = HandModel::load(&hands_dir().join("left.toml")).unwrap();
     assert_eq!(right.segments().len(), 16);
-    assert_eq!(left.side(), Side::Left);
+    assert_eq!(left.side(), HandSide::Left);
     assert_eq!(left.name(), "left hand, 22 DOF");
     assert_eq!(right.limits()[4].name, "index inner (MCP)");
     assert!((right.limits()[4].max - 90f64.to_radians()).abs() < 1e-15);

@@ -15,7 +15,7 @@ use thiserror::Error;
 
 use super::joints::{HandJoints, Joint, JointFlags, JointPose, JointsError, WEBXR_JOINT_COUNT};
 use crate::geometry::{ConfigFileError, read_config_text};
-use crate::grasping::Side;
+use vas_protocol::HandSide;
 
 /// The largest capture file read, in bytes: a capture is a few kilobytes.
 pub const MAX_CAPTURE_BYTES: u64 = 1 << 20;
@@ -53,7 +53,7 @@ pub enum CaptureError {
 #[derive(Debug, Deserialize)]
 struct CaptureFile {
     pose: Option<String>,
-    side: Option<Side>,
+    side: Option<HandSide>,
     joints: Vec<JointEntry>,
 }
 
@@ -123,7 +123,7 @@ impl Capture {
     }
 
     /// The captured joints as a hand of `side`: as captured, or mirrored.
-    pub fn joints_of(&self, side: Side) -> HandJoints {
+    pub fn joints_of(&self, side: HandSide) -> HandJoints {
         if self.joints.side == side {
             self.joints.clone()
         } else {
@@ -164,14 +164,14 @@ fn joint_pose(matrix: &[f64], radius: f64) -> Result<JointPose, String> {
 
 /// Which hand WebXR joints are: a left hand's index knuckle is on the `+X` side of its wrist
 /// frame from the little finger's knuckle, a right hand's on the `-X` side.
-fn side_of(webxr: &[JointPose; WEBXR_JOINT_COUNT]) -> Side {
+fn side_of(webxr: &[JointPose; WEBXR_JOINT_COUNT]) -> HandSide {
     let at = |joint: Joint| webxr[joint.index() - 1];
     let wrist = at(Joint::Wrist);
     let across = wrist.rotation() * Vector3::x();
     let index_from_little = at(Joint::IndexProximal).position - at(Joint::LittleProximal).position;
     if across.dot(&index_from_little) >= 0.0 {
-        Side::Left
+        HandSide::Left
     } else {
-        Side::Right
+        HandSide::Right
     }
 }

@@ -24,7 +24,8 @@ use thiserror::Error;
 use super::joints::{HandJoints, Joint, JointsError};
 use super::skeleton::Skeleton;
 use crate::grasping::model::Dof;
-use crate::grasping::{FLEX_COUNT, FlexVector, HandModel, Side};
+use crate::grasping::{FLEX_COUNT, FlexVector, HandModel};
+use vas_protocol::HandSide;
 
 /// Number of fingertip coordinates the refinement matches.
 const TIP_COORDINATES: usize = 15;
@@ -59,9 +60,9 @@ pub enum RetargetError {
     #[error("a {sample:?} hand sample cannot drive a {model:?} hand model")]
     WrongSide {
         /// The model's side.
-        model: Side,
+        model: HandSide,
         /// The sample's side.
-        sample: Side,
+        sample: HandSide,
     },
     /// The model has a joint the retargeting cannot split into its degrees of freedom.
     #[error("segment {segment:?}: {reason}")]

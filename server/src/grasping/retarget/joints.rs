@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
 use thiserror::Error;
 use vas_protocol::MAX_POSITION_M;
 
-use crate::grasping::Side;
+use vas_protocol::HandSide;
 
 /// Number of OpenXR hand joints.
 pub const JOINT_COUNT: usize = 26;
@@ -207,7 +207,7 @@ impl JointPose {
 #[derive(Debug, Clone, PartialEq)]
 pub struct HandJoints {
     /// Left or right hand.
-    pub side: Side,
+    pub side: HandSide,
     /// The joints, indexed by [`Joint::index`].
     pub joints: [JointPose; JOINT_COUNT],
 }
@@ -275,7 +275,7 @@ impl HandJoints {
     /// A hand from WebXR's 25 joints (wrist first). The palm, which WebXR lacks, is derived as
     /// OpenXR defines it: at the middle of the middle finger's metacarpal, turned as it is; it is
     /// valid or tracked where both joints it comes from are.
-    pub fn from_webxr(side: Side, joints: [JointPose; WEBXR_JOINT_COUNT]) -> HandJoints {
+    pub fn from_webxr(side: HandSide, joints: [JointPose; WEBXR_JOINT_COUNT]) -> HandJoints {
         let metacarpal = joints[Joint::MiddleMetacarpal.index() - 1];
         let knuckle = joints[Joint::MiddleProximal.index() - 1];
         let palm = JointPose {
@@ -388,8 +388,8 @@ impl HandJoints {
         // thumb side is +X and a right hand's -X.
         let across = wrist.rotation() * Vector3::x();
         let sign = match self.side {
-            Side::Left => 1.0,
-            Side::Right => -1.0,
+            HandSide::Left => 1.0,
+            HandSide::Right => -1.0,
         };
         let knuckles = [
             Joint::IndexProximal,

@@ -7,7 +7,7 @@
 //! * [`fit`]: the [`Retargeter`]: the angles from the joints' relative rotations, then a few
 //!   damped least-squares steps on the fingertips.
 //! * [`calibrate`]: the model resized to one user's hand from one sample.
-//! * [`tip_error`]: the distance of the model's fingertips from the tracked tips.
+//! * [`tip_distances`]: the distance of the model's fingertips from the tracked tips.
 //! * [`synthesize`]: the joints a tracker would report for a posed model.
 
 pub mod calibrate;
@@ -18,9 +18,9 @@ pub mod skeleton;
 pub mod synthesize;
 #[cfg(test)]
 mod tests;
-pub mod tip_error;
+pub mod tip_distances;
 
 pub use capture::{Capture, CaptureError};
 pub use fit::{Retarget, RetargetError, Retargeter};
 pub use joints::{HandJoints, Joint, JointFlags, JointPose, JointsError};
-pub use tip_error::FingertipError;
+pub use tip_distances::FingertipDistances;

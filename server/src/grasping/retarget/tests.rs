@@ -9,7 +9,8 @@ use rand_chacha::ChaCha8Rng;
 
 use super::*;
 use crate::grasping::model::tests::hands_dir;
-use crate::grasping::{FLEX_COUNT, FlexVector, HandModel, Side};
+use crate::grasping::{FLEX_COUNT, FlexVector, HandModel};
+use vas_protocol::HandSide;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -21,10 +22,10 @@ fn capture(name: &str) -> Capture {
     Capture::read(&fixture(name)).expect("the fixture is a valid capture")
 }
 
-fn retargeter(side: Side) -> Retargeter {
+fn retargeter(side: HandSide) -> Retargeter {
     let file = match side {
-        Side::Left => "left.toml",
-        Side::Right => "right.toml",
+        HandSide::Left => "left.toml",
+        HandSide::Right => "right.toml",
     };
     Retargeter::new(HandModel::load(&hands_dir().join(file)).unwrap()).unwrap()
 }
@@ -32,7 +33,7 @@ fn retargeter(side: Side) -> Retargeter {
 #[test]
 fn captures_are_left_hands_and_mirror_to_right_hands() {
     let pinch = capture("webxr_pinch.json");
-    assert_eq!(pinch.joints.side, Side::Left);
+    assert_eq!(pinch.joints.side, HandSide::Left);
     assert_eq!(pinch.pose.as_deref(), Some("pinch"));
     // WebXR has no palm: it is derived halfway along the middle finger's metacarpal.
     let palm = pinch.joints.get(Joint::Palm);
@@ -44,7 +45,7 @@ fn captures_are_left_hands_and_mirror_to_right_hands() {
     );
     assert_eq!(palm.orientation, metacarpal.orientation);
     let right = pinch.mirrored();
-    assert_eq!(right.joints.side, Side::Right);
+    assert_eq!(right.joints.side, HandSide::Right);
     right
         .joints
         .validate()
@@ -72,7 +73,7 @@ fn fingertips_of_real_captures_calibrated_on_the_other_capture() {
                 .calibrated(&calibration_capture.joints)
                 .unwrap();
             let fit = retargeter.fit(&capture.joints).unwrap();
-            let error = retargeter.fingertip_error(&fit, &capture.joints);
+            let error = retargeter.fingertip_distances(&fit, &capture.joints);
             let (rms, max) = (error.rms() * 1e3, error.max() * 1e3);
             eprintln!(
                 "{measured} ({side:?}) calibrated on {calibration}: fingertip RMS {rms:.2} mm, \
@@ -117,12 +118,12 @@ fn random_root(rng: &mut ChaCha8Rng) -> Isometry3<f64> {
 fn model_generated_joints_give_back_their_angles() {
     const CASES: usize = 2000;
     let mut rng = ChaCha8Rng::seed_from_u64(35);
-    for side in [Side::Right, Side::Left] {
+    for side in [HandSide::Right, HandSide::Left] {
         for calibrated in [false, true] {
             let mut retargeter = retargeter(side);
             if calibrated {
                 let mut c = capture("webxr_relaxed.json");
-                if side == Side::Right {
+                if side == HandSide::Right {
                     c = c.mirrored();
                 }
                 retargeter = retargeter.calibrated(&c.joints).unwrap();
@@ -159,7 +160,9 @@ fn model_generated_joints_give_back_their_angles() {
 #[test]
 fn calibration_takes_the_measured_bone_lengths() {
     let relaxed = capture("webxr_relaxed.json");
-    let retargeter = retargeter(Side::Left).calibrated(&relaxed.joints).unwrap();
+    let retargeter = retargeter(HandSide::Left)
+        .calibrated(&relaxed.joints)
+        .unwrap();
     let rest = retargeter.synthesize(&Isometry3::identity(), &[0.0; FLEX_COUNT]);
     let length = |joints: &HandJoints, from: Joint, to: Joint| {
         (joints.get(to).position - joints.get(from).position).norm()
@@ -188,7 +191,7 @@ fn calibration_takes_the_measured_bone_lengths() {
 #[test]
 fn a_hand_moved_rigidly_retargets_to_the_moved_root_and_the_same_angles() {
     let joints = capture("webxr_pinch.json").joints;
-    let retargeter = retargeter(Side::Left);
+    let retargeter = retargeter(HandSide::Left);
     let pose = Isometry3::from_parts(
         Translation3::new(0.3, -0.2, 1.1),
         UnitQuaternion::from_euler_angles(0.4, -1.1, 2.0),
@@ -209,7 +212,7 @@ fn quaternions_a_little_off_unit_length_give_a_unit_root() {
     for joint in &mut joints.joints {
         joint.orientation *= 1.0 + 5e-4;
     }
-    let fit = retargeter(Side::Left)
+    let fit = retargeter(HandSide::Left)
         .fit(&joints)
         .expect("within the tolerance");
     assert!((fit.root.rotation.quaternion().norm() - 1.0).abs() < 1e-12);
@@ -218,7 +221,7 @@ fn quaternions_a_little_off_unit_length_give_a_unit_root() {
 #[test]
 fn impossible_samples_are_rejected() {
     let good = capture("webxr_pinch.json").joints;
-    let retargeter = retargeter(Side::Left);
+    let retargeter = retargeter(HandSide::Left);
     let reject = |edit: &dyn Fn(&mut HandJoints)| {
         let mut joints = good.clone();
         edit(&mut joints);
@@ -273,13 +276,13 @@ fn impossible_samples_are_rejected() {
     ));
     // A left hand's joints called a right hand: the knuckles are in the wrong order.
     let mut called_right = good.clone();
-    called_right.side = Side::Right;
+    called_right.side = HandSide::Right;
     assert!(matches!(
         called_right.validate(),
         Err(JointsError::OutOfOrder { .. })
     ));
     assert_eq!(
-        self::retargeter(Side::Right)
+        self::retargeter(HandSide::Right)
             .fit(&good)
             .unwrap_err()
             .to_string(),

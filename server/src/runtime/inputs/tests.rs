@@ -4,11 +4,11 @@ use nalgebra::{Translation3, UnitQuaternion, Vector3};
 use vas_protocol::{FLEX_LIMITS_RAD, WirePose};
 
 use super::*;
-use crate::grasping::Side;
 use crate::grasping::model::tests::right_hand;
 use crate::grasping::retarget::{Joint, Retargeter};
 use crate::runtime::hand_joints::tests::captured;
 use crate::runtime::hand_joints::wire_joints;
+use vas_protocol::HandSide;
 
 fn tracker(seq: u64, hand: WirePose, cart: WirePose) -> TrackerSample {
     TrackerSample {
@@ -157,7 +157,11 @@ fn forgetting_the_targets_keeps_the_counters() {
 
 /// A right hand's pinch, as a wire sample numbered `seq`.
 fn pinch(seq: u64) -> HandJointsSample {
-    wire_joints(&captured("webxr_pinch.json", Side::Right), seq, 100 + seq)
+    wire_joints(
+        &captured("webxr_pinch.json", HandSide::Right),
+        seq,
+        100 + seq,
+    )
 }
 
 #[test]
@@ -170,7 +174,7 @@ fn hand_joints_drive_the_hand_and_the_tracker_keeps_the_cart() {
     );
     let fit = Retargeter::new(model)
         .expect("the right hand retargets")
-        .fit(&captured("webxr_pinch.json", Side::Right))
+        .fit(&captured("webxr_pinch.json", HandSide::Right))
         .expect("the pinch fits");
     let frame = inputs.frame();
     assert_eq!(
@@ -322,7 +326,7 @@ fn two_hands_take_the_glove_and_their_own_joints() {
     assert_eq!(frame.hands[0].input.flex, [0.2; FLEX_COUNT]);
     assert!(frame.hands[0].tracked);
     assert!(!frame.hands[1].tracked, "no input for the left hand yet");
-    let sample = wire_joints(&captured("webxr_pinch.json", Side::Left), 1, 5);
+    let sample = wire_joints(&captured("webxr_pinch.json", HandSide::Left), 1, 5);
     assert_eq!(
         inputs.apply_hand_joints(&sample),
         Ok(JointsOutcome::Tracked)

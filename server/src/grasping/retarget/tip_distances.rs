@@ -7,12 +7,12 @@ use crate::grasping::Finger;
 
 /// The fingertip distances of one retargeted sample, in metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FingertipError {
+pub struct FingertipDistances {
     /// Thumb, index, middle, ring and pinky, as [`Finger::DIGITS`].
     pub per_digit: [f64; 5],
 }
 
-impl FingertipError {
+impl FingertipDistances {
     /// The digits with their distances.
     pub fn digits(&self) -> impl Iterator<Item = (Finger, f64)> + '_ {
         Finger::DIGITS.into_iter().zip(self.per_digit)
@@ -32,12 +32,12 @@ impl FingertipError {
 impl Retargeter {
     /// The distance of each of the model's fingertips, posed by `fit`, from the tip joints of
     /// `joints` (the sample it was fitted to).
-    pub fn fingertip_error(&self, fit: &Retarget, joints: &HandJoints) -> FingertipError {
+    pub fn fingertip_distances(&self, fit: &Retarget, joints: &HandJoints) -> FingertipDistances {
         let poses = self.model().segment_poses(&fit.flex);
         let per_digit = self.skeleton().digits.each_ref().map(|digit| {
             let model_tip = fit.root * (poses[digit.segments[2]] * digit.tip);
             (model_tip - joints.get(digit.joints[3]).position).norm()
         });
-        FingertipError { per_digit }
+        FingertipDistances { per_digit }
     }
 }
