@@ -100,7 +100,7 @@ fn a_glb_loads_as_one_mesh_of_every_node_in_place() {
 
 /// A small glTF document of one mesh node: `positions` (three floats each) and `indices` (u16)
 /// in buffer 0, drawn in `mode`; the node placed by `node` (its JSON fields).
-fn gltf_document(
+pub(super) fn gltf_document(
     positions: &[[f32; 3]],
     indices: &[u16],
     mode: u32,
@@ -137,10 +137,10 @@ fn gltf_document(
 }
 
 /// A unit square in z = 0, as four corners.
-const SQUARE: [[f32; 3]; 4] = [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]];
+pub(super) const SQUARE: [[f32; 3]; 4] = [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]];
 
 /// `document` and `bin` as a GLB file.
-fn glb(document: &Value, bin: &[u8]) -> Vec<u8> {
+pub(super) fn glb(document: &Value, bin: &[u8]) -> Vec<u8> {
     let mut json = serde_json::to_vec(document).unwrap();
     json.resize(json.len().next_multiple_of(4), b' ');
     let mut bin = bin.to_vec();
