@@ -165,7 +165,10 @@ impl ClaspParams {
             } else {
                 Err(ClaspParamError {
                     key,
-                    reason: format!("must be positive and at most {max} {unit}, got {value}"),
+                    reason: format!(
+                        "must be positive and at most {max} {unit}, got {}",
+                        vas_protocol::Readable(value)
+                    ),
                 })
             }
         };

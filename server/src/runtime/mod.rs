@@ -126,7 +126,10 @@ pub enum RuntimeError {
         reason: String,
     },
     /// The scene's publish rate cannot drive a loop.
-    #[error("the publish rate must be positive, finite and below 1 GHz, not {hz} Hz")]
+    #[error(
+        "the publish rate must be positive, finite and below 1 GHz, not {} Hz",
+        vas_protocol::Readable(*hz)
+    )]
     PublishRate {
         /// The configured rate.
         hz: f64,

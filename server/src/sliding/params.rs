@@ -116,7 +116,13 @@ impl SlideParams {
             ("force.max_torque", f.max_torque),
         ] {
             if !non_negative(value) {
-                return fail(key, format!("must be finite and not negative, got {value}"));
+                return fail(
+                    key,
+                    format!(
+                        "must be finite and not negative, got {}",
+                        vas_protocol::Readable(value)
+                    ),
+                );
             }
         }
         for (i, a) in self.allowances.iter().enumerate() {

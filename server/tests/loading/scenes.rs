@@ -929,3 +929,23 @@ fn a_tree_cache_serves_the_next_start_and_refuses_a_damaged_file() {
         "{stderr}"
     );
 }
+
+/// A huge or tiny number a config gives is quoted in scientific notation, not as hundreds of
+/// digits.
+#[test]
+fn errors_quote_huge_numbers_in_scientific_notation() {
+    let dir = scratch_dir("huge_numbers");
+    for (name, part, quoted) in [
+        ("position", "position = [1e300, 0.0, 0.0]", "not 1e300"),
+        ("rotation", "rotation = [1e300, 0.0, 0.0, 1.0]", "[1e300, 0, 0, 1]"),
+    ] {
+        let text = format!(
+            "name = \"huge\"\n[[parts]]\nname = \"box\"\n\
+             shape = {{ kind = \"box\", size = [0.1, 0.1, 0.1], triangles = 12 }}\n{part}\n"
+        );
+        let file = write(&dir, &format!("{name}.toml"), &text);
+        let error = Scene::load(&file).expect_err("refused").to_string();
+        assert!(error.contains(quoted), "{error}");
+        assert!(error.len() < 400, "{error}");
+    }
+}

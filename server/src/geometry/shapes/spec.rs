@@ -349,7 +349,10 @@ pub(super) fn dimension(field: &'static str, value: f64) -> Result<(), ShapeSpec
     } else {
         Err(ShapeSpecError {
             field,
-            reason: format!("must be a length between {lo} and {hi} metres, not {value}"),
+            reason: format!(
+                "must be a length between {lo} and {hi} metres, not {}",
+                vas_protocol::Readable(value)
+            ),
         })
     }
 }

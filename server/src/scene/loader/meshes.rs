@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use vas_protocol::Readable;
+
 use super::Loader;
 use crate::geometry::shapes::ShapeSpec;
 use crate::geometry::{FileLimits, GeometryError, Point, TriMesh, load_mesh_within};
@@ -22,7 +24,7 @@ impl Loader<'_> {
         if !(scale.is_finite() && scale > 0.0) {
             return Err(self.invalid(
                 format!("parts[{index}].scale"),
-                format!("must be a positive number, not {scale}"),
+                format!("must be a positive number, not {}", Readable(scale)),
             ));
         }
         let path = self.folder.join(relative);

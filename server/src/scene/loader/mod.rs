@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use vas_protocol::Readable;
 
 use super::file::{GroupsFile, PartFile, SceneFile};
 use super::groups::sorted_pair;
@@ -322,7 +323,10 @@ impl Loader<'_> {
         if let Some(c) = position.iter().find(|c| !c.is_finite() || c.abs() > limit) {
             return Err(self.invalid(
                 key,
-                format!("coordinates must be finite and within {limit} m, not {c}"),
+                format!(
+                    "coordinates must be finite and within {limit} m, not {}",
+                    Readable(*c)
+                ),
             ));
         }
         Ok(Translation3::from(position))
@@ -341,6 +345,7 @@ impl Loader<'_> {
         let quaternion = Quaternion::new(w, x, y, z);
         let norm = quaternion.norm();
         if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+            let [x, y, z, w, norm] = [x, y, z, w, norm].map(Readable);
             return Err(self.invalid(
                 key,
                 format!(
