@@ -27,11 +27,87 @@ use crate::wait::{Wake, deadline_after, new_waitset, signal_mode, wait_until_rea
 /// may be starting).
 const CONTROL_RETRY: Duration = Duration::from_millis(20);
 
+/// What a [`Client`] does, and so which ports it holds: every service takes only so many ports
+/// (see [`vas_protocol::services::clients`]), and a port a client does not use is a renderer or
+/// an operator refused.
+///
+/// Every client holds a control client (scene info, input counters, reset, loads, metaphor):
+/// [`Roles::CONTROL`] is that alone. [`Roles::RENDER`] adds a subscriber on each output service
+/// (parts, hand, events, force, geometry) for [`Client::wait`] and [`Client::receive`];
+/// [`Roles::INPUT`] adds a publisher and its notifier on each input stream (tracker, glove, hand
+/// joints) for [`Client::send_tracker`] and the other sends. Roles combine with `|`; the default
+/// is [`Roles::ALL`], every port, as a client had before there were roles.
+///
+/// ```
+/// use vas_client::Roles;
+///
+/// // A headset's bridge that reads the answers to its samples.
+/// let device = Roles::INPUT | Roles::RENDER;
+/// assert_eq!(device, Roles::ALL);
+/// assert!(Roles::RENDER.contains(Roles::CONTROL));
+/// assert!(!Roles::RENDER.contains(Roles::INPUT));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Roles(u8);
+
+impl Roles {
+    /// The control service only: what an operator's command (`vas-client reset`, `load-scene`,
+    /// `scenes`, `set-metaphor`, `info`) takes. Every other role includes it.
+    pub const CONTROL: Roles = Roles(0);
+    /// Reads the server's output: a renderer, a viewer, `vas-client watch` (with control).
+    pub const RENDER: Roles = Roles(1);
+    /// Sends input: a device bridge, a replay, `vas-client send-*` (with control).
+    pub const INPUT: Roles = Roles(2);
+    /// Every role: renders and sends. The default.
+    pub const ALL: Roles = Roles(Self::RENDER.0 | Self::INPUT.0);
+
+    /// Whether these roles include every one of `other`.
+    pub const fn contains(self, other: Roles) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+impl Default for Roles {
+    /// [`Roles::ALL`], so that a client opened without saying keeps every port.
+    fn default() -> Self {
+        Roles::ALL
+    }
+}
+
+impl std::ops::BitOr for Roles {
+    type Output = Roles;
+
+    fn bitor(self, other: Roles) -> Roles {
+        Roles(self.0 | other.0)
+    }
+}
+
+impl std::ops::BitOrAssign for Roles {
+    fn bitor_assign(&mut self, other: Roles) {
+        self.0 |= other.0;
+    }
+}
+
+impl std::fmt::Display for Roles {
+    /// `control`, `render`, `input` or `render and input`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(
+            match (self.contains(Roles::RENDER), self.contains(Roles::INPUT)) {
+                (false, false) => "control",
+                (true, false) => "render",
+                (false, true) => "input",
+                (true, true) => "render and input",
+            },
+        )
+    }
+}
+
 /// Options of a [`Client`] connection.
 #[derive(Debug, Clone, Default)]
 pub struct ClientBuilder {
     prefix: Option<String>,
     handle_termination_signals: bool,
+    roles: Roles,
 }
 
 impl ClientBuilder {
@@ -50,85 +126,21 @@ impl ClientBuilder {
         self
     }
 
-    /// Opens the vas services and creates this client's ports.
+    /// Take these roles only, holding only their ports ([`Roles::ALL`] by default): a
+    /// renderer takes `Roles::RENDER`, an operator's tool `Roles::CONTROL`, a device that
+    /// reads its answers `Roles::INPUT | Roles::RENDER`. [`Client::take_roles`] adds roles
+    /// later.
+    pub fn roles(mut self, roles: Roles) -> Self {
+        self.roles = roles;
+        self
+    }
+
+    /// Opens the vas services of the client's roles and creates their ports.
     pub fn connect(self) -> Result<Client, ClientError> {
         let node = create_node(self.prefix.as_deref(), self.handle_termination_signals)?;
-        let tracker = services::open_tracker(&node)?;
-        let glove = services::open_glove(&node)?;
-        let hand_joints = services::open_hand_joints(&node)?;
-        let parts = services::open_parts(&node)?;
-        let hand = services::open_hand(&node)?;
-        let events = services::open_events(&node)?;
-        let force = services::open_force(&node)?;
         let control = services::open_control(&node)?;
-        let tracker_wakeup = services::open_wakeup(&node, services::TRACKER)?;
-        let glove_wakeup = services::open_wakeup(&node, services::GLOVE)?;
-        let hand_joints_wakeup = services::open_wakeup(&node, services::HAND_JOINTS)?;
-        let parts_wakeup = services::open_wakeup(&node, services::PARTS)?;
-        let hand_wakeup = services::open_wakeup(&node, services::HAND)?;
-        let events_wakeup = services::open_wakeup(&node, services::EVENTS)?;
-        let force_wakeup = services::open_wakeup(&node, services::FORCE)?;
-        let geometry_wakeup = services::open_wakeup(&node, services::GEOMETRY)?;
         let control_wakeup = services::open_wakeup(&node, services::CONTROL)?;
-        Ok(Client {
-            tracker: InputPort::open(
-                &tracker,
-                &tracker_wakeup,
-                ["send a tracker sample", "notify the tracker service"],
-            )?,
-            glove: InputPort::open(
-                &glove,
-                &glove_wakeup,
-                ["send a glove sample", "notify the glove service"],
-            )?,
-            hand_joints: InputPort::open(
-                &hand_joints,
-                &hand_joints_wakeup,
-                [
-                    "send a hand-joints sample",
-                    "notify the hand-joints service",
-                ],
-            )?,
-            parts: parts
-                .subscriber_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            parts_listener: parts_wakeup
-                .listener_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            hand: hand
-                .subscriber_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            hand_listener: hand_wakeup
-                .listener_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            events: events
-                .subscriber_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            events_listener: events_wakeup
-                .listener_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            force: force
-                .subscriber_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            force_listener: force_wakeup
-                .listener_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            geometry: services::open_geometry(&node)?
-                .subscriber_builder()
-                .create()
-                .map_err(ClientError::port)?,
-            geometry_listener: geometry_wakeup
-                .listener_builder()
-                .create()
-                .map_err(ClientError::port)?,
+        let mut client = Client {
             control: control
                 .client_builder()
                 .create()
@@ -141,11 +153,100 @@ impl ClientBuilder {
                 .listener_builder()
                 .create()
                 .map_err(ClientError::port)?,
+            outputs: None,
+            inputs: None,
             waitset: new_waitset(self.handle_termination_signals)?,
             latest_parts: None,
             latest_hand: None,
             latest_geometry: None,
             node,
+        };
+        client.take_roles(self.roles)?;
+        Ok(client)
+    }
+}
+
+/// The ports of the render role: a subscriber on each output service, and a listener on its
+/// wake-up service.
+struct Outputs {
+    parts: Subscriber<ipc::Service, [PartState], PartsFrameHeader>,
+    parts_listener: Listener<ipc::Service>,
+    hand: Subscriber<ipc::Service, HandFrame, ()>,
+    hand_listener: Listener<ipc::Service>,
+    events: Subscriber<ipc::Service, SimEvent, ()>,
+    events_listener: Listener<ipc::Service>,
+    force: Subscriber<ipc::Service, ForceFrame, ()>,
+    force_listener: Listener<ipc::Service>,
+    geometry: Subscriber<ipc::Service, [u8], GeometryHeader>,
+    geometry_listener: Listener<ipc::Service>,
+}
+
+impl Outputs {
+    fn open(node: &Node<ipc::Service>) -> Result<Self, ClientError> {
+        let listener = |name| -> Result<Listener<ipc::Service>, ClientError> {
+            services::open_wakeup(node, name)?
+                .listener_builder()
+                .create()
+                .map_err(ClientError::port)
+        };
+        Ok(Outputs {
+            parts: services::open_parts(node)?
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            parts_listener: listener(services::PARTS)?,
+            hand: services::open_hand(node)?
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            hand_listener: listener(services::HAND)?,
+            events: services::open_events(node)?
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            events_listener: listener(services::EVENTS)?,
+            force: services::open_force(node)?
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            force_listener: listener(services::FORCE)?,
+            geometry: services::open_geometry(node)?
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            geometry_listener: listener(services::GEOMETRY)?,
+        })
+    }
+}
+
+/// The ports of the input role: each input stream's sending end.
+struct Inputs {
+    tracker: InputPort<TrackerSample>,
+    glove: InputPort<GloveSample>,
+    hand_joints: InputPort<HandJointsSample>,
+}
+
+impl Inputs {
+    fn open(node: &Node<ipc::Service>) -> Result<Self, ClientError> {
+        Ok(Inputs {
+            tracker: InputPort::open(
+                &services::open_tracker(node)?,
+                &services::open_wakeup(node, services::TRACKER)?,
+                ["send a tracker sample", "notify the tracker service"],
+            )?,
+            glove: InputPort::open(
+                &services::open_glove(node)?,
+                &services::open_wakeup(node, services::GLOVE)?,
+                ["send a glove sample", "notify the glove service"],
+            )?,
+            hand_joints: InputPort::open(
+                &services::open_hand_joints(node)?,
+                &services::open_wakeup(node, services::HAND_JOINTS)?,
+                [
+                    "send a hand-joints sample",
+                    "notify the hand-joints service",
+                ],
+            )?,
         })
     }
 }
@@ -328,26 +429,20 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> InputPort<T> {
 
 /// A connection to a vas server: sends input, receives frames, asks the control service.
 ///
-/// All ports belong to one iceoryx2 node on the chosen prefix. The client is not `Send`
-/// (iceoryx2 ports are bound to their thread): create it on the thread that uses it.
+/// It holds the ports of its [`Roles`] only: a client opened without the render role cannot
+/// [`Client::wait`] or [`Client::receive`], one without the input role cannot send samples
+/// (both are [`ClientError::MissingRole`]). All ports belong to one iceoryx2 node on the chosen
+/// prefix. The client is not `Send` (iceoryx2 ports are bound to their thread): create it on
+/// the thread that uses it.
 pub struct Client {
     node: Node<ipc::Service>,
-    tracker: InputPort<TrackerSample>,
-    glove: InputPort<GloveSample>,
-    hand_joints: InputPort<HandJointsSample>,
-    parts: Subscriber<ipc::Service, [PartState], PartsFrameHeader>,
-    parts_listener: Listener<ipc::Service>,
-    hand: Subscriber<ipc::Service, HandFrame, ()>,
-    hand_listener: Listener<ipc::Service>,
-    events: Subscriber<ipc::Service, SimEvent, ()>,
-    events_listener: Listener<ipc::Service>,
-    force: Subscriber<ipc::Service, ForceFrame, ()>,
-    force_listener: Listener<ipc::Service>,
-    geometry: Subscriber<ipc::Service, [u8], GeometryHeader>,
-    geometry_listener: Listener<ipc::Service>,
     control: ControlPort<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     control_notifier: Notifier<ipc::Service>,
     control_listener: Listener<ipc::Service>,
+    /// The render role's ports, when it was taken.
+    outputs: Option<Outputs>,
+    /// The input role's ports, when it was taken.
+    inputs: Option<Inputs>,
     waitset: WaitSet<ipc::Service>,
     latest_parts: Option<PartsFrame>,
     latest_hand: Option<HandFrame>,
@@ -355,20 +450,61 @@ pub struct Client {
 }
 
 impl Client {
-    /// Connects on `prefix` (the server's `--prefix`, or the configured default for `None`),
-    /// leaving signal handling to the application.
+    /// Connects on `prefix` (the server's `--prefix`, or the configured default for `None`)
+    /// with every role ([`Roles::ALL`]), leaving signal handling to the application.
     pub fn connect(prefix: Option<&str>) -> Result<Self, ClientError> {
         ClientBuilder::default().prefix(prefix).connect()
     }
 
-    /// Options for a connection.
+    /// Options for a connection: its prefix, its roles, signal handling.
     pub fn builder() -> ClientBuilder {
         ClientBuilder::default()
     }
 
+    /// The roles this client holds the ports of.
+    pub fn roles(&self) -> Roles {
+        let mut roles = Roles::CONTROL;
+        if self.outputs.is_some() {
+            roles |= Roles::RENDER;
+        }
+        if self.inputs.is_some() {
+            roles |= Roles::INPUT;
+        }
+        roles
+    }
+
+    /// Takes `roles` as well, creating the ports of those the client does not hold yet: e.g. a
+    /// viewer takes the input role once a headset sends hand joints. On an error (such as
+    /// [`ClientError::Full`]) the client keeps the roles it had.
+    pub fn take_roles(&mut self, roles: Roles) -> Result<(), ClientError> {
+        if roles.contains(Roles::RENDER) && self.outputs.is_none() {
+            self.outputs = Some(Outputs::open(&self.node)?);
+        }
+        if roles.contains(Roles::INPUT) && self.inputs.is_none() {
+            self.inputs = Some(Inputs::open(&self.node)?);
+        }
+        Ok(())
+    }
+
+    /// The input role's ports, or the error saying this client did not take it.
+    fn inputs(&self, action: &'static str) -> Result<&Inputs, ClientError> {
+        self.inputs.as_ref().ok_or(ClientError::MissingRole {
+            role: Roles::INPUT,
+            action,
+        })
+    }
+
+    /// The render role's ports, or the error saying this client did not take it.
+    fn outputs(&self, action: &'static str) -> Result<&Outputs, ClientError> {
+        self.outputs.as_ref().ok_or(ClientError::MissingRole {
+            role: Roles::RENDER,
+            action,
+        })
+    }
+
     /// Sends a tracker sample and wakes the server.
     pub fn send_tracker(&self, sample: &TrackerSample) -> Result<(), ClientError> {
-        self.tracker.send(sample)
+        self.inputs("send a tracker sample")?.tracker.send(sample)
     }
 
     /// Returns once the server has taken in every sample this client sent before the call; call
@@ -384,12 +520,12 @@ impl Client {
 
     /// Sends a glove sample and wakes the server.
     pub fn send_glove(&self, sample: &GloveSample) -> Result<(), ClientError> {
-        self.glove.send(sample)
+        self.inputs("send a glove sample")?.glove.send(sample)
     }
 
     /// Sends a hand-joints sample (one hand's 26 OpenXR joints) and wakes the server.
     pub fn send_hand_joints(&self, sample: &HandJointsSample) -> Result<(), ClientError> {
-        self.hand_joints.send(sample)
+        (self.inputs("send a hand-joints sample")?.hand_joints).send(sample)
     }
 
     /// Sends a sample of any input stream and wakes the server.
@@ -401,20 +537,26 @@ impl Client {
         }
     }
 
-    /// Blocks until an output frame (geometry, parts, hand, event or force) is ready to be received, the
-    /// timeout passes, or (with signal handling on) a termination signal arrives. Frames stay
-    /// queued for [`Client::poll`] or [`Client::receive`].
+    /// Blocks until an output frame (geometry, parts, hand, event or force) is ready to be
+    /// received, the timeout passes, or (with signal handling on) a termination signal arrives.
+    /// Frames stay queued for [`Client::poll`] or [`Client::receive`]. Needs the render role.
     pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
-        let (parts, hand, events, force) = (&self.parts, &self.hand, &self.events, &self.force);
-        let geometry = &self.geometry;
+        let outputs = self.outputs("wait for frames")?;
+        let (parts, hand, events, force) = (
+            &outputs.parts,
+            &outputs.hand,
+            &outputs.events,
+            &outputs.force,
+        );
+        let geometry = &outputs.geometry;
         wait_until_ready(
             &self.waitset,
             &[
-                &self.geometry_listener,
-                &self.parts_listener,
-                &self.hand_listener,
-                &self.events_listener,
-                &self.force_listener,
+                &outputs.geometry_listener,
+                &outputs.parts_listener,
+                &outputs.hand_listener,
+                &outputs.events_listener,
+                &outputs.force_listener,
             ],
             timeout,
             || {
@@ -436,8 +578,9 @@ impl Client {
     /// server publishes a frame's hand last, so the parts and events of a hand frame's own frame
     /// come with it or before it, and a new scene's geometry before its frames).
     pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
+        let outputs = self.outputs("receive frames")?;
         let mut frames = Vec::new();
-        while let Some(sample) = self
+        while let Some(sample) = outputs
             .geometry
             .receive()
             .map_err(|error| ClientError::ipc("receive the geometry", error))?
@@ -445,7 +588,7 @@ impl Client {
             let geometry = SceneGeometry::decode(sample.user_header(), sample.payload())?;
             frames.push(Frame::Geometry(Arc::new(geometry)));
         }
-        while let Some(sample) = self
+        while let Some(sample) = outputs
             .parts
             .receive()
             .map_err(|error| ClientError::ipc("receive a parts frame", error))?
@@ -455,21 +598,21 @@ impl Client {
                 parts: sample.payload().to_vec(),
             }));
         }
-        while let Some(sample) = self
+        while let Some(sample) = outputs
             .events
             .receive()
             .map_err(|error| ClientError::ipc("receive an event", error))?
         {
             frames.push(Frame::Event(*sample.payload()));
         }
-        while let Some(sample) = self
+        while let Some(sample) = outputs
             .force
             .receive()
             .map_err(|error| ClientError::ipc("receive a force frame", error))?
         {
             frames.push(Frame::Force(*sample.payload()));
         }
-        while let Some(sample) = self
+        while let Some(sample) = outputs
             .hand
             .receive()
             .map_err(|error| ClientError::ipc("receive a hand frame", error))?

@@ -8,6 +8,8 @@ use iceoryx2::port::publisher::PublisherCreateError;
 use iceoryx2::port::subscriber::SubscriberCreateError;
 use iceoryx2::service::port_factory::client::ClientCreateError;
 use vas_protocol::services::{PrefixError, ServiceOpenError};
+
+use crate::Roles;
 use vas_protocol::{
     ControlRequestKind, ControlStatus, GeometryDecodeError, UnknownCode, WireTextError,
 };
@@ -31,6 +33,15 @@ pub enum ClientError {
     Full {
         /// The kind of port the service has no room for.
         kind: &'static str,
+    },
+    /// The client was opened without the role that an operation needs (see
+    /// [`crate::Roles`]): it holds no ports for it.
+    #[error("this client cannot {action}: it was opened without the {role} role")]
+    MissingRole {
+        /// The role the operation needs.
+        role: Roles,
+        /// What was asked.
+        action: &'static str,
     },
     /// An iceoryx2 operation failed.
     #[error("cannot {action}: {reason}")]

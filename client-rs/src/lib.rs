@@ -2,15 +2,16 @@
 //!
 //! [`Client`] connects to a server's services on an iceoryx2 prefix, sends tracker, glove and
 //! hand-joints samples, keeps the latest parts and hand frames, waits for new frames on a WaitSet, and asks
-//! the control service for scene information. [`InputTap`] listens to the input streams (what
+//! the control service for scene information; its [`Roles`] say which of these it does, so that
+//! it holds only the ports it uses (a renderer takes [`Roles::RENDER`]). [`InputTap`] listens to the input streams (what
 //! `vas-client record` writes), and [`recording`] is the JSON Lines recording format.
 //!
 //! ```no_run
 //! use std::time::Duration;
-//! use vas_client::{Client, Wake};
+//! use vas_client::{Client, Roles, Wake};
 //!
 //! # fn main() -> Result<(), vas_client::ClientError> {
-//! let mut client = Client::connect(None)?;
+//! let mut client = Client::builder().roles(Roles::RENDER).connect()?;
 //! let scene = client.scene_info(Duration::from_secs(2))?;
 //! println!("scene {} with {} parts", scene.name, scene.parts.len());
 //! loop {
@@ -39,7 +40,7 @@ mod wait;
 pub mod words;
 
 pub use client::{
-    Client, ClientBuilder, Frame, HandInfo, PartInfo, PartsFrame, Received, SceneInfo,
+    Client, ClientBuilder, Frame, HandInfo, PartInfo, PartsFrame, Received, Roles, SceneInfo,
 };
 pub use error::ClientError;
 pub use tap::InputTap;

@@ -40,12 +40,37 @@ pub const GEOMETRY: &str = "vas/scene/geometry";
 /// Control requests and responses ([`crate::ControlRequest`], [`crate::ControlResponse`]).
 pub const CONTROL: &str = "vas/control";
 
+/// How many clients of each role the services take; every port limit below follows from these.
+///
+/// A client holds the ports of its roles only (`vas_client::Roles`): every client holds a
+/// control client; one with the render role also a subscriber on each output service and the
+/// geometry service; one with the input role also a publisher on each input stream. So renderers
+/// and input devices are bounded by the output and input services, and the control service takes
+/// enough clients for all of them and operators besides: however many renderers and devices
+/// connect, an operator can still reset or load a scene.
+pub mod clients {
+    /// Clients with the render role: 16 renderers (viewers, `vas-client watch`), and 4 input
+    /// devices beside them that read the answers to their samples (a viewer forwarding a
+    /// headset, `vas-client send-* --answer`, a lockstep replay).
+    pub const READERS: usize = 20;
+    /// Clients with the input role: device bridges, viewers forwarding a headset, replays,
+    /// `vas-client send-*`. As many as there were clients of every role before roles existed,
+    /// so that 16 clients of the default roles still connect (the 17th is refused by the input
+    /// streams).
+    pub const SENDERS: usize = 16;
+    /// Control clients kept for operators (`vas-client reset`, `load-scene`, `scenes`,
+    /// `set-metaphor`, `info`), beyond one for every reader and one for every sender.
+    pub const OPERATORS: usize = 4;
+    /// Nodes a service takes beyond those of the ports it takes: a client that comes when the
+    /// ports are all taken opens the service before it asks for a port, and is to be told that
+    /// the ports are full, not that the service has no room for its node.
+    pub const SPARE_NODES: usize = 4;
+}
+
 /// Settings of an input service (tracker, glove, hand joints).
 pub mod input {
-    /// Every client publishes on every input stream (renderers, device bridges, replays,
-    /// scripts), so as many as the control service takes clients: with fewer, the input streams
-    /// would refuse clients that the outputs and control still take.
-    pub const MAX_PUBLISHERS: usize = super::control::MAX_CLIENTS;
+    /// Every client with the input role publishes on every input stream.
+    pub const MAX_PUBLISHERS: usize = super::clients::SENDERS;
     /// The server, plus recorders.
     pub const MAX_SUBSCRIBERS: usize = 8;
     /// Samples buffered per subscriber; with safe overflow the oldest are dropped first, so a
@@ -54,24 +79,25 @@ pub mod input {
     /// Inputs have no history: an old sample is no target.
     pub const HISTORY: usize = 0;
     /// Nodes that may take part in the service: every publisher's and subscriber's (the server
-    /// is a subscriber).
-    pub const MAX_NODES: usize = MAX_PUBLISHERS + MAX_SUBSCRIBERS;
+    /// is a subscriber), and spares. A client without the input role does not open the service.
+    pub const MAX_NODES: usize = MAX_PUBLISHERS + MAX_SUBSCRIBERS + super::clients::SPARE_NODES;
 }
 
-/// Settings of an output service (parts, hand, events, force).
+/// Settings of an output service (parts, hand, events, force) and of the geometry service.
 pub mod output {
     /// One server publishes: a second server on the same prefix fails to start.
     pub const MAX_PUBLISHERS: usize = 1;
-    /// Renderers, watchers, recorders and tests.
-    pub const MAX_SUBSCRIBERS: usize = 16;
+    /// Every client with the render role subscribes to every output service.
+    pub const MAX_SUBSCRIBERS: usize = super::clients::READERS;
     /// Frames buffered per subscriber; readers want the latest frame, older ones are dropped.
     pub const SUBSCRIBER_BUFFER: usize = 16;
     /// A reader that (re)connects gets the latest frame at once (parts and hand).
     pub const HISTORY: usize = 1;
     /// Events are not state: a late reader gets no history of them.
     pub const EVENTS_HISTORY: usize = 0;
-    /// Nodes that may take part in the service.
-    pub const MAX_NODES: usize = 24;
+    /// Nodes that may take part in the service: the server's, every reader's, and spares. A
+    /// client without the render role does not open the service.
+    pub const MAX_NODES: usize = MAX_PUBLISHERS + MAX_SUBSCRIBERS + super::clients::SPARE_NODES;
     /// Initial capacity of a parts frame, in parts; the publisher grows it for larger scenes.
     pub const INITIAL_MAX_PARTS: usize = 64;
 }
@@ -86,26 +112,42 @@ pub mod geometry {
 
 /// Settings of the control service.
 pub mod control {
+    use super::clients::{OPERATORS, READERS, SENDERS, SPARE_NODES};
+
     /// One server answers.
     pub const MAX_SERVERS: usize = 1;
-    /// Renderers, tools and tests.
-    pub const MAX_CLIENTS: usize = 16;
+    /// Every client holds one control client: one for each reader (20) and each sender (16),
+    /// counted apart although a device that reads its answers is both, so that even when every
+    /// render and input slot is taken by a client of its own, the 4 operators' slots are left:
+    /// 40. With 16 renderers, an input device and an operator connected, 18 are taken.
+    pub const MAX_CLIENTS: usize = READERS + SENDERS + OPERATORS;
     /// Requests one client may have outstanding.
     pub const MAX_ACTIVE_REQUESTS_PER_CLIENT: usize = 4;
     /// Responses buffered per request (each request gets exactly one).
     pub const MAX_RESPONSE_BUFFER: usize = 2;
-    /// Nodes that may take part in the service.
-    pub const MAX_NODES: usize = 24;
+    /// Nodes that may take part in the service: every client's, the server's, and spares.
+    pub const MAX_NODES: usize = MAX_CLIENTS + MAX_SERVERS + SPARE_NODES;
 }
 
-/// Settings of the event service paired with each service above.
+/// Settings of the event service paired with each service above, sized for the largest pairing:
+/// the control service's.
 pub mod wakeup {
-    /// The writers of the paired service, plus the control clients.
-    pub const MAX_NOTIFIERS: usize = 24;
-    /// The readers of the paired service.
-    pub const MAX_LISTENERS: usize = 24;
-    /// Nodes that may take part in the service.
-    pub const MAX_NODES: usize = 48;
+    use super::{control, input, output};
+
+    /// The writers of the paired service: the control service's are every control client (after
+    /// a request) and the server (after its responses); an input stream's are its publishers, an
+    /// output's the server.
+    pub const MAX_NOTIFIERS: usize = control::MAX_CLIENTS + control::MAX_SERVERS;
+    /// The readers of the paired service: the control service's are, again, every control client
+    /// (for their responses) and the server; an output's are its subscribers, an input's the
+    /// server and the recorders.
+    pub const MAX_LISTENERS: usize = control::MAX_CLIENTS + control::MAX_SERVERS;
+    /// Nodes that may take part in the service: as many as in the paired service.
+    pub const MAX_NODES: usize = max(control::MAX_NODES, max(input::MAX_NODES, output::MAX_NODES));
+
+    const fn max(a: usize, b: usize) -> usize {
+        if a > b { a } else { b }
+    }
 }
 
 /// A service that could not be opened or created.
@@ -296,7 +338,8 @@ pub fn open_force<S: Service>(node: &Node<S>) -> Result<ForceService<S>, Service
     open_output(node, FORCE, output::HISTORY)
 }
 
-/// Opens (or creates) the control service.
+/// Opens (or creates) the control service (see [`control::MAX_CLIENTS`] for how many clients it
+/// takes).
 pub fn open_control<S: Service>(node: &Node<S>) -> Result<ControlService<S>, ServiceOpenError> {
     node.service_builder(&service_name(CONTROL)?)
         .request_response::<ControlRequest, ControlResponse>()

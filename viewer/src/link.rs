@@ -2,7 +2,9 @@
 //!
 //! It waits for a server, passes the scene and every frame and event on to the [`Hub`], carries
 //! out the pages' commands, and publishes a headset's hand joints on the server's hand-joints
-//! service (numbered per side, stamped with the wall-clock time they reached the viewer). In lockstep a server publishes only when it gets input, so
+//! service (numbered per side, stamped with the wall-clock time they reached the viewer). The
+//! link's client takes the render role only, and the input role once a headset sends hand
+//! joints, so that a viewer without a headset holds no input publisher. In lockstep a server publishes only when it gets input, so
 //! silence alone says nothing; after `QUIET` without a frame the link asks the server for its
 //! counters, and a server that does not answer is taken as gone: the pages are told "no
 //! server", and the link waits for one on the same prefix and starts afresh (new ports, so that
@@ -13,7 +15,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use vas_client::{
-    Client, ClientError, Frame, HandFrame, PartsFrame, SceneGeometry, SceneInfo, SceneWords, Wake,
+    Client, ClientError, Frame, HandFrame, PartsFrame, Roles, SceneGeometry, SceneInfo, SceneWords,
+    Wake,
 };
 
 use crate::commands::Command;
@@ -35,6 +38,8 @@ const QUIET: Duration = Duration::from_secs(1);
 const CONTROL_TIMEOUT: Duration = Duration::from_secs(2);
 /// How long a scene may take to load.
 const LOAD_TIMEOUT: Duration = Duration::from_secs(60);
+/// How long the link waits before it asks again for room to publish hand joints.
+const INPUT_RETRY: Duration = Duration::from_secs(1);
 /// How long one look for a server lasts while there is none.
 const LOOK: Duration = Duration::from_millis(250);
 
@@ -47,6 +52,7 @@ pub fn run(prefix: Option<&str>, hub: &Hub, inbox: Inbox, stop: &AtomicBool) {
         scene_version: 0,
         sequence: Sequence::default(),
         last_hands: None,
+        input_refused: None,
     };
     hub.status.send_replace(Some(messages::status(false, &[])));
     while !stop.load(Ordering::Relaxed) {
@@ -69,6 +75,9 @@ struct Link<'a> {
     sequence: Sequence,
     /// When hand joints last came from a page.
     last_hands: Option<Instant>,
+    /// When the server's input streams last had no room for the link's publisher: asked again
+    /// after [`INPUT_RETRY`], said once.
+    input_refused: Option<Instant>,
 }
 
 impl Link<'_> {
@@ -78,7 +87,10 @@ impl Link<'_> {
         if !self.wait_for_server(prefix)? {
             return Ok(());
         }
-        let mut client = Client::connect(prefix)?;
+        let mut client = Client::builder()
+            .prefix(prefix)
+            .roles(Roles::RENDER)
+            .connect()?;
         let mut scene = client.scene_info(CONTROL_TIMEOUT)?;
         let scene_names = client.scene_names(CONTROL_TIMEOUT)?;
         tracing::info!(
@@ -95,7 +107,7 @@ impl Link<'_> {
         let mut last_heard = Instant::now();
         while !self.stop.load(Ordering::Relaxed) {
             self.serve_commands(|command| carry_out(&client, command));
-            self.publish_hand_joints(&client)?;
+            self.publish_hand_joints(&mut client)?;
             let hands_recent = (self.last_hands).is_some_and(|at| at.elapsed() < HANDS_RECENT);
             match client.wait(if hands_recent { HAND_WAIT } else { WAIT })? {
                 Wake::Ready => {
@@ -127,7 +139,10 @@ impl Link<'_> {
     /// Looks for a server until one answers (true) or the viewer stops (false); commands meanwhile
     /// are refused.
     fn wait_for_server(&mut self, prefix: Option<&str>) -> Result<bool, ClientError> {
-        let client = Client::connect(prefix)?;
+        let client = Client::builder()
+            .prefix(prefix)
+            .roles(Roles::CONTROL)
+            .connect()?;
         while !self.stop.load(Ordering::Relaxed) {
             match client.input_stats(LOOK) {
                 Ok(_) => return Ok(true),
@@ -141,15 +156,43 @@ impl Link<'_> {
         Ok(false)
     }
 
-    /// Publishes every waiting hand-joints message on the server's hand-joints service.
-    fn publish_hand_joints(&mut self, client: &Client) -> Result<(), ClientError> {
+    /// Publishes every waiting hand-joints message on the server's hand-joints service, taking
+    /// the input role at the first; while the input streams have no room for the link, the
+    /// messages are dropped and counted.
+    fn publish_hand_joints(&mut self, client: &mut Client) -> Result<(), ClientError> {
         while let Ok((joints, arrived_ns)) = self.inbox.hand_joints.try_recv() {
             self.last_hands = Some(Instant::now());
+            if !client.roles().contains(Roles::INPUT) && !self.take_input(client)? {
+                Stats::count(&self.hub.stats.hand_joints_dropped);
+                continue;
+            }
             let sample = joints.sample(self.sequence.next(joints.side), arrived_ns);
             client.send_hand_joints(&sample)?;
             Stats::count(&self.hub.stats.hand_joints_published);
         }
         Ok(())
+    }
+
+    /// Takes the input role for `client`; false while the input streams have no room for it
+    /// (asked again after [`INPUT_RETRY`], said once until it gets room).
+    fn take_input(&mut self, client: &mut Client) -> Result<bool, ClientError> {
+        if (self.input_refused).is_some_and(|at| at.elapsed() < INPUT_RETRY) {
+            return Ok(false);
+        }
+        match client.take_roles(Roles::INPUT) {
+            Ok(()) => {
+                self.input_refused = None;
+                Ok(true)
+            }
+            Err(error @ ClientError::Full { .. }) => {
+                if self.input_refused.is_none() {
+                    tracing::warn!(%error, "cannot publish hand joints");
+                }
+                self.input_refused = Some(Instant::now());
+                Ok(false)
+            }
+            Err(error) => Err(error),
+        }
     }
 
     /// Drops every waiting hand-joints message: there is no server to publish them to.

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::Context;
-use vas_client::SlidingMetaphor;
+use vas_client::{Roles, SlidingMetaphor};
 use vas_protocol::ControlResponse;
 
 /// How long a scene load may take: a large assembly takes a while.
@@ -37,13 +37,13 @@ pub fn metaphor_parser() -> impl clap::builder::TypedValueParser<Value = Sliding
 
 /// `vas-client reset`.
 pub fn reset(prefix: Option<&str>) -> anyhow::Result<()> {
-    let client = super::connect(prefix)?;
+    let client = super::connect(prefix, Roles::CONTROL)?;
     print(&client.reset(super::CONTROL_TIMEOUT)?)
 }
 
 /// `vas-client load-scene`.
 pub fn load_scene(prefix: Option<&str>, args: &LoadSceneArgs) -> anyhow::Result<()> {
-    let client = super::connect(prefix)?;
+    let client = super::connect(prefix, Roles::CONTROL)?;
     let response = match (&args.name, &args.file) {
         (Some(name), _) => client.load_named_scene(name, LOAD_TIMEOUT)?,
         (None, Some(file)) => {
@@ -59,7 +59,7 @@ pub fn load_scene(prefix: Option<&str>, args: &LoadSceneArgs) -> anyhow::Result<
 
 /// `vas-client scenes`: the names the server offers, one per line.
 pub fn scenes(prefix: Option<&str>) -> anyhow::Result<()> {
-    let client = super::connect(prefix)?;
+    let client = super::connect(prefix, Roles::CONTROL)?;
     let mut out = std::io::stdout().lock();
     for name in client.scene_names(super::CONTROL_TIMEOUT)? {
         writeln!(out, "{name}")?;
@@ -69,7 +69,7 @@ pub fn scenes(prefix: Option<&str>) -> anyhow::Result<()> {
 
 /// `vas-client set-metaphor`.
 pub fn set_metaphor(prefix: Option<&str>, metaphor: SlidingMetaphor) -> anyhow::Result<()> {
-    let client = super::connect(prefix)?;
+    let client = super::connect(prefix, Roles::CONTROL)?;
     print(&client.set_metaphor(metaphor, super::CONTROL_TIMEOUT)?)
 }
 

@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use tracing_subscriber::EnvFilter;
-use vas_client::Client;
+use vas_client::{Client, Roles};
 
 /// How long a control request (scene info) may take before the tool gives up.
 pub const CONTROL_TIMEOUT: Duration = Duration::from_secs(5);
@@ -31,18 +31,22 @@ pub fn init_logging() {
         .init();
 }
 
-/// Connects with SIGINT and SIGTERM handled, so that long-running commands end cleanly.
-pub fn connect(prefix: Option<&str>) -> anyhow::Result<Client> {
+/// Connects with `roles` and with SIGINT and SIGTERM handled, so that long-running commands end
+/// cleanly. Each command takes only the roles it uses: a command that only reads or asks holds
+/// no input publisher, one that does not read frames no output subscriber, so that watchers
+/// and operators do not take each other's places.
+pub fn connect(prefix: Option<&str>, roles: Roles) -> anyhow::Result<Client> {
     Client::builder()
         .handle_termination_signals(true)
         .prefix(prefix)
+        .roles(roles)
         .connect()
         .context("cannot connect to the vas services")
 }
 
 /// `vas-client info`: the scene and the input counters as one JSON document.
 pub fn info(prefix: Option<&str>) -> anyhow::Result<()> {
-    let client = connect(prefix)?;
+    let client = connect(prefix, Roles::CONTROL)?;
     let scene = client.scene_info(CONTROL_TIMEOUT)?;
     let mut out = std::io::stdout().lock();
     serde_json::to_writer_pretty(&mut out, &scene)?;

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use vas_client::recording::{RecordingHeader, RecordingWriter};
-use vas_client::{InputTap, Wake};
+use vas_client::{InputTap, Roles, Wake};
 
 /// Arguments of `vas-client record`.
 #[derive(Debug, clap::Args)]
@@ -33,7 +33,7 @@ pub fn run(prefix: Option<&str>, args: &RecordArgs) -> anyhow::Result<()> {
     let scene = match &args.scene {
         Some(scene) => scene.clone(),
         None => {
-            super::connect(prefix)?
+            super::connect(prefix, Roles::CONTROL)?
                 .scene_info(super::CONTROL_TIMEOUT)
                 .context("cannot ask the server for its scene name (give it with --scene)")?
                 .name

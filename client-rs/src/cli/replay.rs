@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use vas_client::recording::Recording;
-use vas_client::{Client, Frame, SceneWords, Wake};
+use vas_client::{Client, Frame, Roles, SceneWords, Wake};
 use vas_protocol::wall_clock_ns;
 
 use vas_client::latency::LatencySummary;
@@ -33,7 +33,13 @@ pub struct ReplayArgs {
 /// server counts sample times); the latencies are measured from when each was sent.
 pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
     let recording = Recording::load(&args.file)?;
-    let mut client = super::connect(prefix)?;
+    // In lockstep the replay reads the answer to each sample; in real time it only sends.
+    let roles = if args.lockstep {
+        Roles::INPUT | Roles::RENDER
+    } else {
+        Roles::INPUT
+    };
+    let mut client = super::connect(prefix, roles)?;
     let scene = client.scene_info(super::CONTROL_TIMEOUT)?;
     if scene.name != recording.header.scene {
         tracing::warn!(

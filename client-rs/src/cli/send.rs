@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, bail};
-use vas_client::Frame;
 use vas_client::recording::InputSample;
+use vas_client::{Frame, Roles};
 use vas_protocol::{
     FLEX_COUNT, GloveSample, HandJointsSample, InputStats, TrackerSample, WirePose, wall_clock_ns,
 };
@@ -159,7 +159,13 @@ pub fn hand_joints(prefix: Option<&str>, args: &HandJointsArgs) -> anyhow::Resul
 /// sample rejected for another sender between the two reads would be taken for this one's,
 /// which a script sending one sample at a time does not meet.
 fn send(prefix: Option<&str>, sample: &InputSample, args: &AnswerArgs) -> anyhow::Result<()> {
-    let mut client = super::connect(prefix)?;
+    // Only a sender that waits for its answer reads frames.
+    let roles = if args.answer {
+        Roles::INPUT | Roles::RENDER
+    } else {
+        Roles::INPUT
+    };
+    let mut client = super::connect(prefix, roles)?;
     if !args.answer {
         client.send_input(sample)?;
         return Ok(client.flush_inputs(super::CONTROL_TIMEOUT)?);

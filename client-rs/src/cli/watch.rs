@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::time::Duration;
 
-use vas_client::{Client, Frame, SceneWords, Wake};
+use vas_client::{Client, Frame, Roles, SceneWords, Wake};
 
 /// How long one wait lasts before the loop checks again; frames wake it earlier.
 const IDLE_WAIT: Duration = Duration::from_secs(1);
@@ -15,7 +15,7 @@ const PROBE_TIMEOUT: Duration = Duration::from_secs(2);
 /// until `count` frames were printed or SIGINT/SIGTERM arrives. Says on stderr when no server
 /// answers, and when one does again.
 pub fn run(prefix: Option<&str>, count: Option<u64>) -> anyhow::Result<()> {
-    let mut client = super::connect(prefix)?;
+    let mut client = super::connect(prefix, Roles::RENDER)?;
     let mut served = Served::default();
     served.refresh(&client);
     let mut out = std::io::stdout().lock();

@@ -5,7 +5,7 @@ use std::process::Stdio;
 use std::time::Instant;
 
 use vas_client::{Client, ClientError, Frame};
-use vas_protocol::services::control::MAX_CLIENTS;
+use vas_protocol::services::clients::SENDERS;
 use vas_protocol::{
     ControlRequest, ControlStatus, FLEX_COUNT, GloveSample, HandFrame, TrackerSample, wall_clock_ns,
 };
@@ -187,13 +187,14 @@ fn samples_sent_just_before_the_sender_exits_are_all_taken_in() {
     assert_eq!(stats.glove_rejected_non_finite, SENDS);
 }
 
-/// Every client opens ports on every service; the services take the same number of clients, and
-/// one more is told so.
+/// A client of the default roles opens ports on every service; as many connect as the input
+/// streams take senders (the output services take more readers, the control service more
+/// clients still), and one more is told so.
 #[test]
 fn as_many_clients_as_the_services_take_connect_and_one_more_is_told_they_are_full() {
     let mut server = Server::start("full");
     let mut clients = vec![server.connect()];
-    while clients.len() < MAX_CLIENTS {
+    while clients.len() < SENDERS {
         let client = Client::connect(Some(server.prefix())).expect("a client within the limit");
         clients.push(client);
     }
