@@ -72,7 +72,9 @@ fn replay(
         held: BTreeMap::new(),
         hands: BTreeMap::new(),
     };
-    let start_ns = wall_clock_ns();
+    // Stamped as `vas-client replay --lockstep` stamps them: the recording's times, ending now,
+    // so that a replay faster than real time never stamps a sample ahead of the server's clock.
+    let start_ns = wall_clock_ns().saturating_sub(recording.duration_ns());
     for (index, recorded) in recording.samples.iter().enumerate() {
         let input = recorded.stamped(start_ns);
         client.send_input(&input).expect("send");
