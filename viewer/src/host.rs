@@ -4,8 +4,8 @@
 //! 127.0.0.1, talks to the viewer as its own site (same origin, so the browser lets it read the
 //! answers and open the WebSocket), but its requests still say `Host: attacker.example:PORT`.
 //! So a request is served only when its `Host` (and the authority of an absolute URI) names the
-//! listening port and one of the viewer's own names: 127.0.0.1, localhost and [::1], the host
-//! given to `--listen`, and, when that is all addresses (0.0.0.0 or [::]), any IP address
+//! listening port and one of the viewer's own names: `127.0.0.1`, `localhost` and `[::1]`, the host
+//! given to `--listen`, and, when that is all addresses (`0.0.0.0` or `[::]`), any IP address
 //! (a rebinding attack needs a name; an IP address is the site it names).
 
 use crate::listen::ListenAddress;

@@ -9,7 +9,7 @@
 //! Touching counts as intersecting (see [`triangle`]).
 
 pub mod broad_phase;
-pub mod brute_force;
+pub(crate) mod brute_force;
 pub mod dop_tree;
 pub mod orientation;
 pub mod oriented_box;

@@ -1,12 +1,12 @@
 //! Triangle meshes: the mesh type, loading (OBJ, STL, PLY, glTF), welding, adjacency, convex
 //! hulls and procedural shapes.
 
-pub mod adjacency;
+pub(crate) mod adjacency;
 pub mod hull;
-pub mod io;
+pub(crate) mod io;
 pub mod mesh;
 pub mod shapes;
-pub mod weld;
+pub(crate) mod weld;
 
 pub use adjacency::EdgeAdjacency;
 pub use hull::{ConvexHull, HullSource};

@@ -3,8 +3,8 @@
 //!
 //! * [`model`]: the hand model from a config (`configs/hands/`): kinematic tree, flex mapping,
 //!   joint limits, collision shapes and semantics; forward kinematics; mirroring.
-//! * [`flex`]: glove samples clamped to the joint limits, bad values refused and counted.
-//! * [`segment_mesh`]: the segments' closed collision meshes.
+//! * `flex`: glove samples clamped to the joint limits, bad values refused and counted.
+//! * `segment_mesh`: the segments' closed collision meshes.
 //! * [`clasp`]: the clasp minimisation on a collision copy, with the paper's touch flags, generic
 //!   over the collision test.
 //! * [`collider`]: the hand's segments against the parts near it (DOP-trees), and contacts.
@@ -93,11 +93,11 @@
 pub mod analysis;
 pub mod clasp;
 pub mod collider;
-pub mod flex;
+pub(crate) mod flex;
 pub mod hand;
 pub mod model;
 pub mod retarget;
-pub mod segment_mesh;
+pub(crate) mod segment_mesh;
 
 pub use analysis::{GraspClass, PrecisionKind};
 pub use clasp::{ClaspParamError, ClaspParams, HandPose};

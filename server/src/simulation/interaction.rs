@@ -4,8 +4,8 @@
 //! grasping and the sliding loop's threads, and so that [`Interaction`] can run them in sequence
 //! (offline, in tests and for the recording generator) with the same outcome:
 //!
-//! * [`GraspStage`] steps each grasping hand against every part at its visible pose.
-//! * [`SlideStage`] takes the hands' frames: a grasp event starts a [`SlideMachine`] for the
+//! * `GraspStage` steps each grasping hand against every part at its visible pose.
+//! * `SlideStage` takes the hands' frames: a grasp event starts a [`SlideMachine`] for the
 //!   grasped part at its current visible pose, with the other parts as static obstacles. While
 //!   the part is held its ghost is where the hand holds it (the hand's pose times the grasp's
 //!   offset, which may penetrate), and one sliding frame brings the visible part as close to it

@@ -70,28 +70,28 @@ impl Bisection {
     }
 }
 
-/// Runs a [`Bisection`] to the end with `collides` as the static check; returns it finished.
-pub fn bisect(
-    valid: Pose,
-    colliding: Pose,
-    tolerance: f64,
-    radius: f64,
-    mut collides: impl FnMut(&Pose) -> bool,
-) -> Bisection {
-    let mut bisection = Bisection::new(valid, colliding, tolerance, radius);
-    while !bisection.is_done() {
-        let trial = bisection.trial();
-        let hit = collides(&trial);
-        bisection.record(trial, hit);
-    }
-    bisection
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::Vector3;
     use proptest::prelude::*;
+
+    /// Runs a [`Bisection`] to the end with `collides` as the static check; returns it finished.
+    fn bisect(
+        valid: Pose,
+        colliding: Pose,
+        tolerance: f64,
+        radius: f64,
+        mut collides: impl FnMut(&Pose) -> bool,
+    ) -> Bisection {
+        let mut bisection = Bisection::new(valid, colliding, tolerance, radius);
+        while !bisection.is_done() {
+            let trial = bisection.trial();
+            let hit = collides(&trial);
+            bisection.record(trial, hit);
+        }
+        bisection
+    }
 
     fn pose(t: [f64; 3], axis_angle: [f64; 3]) -> Pose {
         Pose::new(Vector3::from(t), Vector3::from(axis_angle))

@@ -43,7 +43,7 @@ pub trait SlideWorld {
 
     /// Appends the classified contacts of the part at `part_pose` to `out`; `approach` is the
     /// pivot's motion from the last free pose to `part_pose` and `pivot` the pivot's position
-    /// there (see [`super::contact::classify_pairs`]).
+    /// there (see `classify_pairs`).
     fn contacts(
         &mut self,
         part_pose: &Pose,

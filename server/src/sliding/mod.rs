@@ -1,16 +1,16 @@
 //! Sliding contact (the paper's §3): a grasped part slides along what it touches and never passes
 //! through it.
 //!
-//! * [`machine`]: the ghost, the visible part and the collision copy, driven by the finite state
+//! * `machine`: the ghost, the visible part and the collision copy, driven by the finite state
 //!   machine of the paper's Figure 6 under one of three metaphors.
-//! * [`bisection`]: contact approximation between the last free and the first colliding pose.
-//! * [`contact`]: contact classification from intersecting triangle pairs, with normals found
+//! * `bisection`: contact approximation between the last free and the first colliding pose.
+//! * `contact`: contact classification from intersecting triangle pairs, with normals found
 //!   from the geometry and oriented against the approach.
-//! * [`direction`]: the remaining motion projected onto the free space the contacts leave.
-//! * [`force`]: the spring-damper wrench a force-feedback device renders.
-//! * [`allowance`]: slide-in units, whose parts may interfere up to a configured depth.
+//! * `direction`: the remaining motion projected onto the free space the contacts leave.
+//! * `force`: the spring-damper wrench a force-feedback device renders.
+//! * `allowance`: slide-in units, whose parts may interfere up to a configured depth.
 //! * [`motion`]: rigid motions of the part's pivot and their interpolation.
-//! * [`params`]: a scene's `[params.sliding]` table (every key defaulted; a bad value is refused
+//! * `params`: a scene's `[params.sliding]` table (every key defaulted; a bad value is refused
 //!   as `params.sliding.<key>`).
 //! * [`world`]: the part's collision copy against the obstacles, queried pair by pair.
 //!
@@ -50,14 +50,14 @@
 //! with scrambled winding, a slide-in unit with and without its allowance. Time per contact point
 //! and frame rates: benchmark B5 in `BENCHMARKS.md`.
 
-pub mod allowance;
-pub mod bisection;
-pub mod contact;
-pub mod direction;
-pub mod force;
-pub mod machine;
+pub(crate) mod allowance;
+pub(crate) mod bisection;
+pub(crate) mod contact;
+pub(crate) mod direction;
+pub(crate) mod force;
+pub(crate) mod machine;
 pub mod motion;
-pub mod params;
+pub(crate) mod params;
 pub mod world;
 
 pub use contact::{Contact, ContactKind};

@@ -937,7 +937,11 @@ fn errors_quote_huge_numbers_in_scientific_notation() {
     let dir = scratch_dir("huge_numbers");
     for (name, part, quoted) in [
         ("position", "position = [1e300, 0.0, 0.0]", "not 1e300"),
-        ("rotation", "rotation = [1e300, 0.0, 0.0, 1.0]", "[1e300, 0, 0, 1]"),
+        (
+            "rotation",
+            "rotation = [1e300, 0.0, 0.0, 1.0]",
+            "[1e300, 0, 0, 1]",
+        ),
     ] {
         let text = format!(
             "name = \"huge\"\n[[parts]]\nname = \"box\"\n\
