@@ -97,20 +97,26 @@ impl Viewer {
 }
 
 /// The HTTP status of each answer in `answer` (one per request, several when pipelined), and
-/// panics unless `answer` is a sequence of HTTP/1.1 answers up to a `101` (after which the
-/// WebSocket speaks).
+/// panics unless `answer` is a sequence of HTTP/1.x answers up to a `101` (after which the
+/// WebSocket speaks). An HTTP/1.0 request is answered in HTTP/1.0.
 fn statuses(answer: &[u8]) -> Vec<u16> {
     let text = String::from_utf8_lossy(answer);
     let mut statuses = Vec::new();
-    for (at, _) in text.match_indices("HTTP/1.1 ") {
-        let code = text[at + 9..].get(..3).and_then(|code| code.parse().ok());
-        statuses.push(code.unwrap_or_else(|| panic!("no status at {at} of {text:?}")));
+    for (at, _) in text.match_indices("HTTP/1.") {
+        let Some(line) = text[at..].get(..12) else {
+            continue;
+        };
+        if !(line.starts_with("HTTP/1.0 ") || line.starts_with("HTTP/1.1 ")) {
+            continue;
+        }
+        let code = line[9..].parse();
+        statuses.push(code.unwrap_or_else(|_| panic!("no status at {at} of {text:?}")));
         if statuses.last() == Some(&101) {
             break;
         }
     }
     assert!(
-        answer.is_empty() || text.starts_with("HTTP/1.1 "),
+        answer.is_empty() || text.starts_with("HTTP/1.1 ") || text.starts_with("HTTP/1.0 "),
         "not HTTP: {text:?}"
     );
     statuses
