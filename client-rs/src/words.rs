@@ -30,7 +30,8 @@ impl SceneWords {
     }
 
     /// The event in a sentence: "grasp peg (power) at sample 44", "release peg at sample 90",
-    /// "contact begin peg – block at sample 61". The sample is the input that caused it (the
+    /// "contact begin peg – block at sample 61", "clearance peg – block 0.8 mm at sample 177",
+    /// "clearance restored peg – block 5.6 mm at sample 198". The sample is the input that caused it (the
     /// newest of the frame's tracker, glove and hand-joints samples).
     pub fn event(&self, event: &SimEvent) -> String {
         let sample = [event.tracker, event.glove, event.joints]
@@ -54,10 +55,23 @@ impl SceneWords {
                 let verb = kind.name().replace('_', " ");
                 format!("{verb} {part} – {}", self.part(event.other))
             }
+            Ok(kind @ (EventKind::ClearanceBelow | EventKind::ClearanceRestored)) => {
+                let verb = match kind {
+                    EventKind::ClearanceBelow => "clearance",
+                    _ => "clearance restored",
+                };
+                let other = self.part(event.other);
+                format!("{verb} {part} – {other} {}", millimetres(event.distance))
+            }
             Err(unknown) => format!("{unknown} about {part}"),
         };
         format!("{what} at sample {sample}")
     }
+}
+
+/// A distance in metres as millimetres to a tenth: "0.8 mm".
+fn millimetres(metres: f64) -> String {
+    format!("{:.1} mm", metres * 1e3)
 }
 
 /// A grasp type code in words (`power`, `tip_pinch`...), or "unknown" for a code this client
@@ -128,6 +142,8 @@ mod tests {
             segment: 0,
             point: [0.0; 3],
             normal: [0.0; 3],
+            other_point: [0.0; 3],
+            distance: 0.0,
         }
     }
 
@@ -154,6 +170,18 @@ mod tests {
         assert_eq!(
             words.event(&hand_over),
             "hand over peg from the left hand at sample 44"
+        );
+        let mut below = event(EventKind::ClearanceBelow, GraspType::None, 1, 0);
+        below.distance = 0.000_8;
+        assert_eq!(
+            words.event(&below),
+            "clearance peg – block 0.8 mm at sample 44"
+        );
+        let mut restored = event(EventKind::ClearanceRestored, GraspType::None, 1, 0);
+        restored.distance = 0.005_62;
+        assert_eq!(
+            words.event(&restored),
+            "clearance restored peg – block 5.6 mm at sample 44"
         );
         assert_eq!(words.part(HAND_PART_ID), "hand");
         assert_eq!(words.part(5), "part 5");

@@ -45,6 +45,7 @@ macro_rules! wire_code_enum {
     };
 }
 
+mod clearance;
 mod clock;
 mod control;
 mod geometry;
@@ -55,6 +56,7 @@ mod pose;
 pub mod services;
 mod text;
 
+pub use clearance::{CLEARANCE_STALE, ClearanceFrame, ClearancePair, MAX_CLEARANCE_PAIRS};
 pub use clock::wall_clock_ns;
 pub use control::{
     ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, HandDescription,

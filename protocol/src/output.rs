@@ -309,6 +309,12 @@ wire_code_enum! {
         /// The hand let go of `part` because the other hand grasped it (the other hand's grasp
         /// event comes in the same frame): a part is held by one hand at a time.
         HandOver = 5,
+        /// `part` and `other` came closer than the scene's clearance threshold: `distance`,
+        /// `point` on `part` and `other_point` on `other`.
+        ClearanceBelow = 6,
+        /// `part` and `other` are apart again by the threshold and its hysteresis (or one of them
+        /// left the watch while apart, see `vas/output/clearance`).
+        ClearanceRestored = 7,
     }
 }
 
@@ -339,13 +345,15 @@ impl EventKind {
             Self::ContactBegin => "contact_begin",
             Self::ContactEnd => "contact_end",
             Self::HandOver => "hand_over",
+            Self::ClearanceBelow => "clearance_below",
+            Self::ClearanceRestored => "clearance_restored",
         }
     }
 }
 
 /// A discrete simulation event on `vas/output/events`.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::SimEvent::v3")]
+#[type_name("vas::output::SimEvent::v4")]
 #[repr(C)]
 pub struct SimEvent {
     /// Number of the hand frame during which the event happened.
@@ -364,18 +372,23 @@ pub struct SimEvent {
     pub grasp_type: u32,
     /// The part the event is about.
     pub part: u32,
-    /// The other part of a contact, or [`HAND_PART_ID`].
+    /// The other part of a contact or clearance, or [`HAND_PART_ID`].
     pub other: u32,
     /// The hand the event is about (grasp, release, hand-over, a contact with the hand) or whose
     /// held part touched, a [`HandSide`] code.
     pub hand: u32,
     /// The hand segment of a contact with the hand, a [`HandSegment`] code; 0 otherwise.
     pub segment: u32,
-    /// Contacts: where the two touch, in the world (metres); zero for other events.
+    /// Contacts: where the two touch; clearances: the closest point on `part`. In the world
+    /// (metres); zero for other events.
     pub point: [f64; 3],
     /// Contacts: the unit normal at `point`, pointing from `other` towards `part`; zero for other
     /// events.
     pub normal: [f64; 3],
+    /// Clearances: the closest point on `other`, in the world (metres); zero for other events.
+    pub other_point: [f64; 3],
+    /// Clearances: the distance between `part` and `other` (metres); zero for other events.
+    pub distance: f64,
 }
 
 /// Force and torque a force-feedback device should render, on `vas/output/force`.

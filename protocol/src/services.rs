@@ -16,8 +16,8 @@ use iceoryx2::service::Service;
 use iceoryx2::service::port_factory::{event, publish_subscribe, request_response};
 
 use crate::{
-    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame,
-    HandJointsSample, PartState, PartsFrameHeader, SimEvent, TrackerSample,
+    ClearanceFrame, ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample,
+    HandFrame, HandJointsSample, PartState, PartsFrameHeader, SimEvent, TrackerSample,
 };
 
 /// Tracker samples ([`crate::TrackerSample`]), clients to server.
@@ -34,6 +34,9 @@ pub const HAND: &str = "vas/output/hand";
 pub const EVENTS: &str = "vas/output/events";
 /// Force feedback ([`crate::ForceFrame`]).
 pub const FORCE: &str = "vas/output/force";
+/// Part pairs closer than the scene's clearance threshold ([`crate::ClearanceFrame`]), one
+/// frame per parts frame measured.
+pub const CLEARANCE: &str = "vas/output/clearance";
 /// Render geometry of the scene: a [`crate::GeometryHeader`] user header over the bytes of a
 /// [`crate::SceneGeometry`], one sample per scene generation.
 pub const GEOMETRY: &str = "vas/scene/geometry";
@@ -91,7 +94,7 @@ pub mod output {
     pub const MAX_SUBSCRIBERS: usize = super::clients::READERS;
     /// Frames buffered per subscriber; readers want the latest frame, older ones are dropped.
     pub const SUBSCRIBER_BUFFER: usize = 16;
-    /// A reader that (re)connects gets the latest frame at once (parts and hand).
+    /// A reader that (re)connects gets the latest frame at once (parts, hand, force, clearance).
     pub const HISTORY: usize = 1;
     /// Events are not state: a late reader gets no history of them.
     pub const EVENTS_HISTORY: usize = 0;
@@ -217,6 +220,8 @@ pub type HandService<S> = publish_subscribe::PortFactory<S, HandFrame, ()>;
 pub type EventsService<S> = publish_subscribe::PortFactory<S, SimEvent, ()>;
 /// The force output service.
 pub type ForceService<S> = publish_subscribe::PortFactory<S, ForceFrame, ()>;
+/// The clearance output service.
+pub type ClearanceService<S> = publish_subscribe::PortFactory<S, ClearanceFrame, ()>;
 /// The geometry service: a generation header over the encoded meshes.
 pub type GeometryService<S> = publish_subscribe::PortFactory<S, [u8], GeometryHeader>;
 /// The control service.
@@ -336,6 +341,12 @@ pub fn open_events<S: Service>(node: &Node<S>) -> Result<EventsService<S>, Servi
 /// Opens (or creates) the force output service.
 pub fn open_force<S: Service>(node: &Node<S>) -> Result<ForceService<S>, ServiceOpenError> {
     open_output(node, FORCE, output::HISTORY)
+}
+
+/// Opens (or creates) the clearance output service: history 1, so that a reader that connects
+/// gets the latest pairs at once.
+pub fn open_clearance<S: Service>(node: &Node<S>) -> Result<ClearanceService<S>, ServiceOpenError> {
+    open_output(node, CLEARANCE, output::HISTORY)
 }
 
 /// Opens (or creates) the control service (see [`control::MAX_CLIENTS`] for how many clients it

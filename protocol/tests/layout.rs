@@ -34,7 +34,9 @@ fn output_types_keep_their_layout() {
     assert_layout::<PartsFrameHeader>(72, 8);
     assert_layout::<PartState>(64, 8);
     assert_layout::<HandFrame>(1128, 8);
-    assert_layout::<SimEvent>(136, 8);
+    assert_layout::<SimEvent>(168, 8);
+    assert_layout::<ClearancePair>(80, 8);
+    assert_layout::<ClearanceFrame>(80 + 80 * MAX_CLEARANCE_PAIRS, 8);
     assert_layout::<GeometryHeader>(24, 8);
     assert_layout::<ForceFrame>(120, 8);
     assert_eq!(offset_of!(PartsFrameHeader, part_count), 64);
@@ -44,6 +46,13 @@ fn output_types_keep_their_layout() {
     assert_eq!(offset_of!(HandFrame, grasp_type), 212);
     assert_eq!(offset_of!(HandFrame, segments), 232);
     assert_eq!(offset_of!(SimEvent, point), 88);
+    assert_eq!(offset_of!(SimEvent, other_point), 136);
+    assert_eq!(offset_of!(SimEvent, distance), 160);
+    assert_eq!(offset_of!(ClearancePair, distance), 24);
+    assert_eq!(offset_of!(ClearancePair, other_point), 56);
+    assert_eq!(offset_of!(ClearanceFrame, threshold), 64);
+    assert_eq!(offset_of!(ClearanceFrame, pairs), 80);
+    assert_eq!(MAX_CLEARANCE_PAIRS, 32);
     assert_eq!(offset_of!(ForceFrame, torque), 88);
     assert_eq!(offset_of!(ForceFrame, hand), 112);
 }
@@ -87,6 +96,8 @@ fn payload_type_names_are_versioned() {
             <HandFrame as ZeroCopySend>::type_name(),
             <SimEvent as ZeroCopySend>::type_name(),
             <ForceFrame as ZeroCopySend>::type_name(),
+            <ClearancePair as ZeroCopySend>::type_name(),
+            <ClearanceFrame as ZeroCopySend>::type_name(),
             <GeometryHeader as ZeroCopySend>::type_name(),
             <ControlRequest as ZeroCopySend>::type_name(),
             <ControlResponse as ZeroCopySend>::type_name(),
@@ -101,8 +112,10 @@ fn payload_type_names_are_versioned() {
             "vas::output::PartsFrameHeader::v2",
             "vas::output::PartState::v1",
             "vas::output::HandFrame::v3",
-            "vas::output::SimEvent::v3",
+            "vas::output::SimEvent::v4",
             "vas::output::ForceFrame::v2",
+            "vas::output::ClearancePair::v1",
+            "vas::output::ClearanceFrame::v1",
             "vas::scene::GeometryHeader::v1",
             "vas::control::ControlRequest::v1",
             "vas::control::ControlResponse::v6",

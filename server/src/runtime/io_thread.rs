@@ -507,6 +507,8 @@ impl Io {
             segment: event.at.map_or(0, |at| at.segment),
             point: event.at.map_or([0.0; 3], |at| at.point.into()),
             normal: event.at.map_or([0.0; 3], |at| at.normal.into()),
+            other_point: [0.0; 3],
+            distance: 0.0,
         });
         self.log_failure(self.ports.publish_events(events));
         let forces = (frame.hands.iter().enumerate()).filter_map(|(index, hand)| {

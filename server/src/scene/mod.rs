@@ -14,6 +14,8 @@
 //! dop_orientations = 24
 //! sliding = { metaphor = "rubber-band", contact_tolerance = 1e-4 }
 //! tracking = { lost_after = 0.1, grace = 0.5 }   # seconds of sample time, for hand joints
+//! clearance = { threshold = 0.005, parts = "held" }  # report pairs closer than 5 mm; off
+//!                                    # without a threshold; "held" (default) or "movable"
 //!
 //! [rates]                              # optional, hertz
 //! publish_hz = 60
@@ -47,6 +49,7 @@
 //!
 //! Parts are numbered in the order of `[[parts]]`, then of each assembly's parts.
 
+mod clearance;
 mod error;
 mod file;
 mod groups;
@@ -63,6 +66,7 @@ use crate::collision::pipeline::ObjectId;
 use crate::collision::pipeline::interest::{GroupId, InterestMatrix};
 use crate::grasping::HandModel;
 
+pub use clearance::{ClearanceParams, ClearanceParts};
 pub use error::SceneError;
 pub use groups::Groups;
 pub use loader::LoadOptions;

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::clearance::ClearanceParams;
 use crate::collision::orientation::DEFAULT_K;
 use crate::grasping::{ClaspParams, GraspParams};
 use crate::sliding::SlideParams;
@@ -32,6 +33,8 @@ pub struct AlgorithmParams {
     pub clasp: ClaspParams,
     /// What a hand does when its tracking drops, the `[params.tracking]` table.
     pub tracking: TrackingParams,
+    /// The clearance watch, the `[params.clearance]` table (off by default).
+    pub clearance: ClearanceParams,
 }
 
 impl Default for AlgorithmParams {
@@ -41,6 +44,7 @@ impl Default for AlgorithmParams {
             sliding: SlideParams::default(),
             clasp: ClaspParams::default(),
             tracking: TrackingParams::default(),
+            clearance: ClearanceParams::default(),
         }
     }
 }
@@ -149,6 +153,10 @@ impl AlgorithmParams {
             key: format!("params.clasp.{}", e.key),
             reason: e.reason,
         })?;
+        self.clearance.validate().map_err(|e| Problem {
+            key: format!("params.clearance.{}", e.key),
+            reason: e.reason,
+        })?;
         let tracking = (0.0, MAX_TRACKING_S);
         within(
             "params.tracking.lost_after",
@@ -206,6 +214,12 @@ mod tests {
         assert_eq!(
             params.validate().unwrap_err().key,
             "params.tracking.lost_after"
+        );
+        let mut params = AlgorithmParams::default();
+        params.clearance.threshold = Some(-0.005);
+        assert_eq!(
+            params.validate().unwrap_err().key,
+            "params.clearance.threshold"
         );
         let rates = Rates {
             grasping_hz: 0.0,
