@@ -1,4 +1,4 @@
-//! Benchmark B5 (sliding) and the scripted sliding scenes its tests share.
+//! Benchmark B5 (sliding), over the scripted sliding scenes of `scenes` that its tests share.
 //!
 //! A [`Scenario`] is a grasped part, static obstacles, a start pose and a scripted ghost path. [`run`]
 //! drives a [`SlideMachine`] along the path over DOP-trees and, after every step that moved the
@@ -7,69 +7,25 @@
 //! steps is measured with collision detection counted apart, so that the report gives the time per
 //! contact point with and without it, and the sliding frame rate.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
-use nalgebra::{Translation3, Vector3};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use anyhow::Result;
 use serde::Serialize;
 
 use crate::args::OutputArgs;
 use crate::oracle::PenetrationOracle;
 use crate::report::{LinePlot, Series, Table, format_number, median};
 use vas_server::collision::DopTree;
-use vas_server::geometry::{TriMesh, shapes};
-use vas_server::scene::Scene;
 use vas_server::sliding::world::{Obstacle, PairwiseWorld, SlideBody, WorldStats};
 use vas_server::sliding::{
-    Event, Pose, RestReason, SlideMachine, SlideParams, SlideState, SlideStats, SlidingMetaphor,
+    Event, Pose, RestReason, SlideMachine, SlideState, SlideStats, SlidingMetaphor,
 };
 
-/// One obstacle of a scenario.
-#[derive(Debug, Clone)]
-pub struct ScenarioObstacle {
-    /// The mesh, in its own frame.
-    pub mesh: Arc<TriMesh>,
-    /// Its pose in the world.
-    pub pose: Pose,
-    /// The slide-in allowance against the part, if the two form a slide-in unit.
-    pub allowance: Option<f64>,
-    /// What the penetration oracle tests instead of `mesh` (for slide-in units: the obstacle
-    /// with the allowance taken away); `None` tests `mesh` itself.
-    pub oracle_mesh: Option<Arc<TriMesh>>,
-}
+mod scenes;
 
-impl ScenarioObstacle {
-    /// A plain obstacle at `pose`.
-    pub fn new(mesh: TriMesh, pose: Pose) -> Self {
-        ScenarioObstacle {
-            mesh: Arc::new(mesh),
-            pose,
-            allowance: None,
-            oracle_mesh: None,
-        }
-    }
-}
-
-/// A grasped part, its surroundings and the ghost's scripted path.
-#[derive(Debug, Clone)]
-pub struct Scenario {
-    /// Name in reports.
-    pub name: String,
-    /// The grasped part, in its own frame.
-    pub part: Arc<TriMesh>,
-    /// The static obstacles.
-    pub obstacles: Vec<ScenarioObstacle>,
-    /// The part's pose when grasped (free).
-    pub start: Pose,
-    /// The ghost's pose (of the part's mesh frame) at each frame.
-    pub ghosts: Vec<Pose>,
-    /// Sliding parameters.
-    pub params: SlideParams,
-}
+pub use scenes::*;
 
 /// What a run did and how long it took.
 #[derive(Debug, Clone)]
@@ -189,274 +145,6 @@ pub fn run(scenario: &Scenario, check: bool, split_long_queries: bool) -> RunRes
     result
 }
 
-/// A copy of `mesh` with the winding of a random half of its triangles reversed (fixed seed):
-/// normals that cannot be trusted, as in CAD data.
-pub fn scramble_winding(mesh: &TriMesh, seed: u64) -> TriMesh {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let triangles = mesh
-        .triangles()
-        .iter()
-        .map(|&[a, b, c]| {
-            if rng.random::<bool>() {
-                [a, c, b]
-            } else {
-                [a, b, c]
-            }
-        })
-        .collect();
-    TriMesh::new(mesh.vertices().to_vec(), triangles)
-        .expect("reversing winding keeps a valid mesh valid")
-        .0
-}
-
-/// `count` ghost poses from `from` to `to` (excluded, included), translation linear, rotation
-/// along the great arc.
-pub fn straight_path(from: &Pose, to: &Pose, count: usize) -> Vec<Pose> {
-    (1..=count)
-        .map(|i| vas_server::sliding::motion::interpolate(from, to, i as f64 / count as f64))
-        .collect()
-}
-
-fn at(x: f64, y: f64, z: f64) -> Pose {
-    Pose::translation(x, y, z)
-}
-
-fn params(metaphor: SlidingMetaphor) -> SlideParams {
-    SlideParams {
-        metaphor,
-        ..SlideParams::default()
-    }
-}
-
-/// A 10 cm cube of about `triangles` triangles starting 5 cm above a floor slab (top at z = 0),
-/// with optional walls at x = 0.3 and y = 0.3; the ghost is dragged diagonally to `ghost_end`.
-pub fn block_scene(
-    walls: usize,
-    ghost_end: [f64; 3],
-    metaphor: SlidingMetaphor,
-    triangles: usize,
-) -> Scenario {
-    let slab = |size: [f64; 3]| shapes::cuboid(Vector3::from(size), 200);
-    let mut obstacles = vec![ScenarioObstacle::new(
-        slab([1.0, 1.0, 0.05]),
-        at(0.0, 0.0, -0.025),
-    )];
-    if walls >= 1 {
-        obstacles.push(ScenarioObstacle::new(
-            slab([0.05, 1.0, 0.5]),
-            at(0.325, 0.0, 0.2),
-        ));
-    }
-    if walls >= 2 {
-        obstacles.push(ScenarioObstacle::new(
-            slab([1.0, 0.05, 0.5]),
-            at(0.0, 0.325, 0.2),
-        ));
-    }
-    // Off round numbers, so that no frame of the path lands the block exactly touching the floor
-    // or a wall: an exact touch is a rounding-level tie between any two collision tests.
-    let start = at(0.0011, 0.0007, 0.1013);
-    let [x, y, z] = ghost_end;
-    Scenario {
-        name: format!("block_{}", ["plane", "crease", "corner"][walls.min(2)]),
-        part: Arc::new(shapes::cuboid(Vector3::new(0.1, 0.1, 0.1), triangles)),
-        obstacles,
-        start,
-        ghosts: straight_path(&start, &at(x, y, z), 60),
-        params: params(metaphor),
-    }
-}
-
-/// Dimensions of the peg-in-hole scene, metres.
-pub mod peg {
-    /// Radius of the hole.
-    pub const HOLE_RADIUS: f64 = 0.02;
-    /// Radius of the peg: 1% radial clearance.
-    pub const PEG_RADIUS: f64 = 0.99 * HOLE_RADIUS;
-    /// Length of the peg.
-    pub const PEG_LENGTH: f64 = 0.08;
-    /// Height of the block; its top is at z = BLOCK_HEIGHT / 2.
-    pub const BLOCK_HEIGHT: f64 = 0.06;
-    /// The hole's bottom: the top of the floor plate under the block.
-    pub const BOTTOM: f64 = -BLOCK_HEIGHT / 2.0;
-    /// How far the ghost is off the hole's axis: 30 times the clearance.
-    pub const MISALIGNMENT: f64 = 0.3 * HOLE_RADIUS;
-}
-
-/// A peg of about `triangles` triangles with 1% radial clearance in a blind hole, starting 1 mm
-/// inside the hole; the ghost is pushed down to 5 mm below the bottom while it is off the hole's
-/// axis by [`peg::MISALIGNMENT`], so the peg must slide down the hole's wall.
-pub fn peg_in_hole(triangles: usize) -> Scenario {
-    use peg::*;
-    let block = shapes::box_with_hole(0.1, BLOCK_HEIGHT, HOLE_RADIUS, 4_000);
-    let floor = shapes::cuboid(Vector3::new(0.2, 0.2, 0.02), 200);
-    let centre_above_bottom = PEG_LENGTH / 2.0;
-    let start = at(0.0, 0.0, BLOCK_HEIGHT / 2.0 - 0.001 + centre_above_bottom);
-    let end = at(MISALIGNMENT, 0.0, BOTTOM - 0.005 + centre_above_bottom);
-    let first = at(MISALIGNMENT, 0.0, start.translation.z);
-    let mut ghosts = vec![first];
-    ghosts.extend(straight_path(&first, &end, 300));
-    Scenario {
-        name: "peg_in_hole".into(),
-        part: Arc::new(shapes::cylinder(PEG_RADIUS, PEG_LENGTH, triangles)),
-        obstacles: vec![
-            ScenarioObstacle::new(block, Pose::identity()),
-            ScenarioObstacle::new(floor, at(0.0, 0.0, BOTTOM - 0.01)),
-        ],
-        start,
-        ghosts,
-        params: params(SlidingMetaphor::RubberBand),
-    }
-}
-
-/// Dimensions of the pipe-through-sheet scene, metres.
-pub mod pipe {
-    /// Radius of the hole in the sheet.
-    pub const HOLE_RADIUS: f64 = 0.05;
-    /// Outer radius of the pipe: 10% clearance.
-    pub const OUTER_RADIUS: f64 = 0.045;
-    /// Length of the pipe.
-    pub const LENGTH: f64 = 0.1;
-    /// How far the ghost drifts off the hole's axis over the path: three times the clearance.
-    pub const DRIFT: f64 = 0.015;
-}
-
-/// A pipe of about `triangles` triangles passed through a hole in an open sheet (z = 0) whose
-/// triangles, like the pipe's, have scrambled winding. The ghost starts on the hole's axis 2 cm
-/// away from the sheet (above it, or below with `from_below`) and drifts off the axis by
-/// [`pipe::DRIFT`] while it travels through, so the pipe must slide along the hole's rim.
-pub fn pipe_through_sheet(triangles: usize, from_below: bool) -> Scenario {
-    use pipe::*;
-    let side = if from_below { -1.0 } else { 1.0 };
-    let sheet = scramble_winding(&shapes::sheet_with_hole(0.4, HOLE_RADIUS, 4_000), 7);
-    let part = scramble_winding(&shapes::pipe(0.035, OUTER_RADIUS, LENGTH, triangles), 11);
-    let start = at(0.0, 0.0, side * (0.02 + LENGTH / 2.0));
-    let end = at(DRIFT, 0.0, -side * (0.03 + LENGTH / 2.0));
-    Scenario {
-        name: if from_below {
-            "pipe_through_sheet_from_below"
-        } else {
-            "pipe_through_sheet"
-        }
-        .into(),
-        part: Arc::new(part),
-        obstacles: vec![ScenarioObstacle::new(sheet, Pose::identity())],
-        start,
-        ghosts: straight_path(&start, &end, 200),
-        params: params(SlidingMetaphor::RubberBand),
-    }
-}
-
-/// Dimensions of the slide-in scene, metres.
-#[cfg(test)]
-pub mod slide_in {
-    /// Width of the unit (along x).
-    pub const UNIT_WIDTH: f64 = 0.18;
-    /// How far each side wall of the slot reaches into the unit by design.
-    pub const INTERFERENCE: f64 = 0.0005;
-    /// The allowance configured for the pair (twice the interference).
-    pub const ALLOWANCE: f64 = 0.001;
-    /// Thickness of the slot's side walls.
-    pub const WALL: f64 = 0.02;
-}
-
-/// A slide-in unit (a car radio) pushed along -y into a slot whose side walls interfere with it
-/// by [`slide_in::INTERFERENCE`]; with `allowance` the pair has [`slide_in::ALLOWANCE`]. The
-/// oracle tests the walls set back by the allowance when one is given.
-#[cfg(test)]
-pub fn slide_in_unit(allowance: bool) -> Scenario {
-    use slide_in::*;
-    let unit = shapes::cuboid(Vector3::new(UNIT_WIDTH, 0.15, 0.05), 600);
-    let wall = || shapes::cuboid(Vector3::new(WALL, 0.2, 0.1), 400);
-    let wall_centre = UNIT_WIDTH / 2.0 - INTERFERENCE + WALL / 2.0;
-    let mut obstacles = Vec::new();
-    for side in [-1.0, 1.0] {
-        let mut obstacle = ScenarioObstacle::new(wall(), at(side * wall_centre, 0.0, 0.0));
-        if allowance {
-            obstacle.allowance = Some(ALLOWANCE);
-            obstacle.oracle_mesh = Some(Arc::new(
-                wall()
-                    .map_vertices(|v| v + Vector3::new(side * ALLOWANCE, 0.0, 0.0))
-                    .expect("a translated box stays valid"),
-            ));
-        }
-        obstacles.push(obstacle);
-    }
-    let start = at(0.0, 0.2, 0.0);
-    Scenario {
-        name: format!(
-            "slide_in_{}",
-            if allowance {
-                "with_allowance"
-            } else {
-                "without"
-            }
-        ),
-        part: Arc::new(unit),
-        obstacles,
-        start,
-        ghosts: straight_path(&start, &at(0.0, 0.0, 0.0), 100),
-        params: params(SlidingMetaphor::RubberBand),
-    }
-}
-
-/// A scenario from a scene config: the movable part named `grasped` is grasped at its configured
-/// pose, every part of interest to it is an obstacle, and `path` gives the ghost's poses from
-/// the start pose.
-pub fn scene_scenario(
-    scene: &Scene,
-    grasped: &str,
-    path: impl FnOnce(&Pose) -> Vec<Pose>,
-) -> Result<Scenario> {
-    let index = scene
-        .parts
-        .iter()
-        .position(|p| p.name == grasped)
-        .with_context(|| format!("{}: no part named {grasped}", scene.source.display()))?;
-    let part = &scene.parts[index];
-    let params = scene.params.sliding.clone();
-    let obstacles = (0..scene.parts.len())
-        .filter(|&other| scene.pair_of_interest(index, other))
-        .map(|other| {
-            let obstacle = &scene.parts[other];
-            ScenarioObstacle {
-                mesh: obstacle.mesh.clone(),
-                pose: obstacle.pose,
-                allowance: params.allowance_between(&part.name, &obstacle.name),
-                oracle_mesh: None,
-            }
-        })
-        .collect();
-    Ok(Scenario {
-        name: format!("{} (config)", scene.name),
-        part: part.mesh.clone(),
-        obstacles,
-        start: part.pose,
-        ghosts: path(&part.pose),
-        params,
-    })
-}
-
-/// The config scenes the benchmark also runs, with their scripted ghost paths: the peg pushed
-/// 2 mm into its hole on the axis, then 3 cm further while drifting off the axis by 30 times the
-/// clearance; the pipe pushed through the sheet while drifting off the axis by three times the
-/// clearance.
-pub fn config_scenarios(configs: &Path) -> Result<Vec<Scenario>> {
-    let peg = Scene::load(&configs.join("peg_in_hole.toml"))?;
-    let peg = scene_scenario(&peg, "peg", |start| {
-        let inside = Translation3::new(0.0, 0.0, -0.004) * start;
-        let deep = Translation3::new(0.003, 0.0, -0.034) * start;
-        let mut ghosts = straight_path(start, &inside, 20);
-        ghosts.extend(straight_path(&inside, &deep, 300));
-        ghosts
-    })?;
-    let pipe = Scene::load(&configs.join("pipe_through_sheet.toml"))?;
-    let pipe = scene_scenario(&pipe, "pipe", |start| {
-        straight_path(start, &(Translation3::new(0.0075, 0.0, -0.33) * start), 300)
-    })?;
-    Ok(vec![peg, pipe])
-}
-
 /// Options of `vas-bench slide`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SlideBenchArgs {
@@ -498,6 +186,9 @@ pub struct SlideRow {
     pub us_per_contact_incl_cd: f64,
     /// Median sliding frames (ghost samples) per second, collision detection included.
     pub steps_per_s: f64,
+    /// Static collision tests the machine asked of its world per ghost frame (the same in
+    /// every run).
+    pub collision_tests_per_frame: f64,
     /// Visible poses parry found penetrating, over all runs.
     pub penetrations: usize,
 }
@@ -511,10 +202,12 @@ pub fn measure(scenario: &Scenario, runs: usize) -> SlideRow {
     let mut rate = Vec::new();
     let mut penetrations = 0;
     let mut contact_points = 0;
+    let mut collision_tests = 0;
     for i in 0..runs.max(1) {
         let result = run(scenario, i == 0, threads > 1);
         penetrations += result.penetrations;
         contact_points = result.machine.contacts_classified + result.machine.contacts_projected;
+        collision_tests = result.machine.collision_checks;
         let contact_us = result.contact_time.as_secs_f64() * 1e6;
         let without_cd = contact_us - result.contact_collision_time.as_secs_f64() * 1e6;
         let contacts = contact_points.max(1) as f64;
@@ -530,6 +223,7 @@ pub fn measure(scenario: &Scenario, runs: usize) -> SlideRow {
         us_per_contact_excl_cd: median(&mut excl),
         us_per_contact_incl_cd: median(&mut incl),
         steps_per_s: median(&mut rate),
+        collision_tests_per_frame: collision_tests as f64 / scenario.ghosts.len().max(1) as f64,
         penetrations,
     }
 }
@@ -554,6 +248,7 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
         "us_per_contact_excl_cd",
         "us_per_contact_incl_cd",
         "steps_per_s",
+        "collision_tests_per_frame",
         "penetrations",
     ]);
     let mut rows = Vec::new();
@@ -577,6 +272,7 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
             format_number(row.us_per_contact_excl_cd),
             format_number(row.us_per_contact_incl_cd),
             format_number(row.steps_per_s),
+            format_number(row.collision_tests_per_frame),
             row.penetrations.to_string(),
         ]);
     }
@@ -605,6 +301,8 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Vector3;
+    use std::path::Path;
 
     /// Runs with the oracle and asserts that no visible pose penetrated (and that there were
     /// poses to check).
