@@ -29,6 +29,9 @@ use crate::echo::READY_LINE;
 use crate::process::stop_child;
 use crate::synthetic;
 use vas_client::latency::LatencySummary;
+use vas_server::scene::Scene;
+use vas_testkit::fixtures;
+use vas_testkit::script::shove;
 
 /// Arguments of `vas-bench e2e`.
 #[derive(Debug, clap::Args)]
@@ -43,6 +46,15 @@ pub struct E2eArgs {
     /// tracker stream; each is renumbered and stamped when sent.
     #[arg(long, conflicts_with = "hand_joints")]
     recording: Option<PathBuf>,
+    /// Send violent shoves of the held peg against its block instead, made for this scene
+    /// config (a `peg` and a `block`, as the peg insert scenes; the server must run the same
+    /// scene): a power grasp, the peg lowered into the hole, then random shoves of up to 15 cm
+    /// and 25 degrees. The grasp before the first shove is left out with the warm-up.
+    #[arg(long, conflicts_with_all = ["hand_joints", "recording"])]
+    shove: Option<PathBuf>,
+    /// The seed of `--shove`'s shoves.
+    #[arg(long, default_value_t = 1, requires = "shove")]
+    shove_seed: u64,
     /// Send two hands' joints instead (the captured relaxed hand, right and left by turns,
     /// drifting in free space), on both paths; the server's scene needs both hands.
     #[arg(long)]
@@ -71,8 +83,8 @@ pub struct PathRow {
 pub struct E2eReport {
     /// The server's scene.
     pub scene: String,
-    /// What was sent: `synthetic tracker`, `synthetic hand joints, two hands` or the
-    /// recording's path.
+    /// What was sent: `synthetic tracker`, `synthetic hand joints, two hands`, the recording's
+    /// path or `shoves, seed N`.
     pub input: String,
     /// Exchanges per path left out before measuring.
     pub warmup: u64,
@@ -90,12 +102,22 @@ pub struct E2eReport {
 /// Runs the benchmark against the server on `prefix`.
 pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     let prefix = args.server.prefix.as_deref();
-    let inputs = match &args.recording {
-        Some(path) => InputStream::recording(path)?,
-        None if args.hand_joints => InputStream::HandJoints,
-        None => InputStream::Synthetic,
+    let mut warmup = args.warmup;
+    let (inputs, input) = match (&args.recording, &args.shove) {
+        (Some(path), _) => (InputStream::recording(path)?, path.display().to_string()),
+        (None, Some(scene)) => {
+            let (samples, lead_in) =
+                shove_samples(scene, args.shove_seed, args.warmup + args.samples)?;
+            warmup = warmup.max(lead_in);
+            let input = format!("shoves, seed {}", args.shove_seed);
+            (InputStream::Recording(samples), input)
+        }
+        (None, None) if args.hand_joints => (
+            InputStream::HandJoints,
+            "synthetic hand joints, two hands".to_owned(),
+        ),
+        (None, None) => (InputStream::Synthetic, "synthetic tracker".to_owned()),
     };
-    let input = inputs.describe(args.recording.as_deref());
     let mut server = crate::args::connect(prefix)?;
     let scene = server
         .scene_info(crate::args::CONTROL_TIMEOUT)
@@ -107,7 +129,7 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     tracing::info!(
         scene,
         samples = args.samples,
-        warmup = args.warmup,
+        warmup,
         "measuring the raw and vas round trips"
     );
 
@@ -116,8 +138,8 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     let mut vas = Vec::new();
     let (mut unanswered_raw, mut unanswered_vas) = (0, 0);
     let mut inputs = inputs.numbered();
-    for index in 0..args.warmup + args.samples {
-        let measured = index >= args.warmup;
+    for index in 0..warmup + args.samples {
+        let measured = index >= warmup;
         match round_trip(&mut echo, inputs.raw_sample(index + 1), timeout, drop)? {
             Some(latency) if measured => raw.push(latency),
             None if measured => unanswered_raw += 1,
@@ -138,7 +160,7 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     let report = E2eReport {
         scene,
         input,
-        warmup: args.warmup,
+        warmup,
         vas_samples_per_s: vas.len() as f64 / vas.iter().sum::<Duration>().as_secs_f64(),
         rows: vec![summary("raw", &raw)?, summary("vas", &vas)?],
         unanswered_raw,
@@ -169,6 +191,26 @@ fn plot(report: &E2eReport) -> LinePlot {
             })
             .collect(),
     }
+}
+
+/// The shoves of `--shove` for the scene config at `path`, at least `count` samples of them
+/// after the grasp, and how many samples the grasp before the first shove takes.
+fn shove_samples(path: &Path, seed: u64, count: u64) -> anyhow::Result<(Vec<InputSample>, u64)> {
+    let scene = Scene::load(path)?;
+    let part = |name: &str| {
+        scene
+            .parts
+            .iter()
+            .find(|part| part.name == name)
+            .with_context(|| format!("{}: no part named {name}", path.display()))
+    };
+    // One tracker and one glove sample per tick.
+    let samples_per_second = 2.0 * fixtures::RATE_HZ;
+    let per_shove = (samples_per_second * shove::PERIOD).round() as u64;
+    let count = usize::try_from(count.div_ceil(per_shove)).context("too many samples")?;
+    let shoves = shove::shoves(part("peg")?, part("block")?, seed, count);
+    let lead_in = (shoves.first_shove * samples_per_second).round() as u64;
+    Ok((fixtures::input_samples(&shoves.keys), lead_in))
 }
 
 /// Sends `input` stamped now and waits for the hand frame answering it; its round trip, or
@@ -240,15 +282,6 @@ impl InputStream {
                 .map(|sample| sample.input)
                 .collect(),
         ))
-    }
-
-    /// What the stream sends, for the report.
-    fn describe(&self, recording: Option<&Path>) -> String {
-        match (self, recording) {
-            (_, Some(path)) => path.display().to_string(),
-            (InputStream::HandJoints, None) => "synthetic hand joints, two hands".to_owned(),
-            _ => "synthetic tracker".to_owned(),
-        }
     }
 
     /// The stream with fresh sequence numbers: from 1 in each input stream.

@@ -16,6 +16,7 @@ use vas_server::grasping::model::{FLEX_COUNT, FlexVector};
 
 pub mod hand_over;
 mod recorded;
+pub mod shove;
 
 pub use recorded::{MissingPart, RecordedScenario, power_grasp_at};
 
