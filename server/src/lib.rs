@@ -1,8 +1,8 @@
 //! vas-server: the simulation library behind the `vas-server` binary.
 //!
 //! The modules are the paper's, layered so that data flows one way:
-//! `geometry` ← `collision` ← `sliding`, `grasping` ← `scene` ← `simulation` ← `runtime`.
-//! Only `runtime` knows about threads and IPC; every other module is a plain library.
+//! `geometry` ← `collision` ← `sliding`, `grasping` ← `scene` ← `simulation` ← `runtime` ←
+//! `replay`. Only `runtime` knows about threads and IPC; every other module is a plain library.
 //!
 //! * [`geometry`]: triangle meshes, loading OBJ, STL, PLY and glTF/GLB, convex hulls, shapes.
 //! * [`collision`]: the DOP-tree, the separating-plane pre-check and the collision pipeline.
@@ -11,6 +11,7 @@
 //! * [`scene`]: scene configs, the parts and their shared DOP-trees.
 //! * [`simulation`]: one step of the whole simulation as plain state.
 //! * [`runtime`]: the server's threads, loops and iceoryx2 ports ([`runtime::run`]).
+//! * [`replay`]: input samples stepped in-process, one frame per sample, as in lockstep.
 //!
 //! A renderer does not link this crate: it links `vas-client` and draws from the wire (the
 //! geometry service carries every mesh). `ARCHITECTURE.md` at the repository root shows how the
@@ -19,6 +20,7 @@
 pub mod collision;
 pub mod geometry;
 pub mod grasping;
+pub mod replay;
 pub mod runtime;
 pub mod scene;
 pub mod simulation;

@@ -1,14 +1,11 @@
-//! Offline replay: a recording stepped through the server's per-sample model of the hands among a
-//! scene's parts ([`Interaction`]), without threads or IPC, checked frame by frame for
-//! penetrations by parry, an oracle independent of the DOP-trees.
+//! Offline replay: a recording stepped through the server's in-process replay
+//! ([`vas_server::replay`], one frame per sample as in lockstep, without threads or IPC), checked
+//! frame by frame for penetrations by parry, an oracle independent of the DOP-trees.
 //!
 //! The inputs reach the interaction as the server hands them over (through its own input state,
-//! [`Inputs`]): every valid sample updates the latest tracker, glove or hand-joints target, and
-//! after each sample the interaction steps once with each hand's latest target: the tracker's
-//! cart, and the hand's root and flex values from its joints once it has had a tracked
-//! hand-joints sample, else (the first hand) from the tracker and the glove (a flat hand before
-//! the first glove sample). Each hand starts parked at its first target with a flat hand;
-//! invalid samples are counted and skipped.
+//! [`Inputs`]): the tracker's cart, and each hand's root and flex values from its joints once it
+//! has had a tracked hand-joints sample, else (the first hand) from the tracker and the glove (a
+//! flat hand before the first glove sample).
 
 use std::sync::Arc;
 
@@ -18,12 +15,13 @@ use parry3d::shape::{ConvexPolyhedron, TriMesh as ParryTriMesh};
 use vas_client::recording::{InputSample, Recording};
 use vas_protocol::{EventKind, FLEX_COUNT, GraspType as WireGrasp};
 use vas_server::collision::parry_mesh::{ORACLE_SCALE, millimetre_pose, millimetre_trimesh};
-use vas_server::grasping::{GraspEvent, GraspingHand, HandModel, HandPose};
+use vas_server::grasping::{GraspEvent, HandModel};
+use vas_server::replay::{Outcome, Replay, ReplayError};
 use vas_server::runtime::inputs::Inputs;
 use vas_server::scene::Scene;
 use vas_server::simulation::frames::{HandTarget, wire_grasp};
 use vas_server::simulation::hand_bodies::HandBodies;
-use vas_server::simulation::interaction::Interaction;
+use vas_server::simulation::interaction::InteractionFrame;
 
 /// A penetration deeper than this (millimetres) is reported: parry computes in `f32`, whose
 /// rounding at these sizes stays well below it.
@@ -32,12 +30,9 @@ const DEPTH_SLACK_MM: f32 = 1e-3;
 /// Why a recording cannot be replayed in a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum OfflineError {
-    /// The scene names no hand model.
-    #[error("scene {0:?} names no hand")]
-    NoHand(String),
-    /// The hand model cannot be loaded or its collision geometry built.
-    #[error("hand model: {0}")]
-    Hand(String),
+    /// The scene has no hand, or its hand cannot be built.
+    #[error(transparent)]
+    Replay(#[from] ReplayError),
     /// The recording has no valid sample that places the hand.
     #[error("the recording has no valid tracker or hand-joints sample")]
     Unplaced,
@@ -232,99 +227,35 @@ impl Oracle {
     }
 }
 
-/// Replays `recording` in `scene` as described in the module documentation.
+/// Replays `recording` in `scene` through the server's in-process replay
+/// ([`vas_server::replay`]), checking every frame with the [`Oracle`].
 pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, OfflineError> {
-    let (targets, rejected) = hand_targets(scene, recording.samples.iter().map(|s| s.input));
-    replay_targets(scene, &targets, rejected)
-}
-
-fn replay_targets(
-    scene: &Scene,
-    inputs: &[Vec<HandTarget>],
-    rejected: usize,
-) -> Result<OfflineRun, OfflineError> {
-    if scene.hands.is_empty() {
-        return Err(OfflineError::NoHand(scene.name.clone()));
-    }
-    let first = inputs.first().ok_or(OfflineError::Unplaced)?;
-    let params = scene.params.grasp();
-    let hands = (scene.hands.iter())
-        .zip(first)
-        .map(|(scene_hand, first)| {
-            GraspingHand::new(
-                Arc::clone(&scene_hand.model),
-                params,
-                HandPose {
-                    root: first.input.cart * first.input.tracker,
-                    flex: [0.0; FLEX_COUNT],
-                },
-            )
-            .map_err(|e| OfflineError::Hand(e.to_string()))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    let bodies: Vec<HandBodies> = (scene.hands.iter())
-        .zip(&hands)
-        .map(|(scene_hand, hand)| HandBodies::of(Arc::clone(&scene_hand.model), hand))
-        .collect();
-    let oracle = Oracle::new(scene, &bodies);
-    let mut interaction = Interaction::new(
-        hands,
-        &scene.parts,
-        scene.params.sliding.clone(),
-        1.0 / scene.rates.sliding_hz,
-    );
+    let mut replay = Replay::new(scene)?;
+    let mut oracle = None;
     let mut run = OfflineRun {
         frames: 0,
-        rejected,
+        rejected: 0,
         events: Vec::new(),
         final_poses: Vec::new(),
         touched_frames: vec![0; scene.parts.len()],
         max_held_back: 0.0,
         penetrations: Vec::new(),
     };
-    for (frame, input) in inputs.iter().enumerate() {
-        let steps = interaction.step(input);
-        let mut touched: Vec<usize> = Vec::new();
-        let mut hand_overs = Vec::new();
-        for (hand, step) in steps.iter().enumerate() {
-            for event in &step.hand.events {
-                let (kind, part, grasp) = match *event {
-                    GraspEvent::Grasp { part, grasp, .. } => {
-                        (EventKind::Grasp, part, wire_grasp(Some(grasp)))
-                    }
-                    GraspEvent::Release { part, .. } if step.handed_over.contains(&part) => {
-                        (EventKind::HandOver, part, WireGrasp::None)
-                    }
-                    GraspEvent::Release { part, .. } => (EventKind::Release, part, WireGrasp::None),
-                };
-                let event = ReplayEvent {
-                    frame,
-                    hand,
-                    kind,
-                    part: scene.parts[part as usize].name.clone(),
-                    grasp,
-                };
-                // As the server publishes them: a hand-over after the grasp that caused it.
-                if kind == EventKind::HandOver {
-                    hand_overs.push(event);
-                } else {
-                    run.events.push(event);
-                }
-            }
-            touched
-                .extend((step.hand.touching.iter().flatten()).map(|contact| contact.part as usize));
-            if let Some(held) = &step.held {
-                let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
-                run.max_held_back = run.max_held_back.max(back);
-            }
-        }
-        run.events.append(&mut hand_overs);
-        touched.sort_unstable();
-        touched.dedup();
-        for p in touched {
-            run.touched_frames[p] += 1;
-        }
-        let poses: Vec<Isometry3<f64>> = interaction.part_poses().collect();
+    for recorded in &recording.samples {
+        let outcome = match &recorded.input {
+            InputSample::Tracker(sample) => replay.tracker(sample)?,
+            InputSample::Glove(sample) => replay.glove(sample)?,
+            InputSample::HandJoints(sample) => replay.hand_joints(sample)?,
+        };
+        let Outcome::Stepped(steps) = outcome else {
+            continue;
+        };
+        let frame = replay.frames() - 1;
+        let oracle = oracle.get_or_insert_with(|| Oracle::new(scene, replay.hand_bodies()));
+        let poses: Vec<Isometry3<f64>> = replay
+            .interaction()
+            .map_or_else(Vec::new, |i| i.part_poses().collect());
+        record_frame(scene, &mut run, frame, &steps);
         let hands: Vec<VisibleHand> = steps
             .iter()
             .map(|step| VisibleHand {
@@ -336,7 +267,52 @@ fn replay_targets(
         run.penetrations
             .extend(oracle.penetrations(scene, &poses, &hands, frame));
     }
-    run.frames = inputs.len();
+    let interaction = replay.interaction().ok_or(OfflineError::Unplaced)?;
+    run.frames = replay.frames();
+    run.rejected = replay.rejected();
     run.final_poses = interaction.part_poses().collect();
     Ok(run)
+}
+
+/// Adds one frame's events, touches and held-back distance to `run`.
+fn record_frame(scene: &Scene, run: &mut OfflineRun, frame: usize, steps: &[InteractionFrame]) {
+    let mut touched: Vec<usize> = Vec::new();
+    let mut hand_overs = Vec::new();
+    for (hand, step) in steps.iter().enumerate() {
+        for event in &step.hand.events {
+            let (kind, part, grasp) = match *event {
+                GraspEvent::Grasp { part, grasp, .. } => {
+                    (EventKind::Grasp, part, wire_grasp(Some(grasp)))
+                }
+                GraspEvent::Release { part, .. } if step.handed_over.contains(&part) => {
+                    (EventKind::HandOver, part, WireGrasp::None)
+                }
+                GraspEvent::Release { part, .. } => (EventKind::Release, part, WireGrasp::None),
+            };
+            let event = ReplayEvent {
+                frame,
+                hand,
+                kind,
+                part: scene.parts[part as usize].name.clone(),
+                grasp,
+            };
+            // As the server publishes them: a hand-over after the grasp that caused it.
+            if kind == EventKind::HandOver {
+                hand_overs.push(event);
+            } else {
+                run.events.push(event);
+            }
+        }
+        touched.extend((step.hand.touching.iter().flatten()).map(|contact| contact.part as usize));
+        if let Some(held) = &step.held {
+            let back = (held.ghost.translation.vector - held.visible.translation.vector).norm();
+            run.max_held_back = run.max_held_back.max(back);
+        }
+    }
+    run.events.append(&mut hand_overs);
+    touched.sort_unstable();
+    touched.dedup();
+    for p in touched {
+        run.touched_frames[p] += 1;
+    }
 }
