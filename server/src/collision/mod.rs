@@ -10,6 +10,7 @@
 
 pub mod broad_phase;
 pub(crate) mod brute_force;
+pub mod distance;
 pub mod dop_tree;
 pub mod orientation;
 pub mod oriented_box;

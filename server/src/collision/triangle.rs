@@ -89,7 +89,13 @@ pub fn triangles_intersect(t1: &Triangle, t2: &Triangle) -> bool {
         return false;
     }
     if side1 == [0; 3] || side2 == [0; 3] {
-        return coplanar_intersect(t1, t2);
+        // In one plane, or one triangle is degenerate (it puts every point on its "plane").
+        return match (collinear(t1), collinear(t2)) {
+            (false, false) => coplanar_intersect(t1, t2),
+            (true, false) => edges_meet_triangle(t1, t2),
+            (false, true) => edges_meet_triangle(t2, t1),
+            (true, true) => (0..3).any(|i| (0..3).any(|j| segments_meet(edge(t1, i), edge(t2, j)))),
+        };
     }
     let mut a = *t1;
     let mut b = *t2;
@@ -112,6 +118,51 @@ pub fn triangles_intersect(t1: &Triangle, t2: &Triangle) -> bool {
     // and likewise for b. The segments a ∩ plane(b) and b ∩ plane(a) lie on the planes' common
     // line; they overlap exactly when these two orientations have the signs below.
     orient3d(&a[0], &a[1], &b[0], &b[1]) <= 0 && orient3d(&a[0], &a[2], &b[0], &b[2]) >= 0
+}
+
+/// Edge `i` of `t`: from corner `i` to the next.
+fn edge(t: &Triangle, i: usize) -> [&Point3<f64>; 2] {
+    [&t[i], &t[(i + 1) % 3]]
+}
+
+/// Exactly whether the corners of `t` lie on one line (or coincide): its cross product vanishes
+/// exactly when all three of its projections on the coordinate planes are degenerate.
+fn collinear(t: &Triangle) -> bool {
+    (0..3).all(|drop| {
+        let project = |p: &Point3<f64>| [p[(drop + 1) % 3], p[(drop + 2) % 3]];
+        orient2d(project(&t[0]), project(&t[1]), project(&t[2])) == 0
+    })
+}
+
+/// Whether some edge of the degenerate triangle `degenerate` meets the proper triangle `t`.
+fn edges_meet_triangle(degenerate: &Triangle, t: &Triangle) -> bool {
+    (0..3).any(|i| {
+        let [p, q] = edge(degenerate, i);
+        let (sp, sq) = (
+            orient3d(&t[0], &t[1], &t[2], p),
+            orient3d(&t[0], &t[1], &t[2], q),
+        );
+        if sp * sq > 0 {
+            return false;
+        }
+        if sp == 0 && sq == 0 {
+            return coplanar_intersect(&[*p, *q, *q], t);
+        }
+        // The segment crosses the plane at one point, inside the closed triangle exactly when
+        // the segment turns the same way (or not at all) around each of its edges.
+        let turns = [0, 1, 2].map(|j| orient3d(p, q, &t[j], &t[(j + 1) % 3]));
+        turns.iter().all(|&o| o >= 0) || turns.iter().all(|&o| o <= 0)
+    })
+}
+
+/// Whether two segments of 3-space share a point: they must lie in one plane, and then their
+/// projections meet on every coordinate plane (at least one of which maps that plane one to one).
+fn segments_meet([p, q]: [&Point3<f64>; 2], [r, s]: [&Point3<f64>; 2]) -> bool {
+    orient3d(p, q, r, s) == 0
+        && (0..3).all(|drop| {
+            let project = |x: &Point3<f64>| [x[(drop + 1) % 3], x[(drop + 2) % 3]];
+            segments_intersect(project(p), project(q), project(r), project(s))
+        })
 }
 
 /// `corners` rotated left by `shift` (< 3): written out, since the slice method is a call to a
@@ -179,9 +230,12 @@ fn coplanar_intersect(t1: &Triangle, t2: &Triangle) -> bool {
 fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     let (o1, o2) = (orient2d(a, b, c), orient2d(a, b, d));
     let (o3, o4) = (orient2d(c, d, a), orient2d(c, d, b));
-    if o1 == 0 && o2 == 0 {
-        // Collinear: compare the intervals on the coordinate along which the line extends.
-        let axis = if (b[0] - a[0]).abs() >= (b[1] - a[1]).abs() {
+    if o1 == 0 && o2 == 0 && o3 == 0 && o4 == 0 {
+        // Collinear (all four signs vanish: a segment reduced to a point is collinear with
+        // another only when it lies on its line): compare the intervals on the coordinate along
+        // which the line extends.
+        let (from, to) = if a != b { (a, b) } else { (c, d) };
+        let axis = if (to[0] - from[0]).abs() >= (to[1] - from[1]).abs() {
             0
         } else {
             1

@@ -12,6 +12,7 @@
 //! - `realign`: B's nodes mapped into A's orientations in O(k), cached per query;
 //! - `traverse`: the depth-first walk over node pairs; `separation`: the tests beyond the DOPs
 //!   and the certificates they leave; `parallel`: the walk split across threads;
+//! - `distance`: the distance query's own walk, with its bounds and its memory;
 //! - `cache`: built trees kept in a folder, as `persist` writes and reads them, and `check`
 //!   accepts them.
 
@@ -19,6 +20,7 @@ mod build;
 mod cache;
 mod certificates;
 mod check;
+mod distance;
 mod front;
 mod node_bounds;
 mod pair_memory;
@@ -33,6 +35,7 @@ mod traverse;
 mod tree;
 
 pub use cache::{Provenance, TreeCache};
+pub use distance::DistanceMemory;
 pub use persist::reseal;
 pub use tree::{DEFAULT_LEAF_SIZE, DopTree};
 

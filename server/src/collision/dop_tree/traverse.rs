@@ -120,7 +120,7 @@ impl<'a, R> TreePair<'a, R> {
     }
 
     /// B's leaf triangle `index` (leaf order) moved into A's frame.
-    fn b_triangle_in_a(&self, index: usize) -> Triangle {
+    pub(super) fn b_triangle_in_a(&self, index: usize) -> Triangle {
         self.b.triangles[index].map(|p| Point3::from(self.rotation * p.coords + self.translation))
     }
 
@@ -473,7 +473,7 @@ pub(super) fn dops_overlap<const K: usize>(a: &[f32; K], e: &[f32; K]) -> bool {
 /// The least `a_i + e_i`: how deeply the DOPs overlap along their tightest axis (negative when
 /// they are disjoint).
 #[inline(always)]
-fn overlap_slack<const K: usize>(a: &[f32; K], e: &[f32; K]) -> f32 {
+pub(super) fn overlap_slack<const K: usize>(a: &[f32; K], e: &[f32; K]) -> f32 {
     let mut least = f32::INFINITY;
     for i in 0..K {
         let s = a[i] + e[i];
