@@ -375,7 +375,7 @@ pub struct SimEvent {
     /// The other part of a contact or clearance, or [`HAND_PART_ID`].
     pub other: u32,
     /// The hand the event is about (grasp, release, hand-over, a contact with the hand) or whose
-    /// held part touched, a [`HandSide`] code.
+    /// held part touched, a [`HandSide`] code; 0 for clearance events.
     pub hand: u32,
     /// The hand segment of a contact with the hand, a [`HandSegment`] code; 0 otherwise.
     pub segment: u32,

@@ -19,9 +19,10 @@ use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use vas_protocol::{
     ControlResponse, ControlStatus, ForceFrame, HAND_SEGMENT_COUNT, HandFrame, HandSide,
-    InputStats, PartState, PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
+    InputStats, PART_GRASPED, PartState, PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
 };
 
+use super::clearance::{self, ClearanceJob, ClearanceWatch};
 use super::control::{self, Session};
 use super::geometry::ServedGeometry;
 use super::inputs::TrackingClock;
@@ -65,6 +66,8 @@ struct Io {
     hand_sides: Vec<HandSide>,
     /// The latest published part states, for the periodic parts frames.
     parts: Vec<PartState>,
+    /// Measures the published frames' clearance beside the loops.
+    clearance: ClearanceWatch,
     hand_frames: u64,
     parts_frames: u64,
     logged_stats: InputStats,
@@ -103,6 +106,8 @@ impl Answer {
 struct Lockstep {
     enabled: bool,
     in_flight: bool,
+    /// The frame in flight is published and its clearance is being measured.
+    awaiting_clearance: bool,
     waiting: VecDeque<LoopWork<InputFrame>>,
 }
 
@@ -134,9 +139,12 @@ impl InteractionManager {
             session.scene.parts.len(),
             geometry.geometry().encoded_len(),
         )?;
+        let mut clearance = ClearanceWatch::spawn(waker.clone(), options.lockstep)?;
+        clearance.restart(&start.scene, start.epoch);
         let mut io = Io {
             ports,
             parts: Vec::new(),
+            clearance,
             session,
             inputs: Arc::clone(&links.inputs),
             verified,
@@ -148,6 +156,7 @@ impl InteractionManager {
             lockstep: Lockstep {
                 enabled: options.lockstep,
                 in_flight: false,
+                awaiting_clearance: false,
                 waiting: VecDeque::new(),
             },
             hand_frames: 0,
@@ -223,6 +232,7 @@ impl InteractionManager {
             io.process_input_samples();
             io.answer_control_requests();
             io.publish_verified_frames();
+            io.publish_clearance();
             let scene_hz = io.session.scene.rates.publish_hz;
             if scene_hz != publish_hz {
                 publish_hz = scene_hz;
@@ -430,6 +440,7 @@ impl Io {
         if let Some(change) = change {
             if let Change::Restart(restart) = &change {
                 self.geometry.restart(restart);
+                self.clearance.restart(&restart.scene, restart.epoch);
                 self.hand_sides = hand_sides(&restart.scene);
             }
             let restarted = matches!(change, Change::Restart(_));
@@ -479,15 +490,31 @@ impl Io {
             self.answer.take(frame.stamps);
             // A frame of the scene before a restart still answers its sample, but its parts
             // are not the scene's any more.
-            self.publish(&frame);
+            let measuring = self.publish(&frame);
             if self.lockstep.enabled {
-                self.lockstep.in_flight = false;
+                // The next sample's frame waits for this one's clearance, if it is measured.
+                self.lockstep.awaiting_clearance = measuring;
+                self.lockstep.in_flight = measuring;
                 self.send_waiting();
             }
         }
     }
 
-    fn publish(&mut self, frame: &VerifiedFrame) {
+    /// Publishes the clearance of the frames measured since the last call; in lockstep, then
+    /// hands the loops the next frame.
+    fn publish_clearance(&mut self) {
+        while let Some(report) = self.clearance.take() {
+            self.log_failure(clearance::publish(&self.ports, &report));
+        }
+        if self.lockstep.awaiting_clearance && !self.clearance.is_pending() {
+            self.lockstep.awaiting_clearance = false;
+            self.lockstep.in_flight = false;
+            self.send_waiting();
+        }
+    }
+
+    /// Publishes a verified frame; true when it was handed over to have its clearance measured.
+    fn publish(&mut self, frame: &VerifiedFrame) -> bool {
         let now = wall_clock_ns();
         self.hand_frames += 1;
         let stamps = frame.stamps;
@@ -539,6 +566,20 @@ impl Io {
                 self.publish_parts(Some(frame));
             }
         }
+        let measuring = frame.epoch == self.session.epoch
+            && frame.parts.len() == self.parts.len()
+            && self.clearance.hand(ClearanceJob {
+                epoch: frame.epoch,
+                parts_frame: self.parts_frames,
+                hand_frame: self.hand_frames,
+                stamps,
+                poses: frame.parts.iter().map(|part| part.pose).collect(),
+                held: (0u32..)
+                    .zip(&frame.parts)
+                    .filter(|(_, part)| part.flags & PART_GRASPED != 0)
+                    .map(|(id, _)| id)
+                    .collect(),
+            });
         // The hand frames go last: a client that waits for the answer to its sample has the
         // parts and events of the same frame by then.
         let hands = (frame.hands.iter().enumerate()).map(|(index, hand)| {
@@ -566,6 +607,7 @@ impl Io {
             }
         });
         self.log_failure(self.ports.publish_hands(hands));
+        measuring
     }
 
     /// Publishes the latest part states, stamped with `frame`'s inputs (or the latest inputs).

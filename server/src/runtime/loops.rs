@@ -20,6 +20,7 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, Sender};
 use nalgebra::Isometry3;
 
+use super::meter::LoopMeter;
 use super::priority::RealtimePriority;
 use super::rendezvous::{AwakeWatch, Coalesce, Handoff, Received, Work};
 use super::wakeup::Waker;
@@ -209,67 +210,6 @@ impl Loops {
 
 /// How often [`Loops::join`] looks whether the loops have ended.
 const JOIN_POLL: Duration = Duration::from_millis(10);
-
-/// How often a loop logs its rate.
-const RATE_LOG_PERIOD: Duration = Duration::from_secs(10);
-
-/// The time a loop spent on each frame of the current window: the rate it sustains is frames per
-/// busy second, whatever rate its input comes at. A window ends every [`RATE_LOG_PERIOD`], at a
-/// restart (so that one scene's figures are not mixed with the next's) and when the loop ends.
-struct LoopMeter {
-    name: &'static str,
-    /// Each frame's processing time since the window began.
-    frames: Vec<Duration>,
-    since: Instant,
-}
-
-impl LoopMeter {
-    fn new(name: &'static str) -> LoopMeter {
-        LoopMeter {
-            name,
-            frames: Vec::new(),
-            since: Instant::now(),
-        }
-    }
-
-    /// Counts a frame whose processing started at `started`, and logs the window now and then.
-    fn frame_done(&mut self, started: Instant) {
-        self.frames.push(started.elapsed());
-        if self.since.elapsed() >= RATE_LOG_PERIOD {
-            self.log();
-        }
-    }
-
-    /// Logs the window's frames, their rate, mean, 99th percentile (nearest rank) and longest
-    /// time, and starts a new window.
-    fn log(&mut self) {
-        let window = self.since.elapsed().as_secs_f64();
-        let count = self.frames.len();
-        if let Some(p99) = p99(&mut self.frames) {
-            let busy = self.frames.iter().sum::<Duration>().as_secs_f64();
-            let longest = self.frames.iter().max().copied().unwrap_or(p99);
-            tracing::info!(
-                loop_name = self.name,
-                frames = count,
-                frames_per_s = format_args!("{:.0}", count as f64 / window),
-                busy_percent = format_args!("{:.1}", 100.0 * busy / window),
-                mean_us = format_args!("{:.1}", busy * 1e6 / count as f64),
-                p99_us = format_args!("{:.1}", p99.as_secs_f64() * 1e6),
-                max_us = format_args!("{:.1}", longest.as_secs_f64() * 1e6),
-                sustains_per_s = format_args!("{:.0}", count as f64 / busy),
-                "loop rate"
-            );
-        }
-        self.frames.clear();
-        self.since = Instant::now();
-    }
-}
-
-/// The 99th percentile of `times` by nearest rank (reordering them); `None` for no times.
-fn p99(times: &mut [Duration]) -> Option<Duration> {
-    let rank = (times.len() * 99).div_ceil(100).checked_sub(1)?;
-    Some(*times.select_nth_unstable(rank).1)
-}
 
 /// The period of a loop rate (validated by the scene: positive and finite).
 fn period(hz: f64) -> Duration {

@@ -13,9 +13,12 @@
 //! Output services: every verified frame publishes `vas/output/hand` (answering the input sample
 //! it carries the stamp of), `vas/output/parts` when a part changed (and at the scene's
 //! `rates.publish_hz` regardless), `vas/output/events` and, while a part is held,
-//! `vas/output/force`. The input counters (rejected, clamped) are logged and returned in every
+//! `vas/output/force`; a scene with a clearance threshold also has each published frame measured
+//! on a thread beside the loops (`clearance`) and its pairs published on `vas/output/clearance`
+//! (with their events on `vas/output/events`) as soon as they are measured. The input counters (rejected, clamped) are logged and returned in every
 //! `vas/control` response (`stats`).
 
+mod clearance;
 pub mod control;
 pub mod cpu_latency;
 mod geometry;
@@ -24,6 +27,7 @@ pub mod inputs;
 mod io_thread;
 mod loader;
 pub(crate) mod loops;
+mod meter;
 mod ports;
 pub mod priority;
 pub(crate) mod rendezvous;

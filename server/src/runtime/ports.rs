@@ -9,8 +9,9 @@ use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use vas_protocol::services::{self, output};
 use vas_protocol::{
-    ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample, HandFrame,
-    HandJointsSample, PartState, PartsFrameHeader, SceneGeometry, SimEvent, TrackerSample,
+    ClearanceFrame, ControlRequest, ControlResponse, ForceFrame, GeometryHeader, GloveSample,
+    HandFrame, HandJointsSample, PartState, PartsFrameHeader, SceneGeometry, SimEvent,
+    TrackerSample,
 };
 
 use super::RuntimeError;
@@ -73,6 +74,8 @@ pub(super) struct Ports {
     events_notifier: Notifier<ipc::Service>,
     force: Publisher<ipc::Service, ForceFrame, ()>,
     force_notifier: Notifier<ipc::Service>,
+    clearance: Publisher<ipc::Service, ClearanceFrame, ()>,
+    clearance_notifier: Notifier<ipc::Service>,
     /// Control requests from the clients.
     pub(super) control: Server<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     control_notifier: Notifier<ipc::Service>,
@@ -100,7 +103,7 @@ impl Ports {
         geometry_bytes: usize,
     ) -> Result<(Self, Wakeups), RuntimeError> {
         use services::{
-            CONTROL, EVENTS, FORCE, GEOMETRY, GLOVE, HAND, HAND_JOINTS, PARTS, TRACKER,
+            CLEARANCE, CONTROL, EVENTS, FORCE, GEOMETRY, GLOVE, HAND, HAND_JOINTS, PARTS, TRACKER,
         };
         let wakeup = |name| services::open_wakeup(node, name);
         let listener = |name| port(name, wakeup(name)?.listener_builder().create());
@@ -166,6 +169,11 @@ impl Ports {
                 services::open_force(node)?.publisher_builder().create(),
             )?,
             force_notifier: notifier(FORCE)?,
+            clearance: port(
+                CLEARANCE,
+                services::open_clearance(node)?.publisher_builder().create(),
+            )?,
+            clearance_notifier: notifier(CLEARANCE)?,
             control: port(
                 CONTROL,
                 services::open_control(node)?.server_builder().create(),
@@ -257,6 +265,16 @@ impl Ports {
         )
     }
 
+    /// Publishes a clearance frame and wakes its readers.
+    pub(super) fn publish_clearance(&self, frame: &ClearanceFrame) -> Result<(), RuntimeError> {
+        send_all(
+            &self.clearance,
+            &self.clearance_notifier,
+            [*frame],
+            ("send a clearance frame", "notify clearance readers"),
+        )
+    }
+
     /// Wakes the control clients after responses were sent.
     pub(super) fn notify_control_clients(&self) -> Result<(), RuntimeError> {
         self.control_notifier
@@ -266,8 +284,8 @@ impl Ports {
     }
 
     /// Connects readers that appeared since the last send and hands them the history (the
-    /// latest hand frame), so that a reader that (re)connects while no input arrives still gets
-    /// it.
+    /// latest hand, force and clearance frames), so that a reader that (re)connects while no
+    /// input arrives still gets it.
     pub(super) fn update_connections(&self) -> Result<(), RuntimeError> {
         self.hand
             .update_connections()
@@ -275,6 +293,9 @@ impl Ports {
         self.force
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new force readers", error))?;
+        self.clearance
+            .update_connections()
+            .map_err(|error| RuntimeError::ipc("connect new clearance readers", error))?;
         self.geometry
             .update_connections()
             .map_err(|error| RuntimeError::ipc("connect new geometry readers", error))?;

@@ -42,18 +42,6 @@ fn handle_scene(folder: &Path) -> Arc<Scene> {
 }
 
 #[test]
-fn the_99th_percentile_is_the_nearest_rank() {
-    let micros = |range: std::ops::RangeInclusive<u64>| -> Vec<Duration> {
-        range.rev().map(Duration::from_micros).collect()
-    };
-    assert_eq!(p99(&mut []), None);
-    assert_eq!(p99(&mut micros(7..=7)), Some(Duration::from_micros(7)));
-    assert_eq!(p99(&mut micros(1..=100)), Some(Duration::from_micros(99)));
-    assert_eq!(p99(&mut micros(1..=1000)), Some(Duration::from_micros(990)));
-    assert_eq!(p99(&mut micros(1..=50)), Some(Duration::from_micros(50)));
-}
-
-#[test]
 fn the_loops_in_lockstep_give_the_offline_interaction_frame_by_frame() {
     let folder = tempfile::tempdir().expect("a temporary folder");
     let scene = handle_scene(folder.path());
