@@ -13,9 +13,9 @@ use iceoryx2::service::port_factory::{event, publish_subscribe};
 use serde::Serialize;
 use vas_protocol::services::{self, config_with_prefix};
 use vas_protocol::{
-    ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, ForceFrame, GeometryHeader,
-    GloveSample, HandFrame, HandJointsSample, HandSide, InputStats, MAX_PATH_BYTES, MeshData,
-    PART_MOVABLE, PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor,
+    ClearanceFrame, ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, ForceFrame,
+    GeometryHeader, GloveSample, HandFrame, HandJointsSample, HandSide, InputStats, MAX_PATH_BYTES,
+    MeshData, PART_MOVABLE, PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor,
     TrackerSample, WirePose, WireText,
 };
 
@@ -33,7 +33,7 @@ const CONTROL_RETRY: Duration = Duration::from_millis(20);
 ///
 /// Every client holds a control client (scene info, input counters, reset, loads, metaphor):
 /// [`Roles::CONTROL`] is that alone. [`Roles::RENDER`] adds a subscriber on each output service
-/// (parts, hand, events, force, geometry) for [`Client::wait`] and [`Client::receive`];
+/// (parts, hand, events, force, clearance, geometry) for [`Client::wait`] and [`Client::receive`];
 /// [`Roles::INPUT`] adds a publisher and its notifier on each input stream (tracker, glove, hand
 /// joints) for [`Client::send_tracker`] and the other sends. Roles combine with `|`; the default
 /// is [`Roles::ALL`], every port, as a client had before there were roles.
@@ -158,6 +158,7 @@ impl ClientBuilder {
             waitset: new_waitset(self.handle_termination_signals)?,
             latest_parts: None,
             latest_hand: None,
+            latest_clearance: None,
             latest_geometry: None,
             node,
         };
@@ -177,6 +178,8 @@ struct Outputs {
     events_listener: Listener<ipc::Service>,
     force: Subscriber<ipc::Service, ForceFrame, ()>,
     force_listener: Listener<ipc::Service>,
+    clearance: Subscriber<ipc::Service, ClearanceFrame, ()>,
+    clearance_listener: Listener<ipc::Service>,
     geometry: Subscriber<ipc::Service, [u8], GeometryHeader>,
     geometry_listener: Listener<ipc::Service>,
 }
@@ -210,6 +213,11 @@ impl Outputs {
                 .create()
                 .map_err(ClientError::port)?,
             force_listener: listener(services::FORCE)?,
+            clearance: services::open_clearance(node)?
+                .subscriber_builder()
+                .create()
+                .map_err(ClientError::port)?,
+            clearance_listener: listener(services::CLEARANCE)?,
             geometry: services::open_geometry(node)?
                 .subscriber_builder()
                 .create()
@@ -293,6 +301,9 @@ pub enum Frame {
     Event(SimEvent),
     /// The force and torque for a force-feedback device.
     Force(ForceFrame),
+    /// The part pairs closer than the scene's clearance threshold on a parts frame; in JSON,
+    /// the listed pairs only.
+    Clearance(#[serde(serialize_with = "clearance_listed")] Box<ClearanceFrame>),
     /// The render meshes of a new scene generation (after a start, load or reset); in JSON, a
     /// summary.
     Geometry(#[serde(serialize_with = "geometry_summary")] Arc<SceneGeometry>),
@@ -317,6 +328,25 @@ fn geometry_summary<S: serde::Serializer>(
     summary.end()
 }
 
+/// A clearance frame in JSON: its header and the pairs it lists, not its empty slots.
+fn clearance_listed<S: serde::Serializer>(
+    frame: &ClearanceFrame,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeStruct;
+    let mut listed = serializer.serialize_struct("Clearance", 9)?;
+    listed.serialize_field("frame", &frame.frame)?;
+    listed.serialize_field("tracker", &frame.tracker)?;
+    listed.serialize_field("glove", &frame.glove)?;
+    listed.serialize_field("joints", &frame.joints)?;
+    listed.serialize_field("timestamp_ns", &frame.timestamp_ns)?;
+    listed.serialize_field("threshold", &frame.threshold)?;
+    listed.serialize_field("pair_count", &frame.pair_count)?;
+    listed.serialize_field("more", &frame.more)?;
+    listed.serialize_field("pairs", frame.listed())?;
+    listed.end()
+}
+
 /// How many frames a [`Client::poll`] received.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Received {
@@ -328,6 +358,8 @@ pub struct Received {
     pub events: usize,
     /// Force frames received.
     pub force: usize,
+    /// Clearance frames received.
+    pub clearance: usize,
     /// Geometry generations received.
     pub geometry: usize,
 }
@@ -446,6 +478,7 @@ pub struct Client {
     waitset: WaitSet<ipc::Service>,
     latest_parts: Option<PartsFrame>,
     latest_hand: Option<HandFrame>,
+    latest_clearance: Option<Box<ClearanceFrame>>,
     latest_geometry: Option<Arc<SceneGeometry>>,
 }
 
@@ -537,7 +570,7 @@ impl Client {
         }
     }
 
-    /// Blocks until an output frame (geometry, parts, hand, event or force) is ready to be
+    /// Blocks until an output frame (geometry, parts, hand, event, force or clearance) is ready to be
     /// received, the timeout passes, or (with signal handling on) a termination signal arrives.
     /// Frames stay queued for [`Client::poll`] or [`Client::receive`]. Needs the render role.
     pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
@@ -548,7 +581,7 @@ impl Client {
             &outputs.events,
             &outputs.force,
         );
-        let geometry = &outputs.geometry;
+        let (geometry, clearance) = (&outputs.geometry, &outputs.clearance);
         wait_until_ready(
             &self.waitset,
             &[
@@ -557,6 +590,7 @@ impl Client {
                 &outputs.hand_listener,
                 &outputs.events_listener,
                 &outputs.force_listener,
+                &outputs.clearance_listener,
             ],
             timeout,
             || {
@@ -567,14 +601,15 @@ impl Client {
                     || has(parts.has_samples())?
                     || has(hand.has_samples())?
                     || has(events.has_samples())?
-                    || has(force.has_samples())?)
+                    || has(force.has_samples())?
+                    || has(clearance.has_samples())?)
             },
         )
     }
 
     /// Receives every queued frame, keeps the newest of each kind for [`Client::geometry`],
     /// [`Client::latest_parts`] and [`Client::latest_hand`], and returns them all in arrival
-    /// order per kind: geometry, parts frames, events, force frames, then hand frames (the
+    /// order per kind: geometry, parts frames, events, force frames, clearance frames, then hand frames (the
     /// server publishes a frame's hand last, so the parts and events of a hand frame's own frame
     /// come with it or before it, and a new scene's geometry before its frames).
     pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
@@ -613,6 +648,13 @@ impl Client {
             frames.push(Frame::Force(*sample.payload()));
         }
         while let Some(sample) = outputs
+            .clearance
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a clearance frame", error))?
+        {
+            frames.push(Frame::Clearance(Box::new(*sample.payload())));
+        }
+        while let Some(sample) = outputs
             .hand
             .receive()
             .map_err(|error| ClientError::ipc("receive a hand frame", error))?
@@ -624,6 +666,7 @@ impl Client {
                 Frame::Geometry(geometry) => self.latest_geometry = Some(Arc::clone(geometry)),
                 Frame::Parts(parts) => self.latest_parts = Some(parts.clone()),
                 Frame::Hand(hand) => self.latest_hand = Some(*hand),
+                Frame::Clearance(frame) => self.latest_clearance = Some(frame.clone()),
                 Frame::Event(_) | Frame::Force(_) => {}
             }
         }
@@ -669,6 +712,7 @@ impl Client {
                 Frame::Hand(_) => received.hand += 1,
                 Frame::Event(_) => received.events += 1,
                 Frame::Force(_) => received.force += 1,
+                Frame::Clearance(_) => received.clearance += 1,
                 Frame::Geometry(_) => received.geometry += 1,
             }
         }
@@ -683,6 +727,14 @@ impl Client {
     /// The newest hand frame received so far (by [`Client::poll`] or [`Client::receive`]).
     pub fn latest_hand(&self) -> Option<&HandFrame> {
         self.latest_hand.as_ref()
+    }
+
+    /// The newest clearance frame received so far (by [`Client::poll`] or [`Client::receive`]):
+    /// the part pairs closer than the scene's threshold, on the parts frame it names. The server
+    /// publishes one per frame it measures, shortly after that frame's parts, and none while its
+    /// scene has no `[params.clearance]` threshold.
+    pub fn latest_clearance(&self) -> Option<&ClearanceFrame> {
+        self.latest_clearance.as_deref()
     }
 
     /// The render meshes of the newest scene generation received so far (by [`Client::poll`]

@@ -51,9 +51,10 @@ pub use words::SceneWords;
 /// program names most are re-exported below as well.
 pub use vas_protocol as protocol;
 pub use vas_protocol::{
-    ControlStatus, EventKind, FLEX_COUNT, FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, ForceFrame,
-    GloveSample, GraspType, HAND_JOINT_COUNT, HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame,
-    HandGeometry, HandJointsSample, HandSegment, HandSide, InputStamp, InputStats, JointLocation,
-    MeshData, PART_GRASPED, PART_SLIDING, PART_TOUCHING, PartState, PartsFrameHeader,
-    SceneGeometry, SimEvent, SlidingMetaphor, TrackerSample, WirePose, wall_clock_ns,
+    CLEARANCE_STALE, ClearanceFrame, ClearancePair, ControlStatus, EventKind, FLEX_COUNT,
+    FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, ForceFrame, GloveSample, GraspType, HAND_JOINT_COUNT,
+    HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame, HandGeometry, HandJointsSample, HandSegment,
+    HandSide, InputStamp, InputStats, JointLocation, MeshData, PART_GRASPED, PART_SLIDING,
+    PART_TOUCHING, PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor,
+    TrackerSample, WirePose, wall_clock_ns,
 };

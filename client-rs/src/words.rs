@@ -1,7 +1,7 @@
 //! The wire's codes in words: parts by name, events and grasps by kind, for tools and pages
 //! that show them to people ("grasp peg (power) at sample 44").
 
-use vas_protocol::{EventKind, GraspType, HAND_PART_ID, HandSide, SimEvent};
+use vas_protocol::{ClearancePair, EventKind, GraspType, HAND_PART_ID, HandSide, SimEvent};
 
 use crate::SceneInfo;
 
@@ -66,6 +66,16 @@ impl SceneWords {
             Err(unknown) => format!("{unknown} about {part}"),
         };
         format!("{what} at sample {sample}")
+    }
+}
+
+impl SceneWords {
+    /// A clearance pair in words: "peg – block 0.8 mm", with " (stale)" when it carries an
+    /// earlier frame's measurement.
+    pub fn clearance(&self, pair: &ClearancePair) -> String {
+        let stale = if pair.is_stale() { " (stale)" } else { "" };
+        let (part, other) = (self.part(pair.part), self.part(pair.other));
+        format!("{part} – {other} {}{stale}", millimetres(pair.distance))
     }
 }
 
@@ -183,6 +193,15 @@ mod tests {
             words.event(&restored),
             "clearance restored peg – block 5.6 mm at sample 44"
         );
+        let mut pair = ClearancePair {
+            part: 1,
+            other: 0,
+            distance: 0.001_3,
+            ..ClearancePair::default()
+        };
+        assert_eq!(words.clearance(&pair), "peg – block 1.3 mm");
+        pair.flags = vas_protocol::CLEARANCE_STALE;
+        assert_eq!(words.clearance(&pair), "peg – block 1.3 mm (stale)");
         assert_eq!(words.part(HAND_PART_ID), "hand");
         assert_eq!(words.part(5), "part 5");
         assert_eq!(

@@ -3,7 +3,8 @@
 // Everything vas sends lives in `world`, a group in vas's frame (metres, z up). On a screen the
 // group is left as it is and the camera's up is z; in a WebXR session (y up) xr.js turns the
 // group. Nothing here computes a pose: each part and each hand segment is placed at the pose of
-// the newest frame, and coloured by the state flags the server set.
+// the newest frame, and coloured by the state flags the server set; clearance pairs are drawn as
+// the segments between their closest points, labelled in millimetres.
 
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -26,6 +27,9 @@ const CONTACT_BEGIN_COLOUR = 0xff3b30;
 const CONTACT_END_COLOUR = 0x35a7ff;
 // How long a contact marker stays, in milliseconds.
 const MARKER_MS = 1500;
+// A clearance label's height in the world (metres) and its canvas's size in pixels.
+const LABEL_HEIGHT = 0.012;
+const LABEL_PIXELS = [160, 48];
 
 // A part's state from its flags; grasped shows over sliding over touching.
 export function stateOf(flags) {
@@ -64,6 +68,8 @@ export class View {
     this.parts = [];
     this.hands = new Map();
     this.markers = [];
+    // One segment and label per clearance pair drawn, reused from frame to frame.
+    this.gaps = [];
     this.sceneName = null;
     this.fitPending = false;
 
@@ -145,10 +151,65 @@ export class View {
         mesh.material.color.setHex(touching ? HAND_TOUCHING_COLOUR : HAND_COLOUR);
       });
     }
+    this.drawClearance(frame.clearance);
     if (this.fitPending && this.parts.some((mesh) => mesh.visible)) {
       this.fitPending = false;
       this.fit();
     }
+  }
+
+  // Draws each clearance pair's closest points as a segment with its distance in millimetres,
+  // red when touching through yellow to green at the threshold; a stale pair (measured on an
+  // earlier frame) is drawn faint. Drawn over the parts: the tightest spot is often inside a
+  // hole.
+  drawClearance(clearance) {
+    const pairs = clearance?.pairs ?? [];
+    while (this.gaps.length < pairs.length) this.gaps.push(this.addGap());
+    this.gaps.forEach((gap, index) => {
+      const pair = pairs[index];
+      gap.line.visible = gap.label.visible = pair !== undefined;
+      if (!pair) return;
+      const positions = gap.line.geometry.attributes.position;
+      positions.setXYZ(0, ...pair.point);
+      positions.setXYZ(1, ...pair.other_point);
+      positions.needsUpdate = true;
+      gap.line.geometry.computeBoundingSphere();
+      const closeness = Math.min(Math.max(pair.distance / clearance.threshold, 0), 1);
+      const colour = new THREE.Color().setHSL(closeness / 3, 0.9, 0.5);
+      const opacity = pair.stale ? 0.35 : 1;
+      gap.line.material.color.copy(colour);
+      gap.line.material.opacity = opacity;
+      gap.label.material.opacity = opacity;
+      gap.label.position.set(...pair.point.map((c, i) => (c + pair.other_point[i]) / 2));
+      const text = `${(pair.distance * 1000).toFixed(1)} mm`;
+      if (text !== gap.text || colour.getHex() !== gap.colour) {
+        gap.text = text;
+        gap.colour = colour.getHex();
+        drawLabel(gap.canvas, text, colour.getStyle());
+        gap.label.material.map.needsUpdate = true;
+      }
+    });
+  }
+
+  // A clearance segment and its label, hidden until used.
+  addGap() {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(6), 3));
+    const lineMaterial = new THREE.LineBasicMaterial({ transparent: true, depthTest: false });
+    const line = new THREE.Line(geometry, lineMaterial);
+    const canvas = document.createElement('canvas');
+    [canvas.width, canvas.height] = LABEL_PIXELS;
+    const labelMaterial = new THREE.SpriteMaterial({
+      map: new THREE.CanvasTexture(canvas),
+      transparent: true,
+      depthTest: false,
+    });
+    const label = new THREE.Sprite(labelMaterial);
+    label.scale.set((LABEL_HEIGHT * LABEL_PIXELS[0]) / LABEL_PIXELS[1], LABEL_HEIGHT, 1);
+    line.renderOrder = label.renderOrder = 2;
+    line.visible = label.visible = false;
+    this.world.add(line, label);
+    return { line, label, canvas, text: null, colour: null };
   }
 
   // Points the camera at the parts from the front, above and to the right.
@@ -202,6 +263,22 @@ export class View {
     const { clientWidth: width, clientHeight: height } = this.renderer.domElement;
     return [((point.x + 1) / 2) * width, ((1 - point.y) / 2) * height];
   }
+}
+
+// Writes `text` in `colour` on a dark rounded plate filling `canvas`.
+function drawLabel(canvas, text, colour) {
+  const context = canvas.getContext('2d');
+  const { width, height } = canvas;
+  context.clearRect(0, 0, width, height);
+  context.fillStyle = 'rgba(20, 23, 27, 0.8)';
+  context.beginPath();
+  context.roundRect(0, 0, width, height, height / 4);
+  context.fill();
+  context.fillStyle = colour;
+  context.font = `bold ${Math.round(height * 0.6)}px sans-serif`;
+  context.textAlign = 'center';
+  context.textBaseline = 'middle';
+  context.fillText(text, width / 2, height / 2);
 }
 
 function place(mesh, position, rotation) {

@@ -15,8 +15,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use vas_client::{
-    Client, ClientError, Frame, HandFrame, PartsFrame, Roles, SceneGeometry, SceneInfo, SceneWords,
-    Wake,
+    ClearanceFrame, Client, ClientError, Frame, HandFrame, PartsFrame, Roles, SceneGeometry,
+    SceneInfo, SceneWords, Wake,
 };
 
 use crate::commands::Command;
@@ -242,6 +242,10 @@ impl Link<'_> {
                     // No page connected is not an error.
                     let _ = self.hub.events.send(message);
                 }
+                Frame::Clearance(clearance) => {
+                    latest.clearance = Some(clearance);
+                    changed = true;
+                }
                 Frame::Geometry(_) | Frame::Force(_) => {}
             }
         }
@@ -252,6 +256,7 @@ impl Link<'_> {
                 self.scene_version,
                 latest.parts.as_ref(),
                 latest.hands.values(),
+                latest.clearance.as_deref(),
             );
             self.hub.frame.send_replace(Some(message));
         }
@@ -279,6 +284,8 @@ struct Latest {
     parts: Option<PartsFrame>,
     /// Each hand's newest frame, by side code.
     hands: BTreeMap<u32, HandFrame>,
+    /// The newest clearance frame (none while the scene has no threshold).
+    clearance: Option<Box<ClearanceFrame>>,
 }
 
 /// Carries out a page's command on the server; the answer in words either way.

@@ -1,14 +1,14 @@
 //! The messages the viewer sends a page, built once for all pages.
 //!
-//! Text messages are JSON objects with a `type`: `status`, `scene`, `frame`, `event`, `reply`,
-//! `warning`. Poses keep the wire's units and order (metres; quaternions x, y, z, w; z up) and
+//! Text messages are JSON objects with a `type`: `status`, `scene`, `frame` (parts, hands and
+//! clearance pairs), `event`, `reply`, `warning`. Poses keep the wire's units and order (metres; quaternions x, y, z, w; z up) and
 //! its full precision, so a page draws exactly what the server published.
 
 use axum::extract::ws::Message;
 use serde::Serialize;
 use serde_json::json;
 use vas_client::words::grasp_name;
-use vas_client::{HandFrame, PartState, PartsFrame, WirePose};
+use vas_client::{ClearanceFrame, ClearancePair, HandFrame, PartState, PartsFrame, WirePose};
 
 /// `{"type": "status"}`: whether a server answers, and the scenes it offers.
 pub fn status(server: bool, scene_names: &[String]) -> Message {
@@ -67,6 +67,30 @@ struct HandView<'a> {
     touching: u32,
 }
 
+/// One pair of the newest clearance frame in a frame message.
+#[derive(Debug, Serialize)]
+struct PairView<'a> {
+    part: u32,
+    other: u32,
+    /// Metres.
+    distance: f64,
+    /// The closest points on `part` and on `other`, in the world.
+    point: &'a [f64; 3],
+    other_point: &'a [f64; 3],
+    /// Measured on an earlier frame than `frame`.
+    stale: bool,
+}
+
+/// The newest clearance frame in a frame message: the pairs closer than the threshold.
+#[derive(Debug, Serialize)]
+struct ClearanceView<'a> {
+    /// The parts frame measured.
+    frame: u64,
+    /// Metres: a page colours each pair by its distance over this.
+    threshold: f64,
+    pairs: Vec<PairView<'a>>,
+}
+
 /// A frame message: serialised as is, in this field order. A page's link reads `published_ns`
 /// from the start of the text (`{"type":"frame","published_ns":`) without parsing the rest.
 #[derive(Debug, Serialize)]
@@ -78,14 +102,17 @@ struct FrameView<'a> {
     scene: u64,
     parts: Option<PartsView<'a>>,
     hands: Vec<HandView<'a>>,
+    clearance: Option<ClearanceView<'a>>,
 }
 
-/// `{"type": "frame"}`: the newest parts frame and each hand's newest frame, for the scene
-/// numbered `scene`, with the newest of their publish stamps first.
+/// `{"type": "frame"}`: the newest parts frame, each hand's newest frame and the newest
+/// clearance frame, for the scene numbered `scene`, with the newest of the parts' and hands'
+/// publish stamps first.
 pub fn frame<'a>(
     scene: u64,
     parts: Option<&'a PartsFrame>,
     hands: impl IntoIterator<Item = &'a HandFrame>,
+    clearance: Option<&'a ClearanceFrame>,
 ) -> Message {
     let parts = parts.map(|frame| PartsView {
         frame: frame.header.frame,
@@ -106,7 +133,23 @@ pub fn frame<'a>(
         scene,
         parts,
         hands,
+        clearance: clearance.map(|frame| ClearanceView {
+            frame: frame.frame,
+            threshold: frame.threshold,
+            pairs: frame.listed().iter().map(pair_view).collect(),
+        }),
     })
+}
+
+fn pair_view(pair: &ClearancePair) -> PairView<'_> {
+    PairView {
+        part: pair.part,
+        other: pair.other,
+        distance: pair.distance,
+        point: &pair.point,
+        other_point: &pair.other_point,
+        stale: pair.is_stale(),
+    }
 }
 
 fn part_view(part: &PartState) -> PartView<'_> {
@@ -159,7 +202,20 @@ mod tests {
             timestamp_ns: 1_700_000_000_000_000_100,
             ..HandFrame::default()
         };
-        let Message::Text(text) = frame(3, Some(&parts), [&hand]) else {
+        let mut clearance = ClearanceFrame {
+            frame: 9,
+            threshold: 0.005,
+            pair_count: 1,
+            ..ClearanceFrame::default()
+        };
+        clearance.pairs[0] = ClearancePair {
+            part: 1,
+            distance: 0.0008,
+            point: [0.1, 0.0, 0.0],
+            flags: vas_client::CLEARANCE_STALE,
+            ..ClearancePair::default()
+        };
+        let Message::Text(text) = frame(3, Some(&parts), [&hand], Some(&clearance)) else {
             panic!("a frame is a text message");
         };
         let text = text.as_str();
@@ -175,6 +231,12 @@ mod tests {
         assert_eq!(
             value["parts"]["published_ns"],
             1_700_000_000_000_000_200_u64
+        );
+        let pairs = &value["clearance"]["pairs"];
+        assert_eq!(pairs.as_array().map(Vec::len), Some(1), "listed pairs only");
+        assert_eq!(
+            (&pairs[0]["distance"], &pairs[0]["stale"]),
+            (&serde_json::json!(0.0008), &serde_json::json!(true))
         );
     }
 }

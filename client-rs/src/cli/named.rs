@@ -7,7 +7,7 @@ use vas_client::{Frame, HandSegment, SceneWords};
 /// `frame` as a JSON object (`{"event":{...}}`, `{"hand":{...}}`...), its codes kept and their
 /// names added: events get `kind_name`, `grasp_name`, `part_name`, `other_name`, `hand_name`
 /// and `text`; hand frames `grasp_name`, `hand_name` and `touching_names`; parts frames each
-/// part's `name`.
+/// part's `name`; clearance frames each pair's `part_name`, `other_name` and `text`.
 pub fn named(frame: &Frame, words: &SceneWords) -> serde_json::Result<Value> {
     let mut value = serde_json::to_value(frame)?;
     let Some((_, inner)) = value
@@ -42,6 +42,18 @@ pub fn named(frame: &Frame, words: &SceneWords) -> serde_json::Result<Value> {
                 for (state, part) in states.iter_mut().zip(&parts.parts) {
                     if let Some(state) = state.as_object_mut() {
                         state.insert("name".into(), words.part(part.id).into());
+                    }
+                }
+            }
+            return Ok(value);
+        }
+        Frame::Clearance(clearance) => {
+            if let Some(Value::Array(pairs)) = fields.get_mut("pairs") {
+                for (named, pair) in pairs.iter_mut().zip(clearance.listed()) {
+                    if let Some(named) = named.as_object_mut() {
+                        named.insert("part_name".into(), words.part(pair.part).into());
+                        named.insert("other_name".into(), words.part(pair.other).into());
+                        named.insert("text".into(), words.clearance(pair).into());
                     }
                 }
             }

@@ -312,7 +312,10 @@ fn bad_scenes_under_load_are_refused_and_the_stream_goes_on() {
                             .chain(&part.rotation)
                             .all(|c| c.is_finite())
                     })),
-                    Frame::Event(_) | Frame::Force(_) | Frame::Geometry(_) => {}
+                    Frame::Event(_)
+                    | Frame::Force(_)
+                    | Frame::Clearance(_)
+                    | Frame::Geometry(_) => {}
                 }
             }
         }

@@ -199,7 +199,7 @@ impl Seen {
                     self.hands.insert(hand.hand, hand);
                     hands.push(hand);
                 }
-                Frame::Force(_) | Frame::Geometry(_) => {}
+                Frame::Force(_) | Frame::Clearance(_) | Frame::Geometry(_) => {}
             }
         }
         hands
