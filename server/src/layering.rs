@@ -1,14 +1,14 @@
 //! The modules' layering, checked on the sources: data flows one way, `geometry` ← `collision` ←
-//! `sliding`, `grasping` ← `scene` ← `simulation` ← `runtime` ← `replay`, so the non-test code
-//! of a module names no module of its own layer or above (`sliding` and `grasping` stay apart
-//! too). Every `crate::` path counts, not only `use` lines; code under `#[cfg(test)]` may reach
-//! up for its fixtures. The library names no client crate: recordings are read by the binary
-//! alone.
+//! `sliding`, `grasping` ← `scene` ← `simulation` ← `runtime` ← `replay`, `report`, so the
+//! non-test code of a module names no module of its own layer or above (`sliding` and `grasping`
+//! stay apart too, as do `replay` and `report`). Every `crate::` path counts, not only `use`
+//! lines; code under `#[cfg(test)]` may reach up for its fixtures. The library names no client
+//! crate: recordings are read by the binary alone.
 
 use std::path::{Path, PathBuf};
 
 /// The library's modules and their layers, lowest first.
-const LAYERS: [(&str, u8); 8] = [
+const LAYERS: [(&str, u8); 9] = [
     ("geometry", 0),
     ("collision", 1),
     ("sliding", 2),
@@ -17,6 +17,7 @@ const LAYERS: [(&str, u8); 8] = [
     ("simulation", 4),
     ("runtime", 5),
     ("replay", 6),
+    ("report", 6),
 ];
 
 fn layer(module: &str) -> Option<u8> {

@@ -2,7 +2,8 @@
 //!
 //! The modules are the paper's, layered so that data flows one way:
 //! `geometry` ← `collision` ← `sliding`, `grasping` ← `scene` ← `simulation` ← `runtime` ←
-//! `replay`. Only `runtime` knows about threads and IPC; every other module is a plain library.
+//! `replay`, `report`. Only `runtime` knows about threads and IPC; every other module is a plain
+//! library.
 //!
 //! * [`geometry`]: triangle meshes, loading OBJ, STL, PLY and glTF/GLB, convex hulls, shapes.
 //! * [`collision`]: the DOP-tree, the separating-plane pre-check and the collision pipeline.
@@ -12,6 +13,7 @@
 //! * [`simulation`]: one step of the whole simulation as plain state.
 //! * [`runtime`]: the server's threads, loops and iceoryx2 ports ([`runtime::run`]).
 //! * [`replay`]: input samples stepped in-process, one frame per sample, as in lockstep.
+//! * [`report`]: a session's clearance, contact and clash report per part pair.
 //!
 //! A renderer does not link this crate: it links `vas-client` and draws from the wire (the
 //! geometry service carries every mesh). `ARCHITECTURE.md` at the repository root shows how the
@@ -21,6 +23,7 @@ pub mod collision;
 pub mod geometry;
 pub mod grasping;
 pub mod replay;
+pub mod report;
 pub mod runtime;
 pub mod scene;
 pub mod simulation;

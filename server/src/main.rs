@@ -9,12 +9,15 @@ use std::sync::Arc;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
+use vas_client::recording::{InputSample, Recording};
 use vas_protocol::HandSide;
 use vas_server::collision::dop_tree::{Provenance, TreeCache};
 use vas_server::geometry::shapes::{self, ShapeKind};
 use vas_server::geometry::{FileLimits, write_obj};
 use vas_server::grasping::HandModel;
 use vas_server::grasping::retarget::{Capture, HandJoints, Retargeter};
+use vas_server::replay::{Outcome, Replay};
+use vas_server::report::{Session, html};
 use vas_server::runtime;
 use vas_server::runtime::priority::RealtimePriority;
 use vas_server::scene::{LoadOptions, Scene, default_scene_path};
@@ -84,6 +87,9 @@ enum Command {
     /// Retarget a captured hand pose (WebXR joints, JSON) onto the hand model: print the flex
     /// angles and each fingertip's distance from the captured tip.
     Retarget(RetargetArgs),
+    /// Replay a recording in-process, one frame per sample as in lockstep, and report per part
+    /// pair the minimum clearance, the contacts and the clashes (text, JSON, an HTML page).
+    Report(ReportArgs),
 }
 
 /// How scenes are loaded: the largest files read (larger ones are refused with their size), the
@@ -165,6 +171,7 @@ fn main() -> ExitCode {
             .options()
             .and_then(|load| check_scene(&file, prepare, &load)),
         Command::Retarget(args) => retarget(&args),
+        Command::Report(args) => report(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -336,6 +343,142 @@ fn retarget(args: &RetargetArgs) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", out.display()))?;
     }
     Ok(())
+}
+
+/// The clearance threshold when neither `--clearance` nor the scene gives one, metres.
+const DEFAULT_CLEARANCE: f64 = 0.005;
+
+/// What `vas-server report` is asked.
+#[derive(Debug, Args)]
+struct ReportArgs {
+    /// The scene the recording was made in.
+    #[arg(long)]
+    scene: PathBuf,
+    /// The recording (JSON Lines, as `vas-client record` writes it).
+    recording: PathBuf,
+    /// The clearance threshold in metres (default: the scene's `[params.clearance] threshold`,
+    /// else 0.005).
+    #[arg(long, value_name = "M", value_parser = parse_clearance)]
+    clearance: Option<f64>,
+    /// Also write the report as JSON to this file.
+    #[arg(long, value_name = "OUT")]
+    json: Option<PathBuf>,
+    /// Also write the report as one self-contained HTML page to this file.
+    #[arg(long, value_name = "OUT")]
+    html: Option<PathBuf>,
+    #[command(flatten)]
+    load: LoadArgs,
+}
+
+/// `vas-server report`: replays the recording in the scene, measures every pair of parts with
+/// a movable one, prints the pairs that came within the threshold and writes the JSON and HTML.
+fn report(args: &ReportArgs) -> anyhow::Result<()> {
+    let scene = Scene::load_with(&args.scene, &args.load.options()?)?;
+    let recording = Recording::load(&args.recording)?;
+    if recording.header.scene != scene.name {
+        anyhow::bail!(
+            "{} was recorded in scene {:?}, but {} is scene {:?}",
+            args.recording.display(),
+            recording.header.scene,
+            args.scene.display(),
+            scene.name
+        );
+    }
+    // The outputs are created first, so that a path that cannot be written fails at once.
+    let create = |path: &Path| {
+        std::fs::File::create(path)
+            .map_err(|error| anyhow::anyhow!("{}: cannot write: {error}", path.display()))
+    };
+    let json_out = args.json.as_deref().map(create).transpose()?;
+    let html_out = args.html.as_deref().map(create).transpose()?;
+    let threshold = (args.clearance)
+        .or(scene.params.clearance.threshold)
+        .unwrap_or(DEFAULT_CLEARANCE);
+    let mut replay = Replay::new(&scene)?;
+    let mut session = Session::new(&scene, threshold);
+    let bar = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(recording.samples.len() as u64).with_style(
+            indicatif::ProgressStyle::with_template(
+                "replaying {bar:40} {pos}/{len} samples, {eta} left",
+            )?,
+        )
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    // Stamped as `vas-client replay --lockstep` stamps them: the recording's times, ending now.
+    let start_ns = vas_protocol::wall_clock_ns().saturating_sub(recording.duration_ns());
+    for (index, recorded) in recording.samples.iter().enumerate() {
+        let outcome = match recorded.stamped(start_ns) {
+            InputSample::Tracker(sample) => replay.tracker(&sample)?,
+            InputSample::Glove(sample) => replay.glove(&sample)?,
+            InputSample::HandJoints(sample) => replay.hand_joints(&sample)?,
+        };
+        if let (Outcome::Stepped(_), Some(interaction)) = (outcome, replay.interaction()) {
+            let poses: Vec<_> = interaction.part_poses().collect();
+            session.observe(index, recorded.time, &poses);
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if replay.frames() == 0 {
+        anyhow::bail!(
+            "{}: no valid tracker or hand-joints sample places the hand",
+            args.recording.display()
+        );
+    }
+    let name = (args.recording.file_name()).map_or_else(
+        || args.recording.display().to_string(),
+        |name| name.to_string_lossy().into_owned(),
+    );
+    let report = session.finish(name, recording.samples.len(), replay.rejected());
+    let mut text = format!(
+        "{}: {} samples, {} frames, {} refused; threshold {:.3} mm; {} of {} pairs within it\n",
+        report.recording,
+        report.samples,
+        report.frames,
+        report.rejected,
+        threshold * 1e3,
+        report.pairs.len(),
+        report.pairs_measured
+    );
+    for pair in &report.pairs {
+        let minimum = (pair.minimum.as_ref()).map_or_else(
+            || "no distance".to_owned(),
+            |m| format!("min {:.4} mm at sample {}", m.clearance_m * 1e3, m.sample),
+        );
+        text.push_str(&format!(
+            "  {} – {}: {}, {minimum}, {:.3} s below, {} contacts, {} clash frames\n",
+            pair.a,
+            pair.b,
+            pair.status.name(),
+            pair.seconds_below,
+            pair.contacts.len(),
+            pair.clash_frames
+        ));
+    }
+    print!("{text}");
+    let write = |file: Option<std::fs::File>, path: &Option<PathBuf>, content: String| {
+        let (Some(mut file), Some(path)) = (file, path) else {
+            return Ok(());
+        };
+        file.write_all(content.as_bytes())
+            .map_err(|error| anyhow::anyhow!("{}: cannot write: {error}", path.display()))
+    };
+    write(json_out, &args.json, report.json() + "\n")?;
+    write(html_out, &args.html, html::page(&report))
+}
+
+/// clap's parser of a clearance threshold: a distance in metres above 0, at most a metre.
+fn parse_clearance(text: &str) -> Result<f64, String> {
+    let metres: f64 = (text.trim().parse())
+        .map_err(|_| format!("a clearance is a distance in metres, such as 0.005, not {text:?}"))?;
+    if metres > 0.0 && metres <= 1.0 {
+        Ok(metres)
+    } else {
+        Err(format!(
+            "a clearance must be above 0 and at most 1 m, not {text}"
+        ))
+    }
 }
 
 /// `vas-server shape`: builds the object and writes it as OBJ.

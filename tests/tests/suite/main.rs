@@ -11,4 +11,5 @@ mod fixtures;
 mod hand_joints;
 mod hostile_input;
 mod replays;
+mod report;
 mod retarget;
