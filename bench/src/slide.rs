@@ -159,6 +159,10 @@ pub struct SlideBenchArgs {
     /// than one, long collision queries are split across the threads.
     #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2])]
     pub threads: Vec<usize>,
+    /// Whether contact approximation starts with conservative advancement, per pass
+    /// (comma-separated; both by default, so that the two compare in one run).
+    #[arg(long, value_delimiter = ',', default_values_t = [false, true])]
+    pub advance: Vec<bool>,
     #[command(flatten)]
     pub output: OutputArgs,
     /// The folder of the scene configs peg_in_hole.toml and pipe_through_sheet.toml, which are
@@ -174,6 +178,8 @@ pub struct SlideRow {
     pub scene: String,
     /// Threads the collision queries could use (long ones are split across them).
     pub threads: usize,
+    /// Whether contact approximation started with conservative advancement.
+    pub advance: bool,
     /// Triangles of the grasped part.
     pub triangles: usize,
     /// Contact points handled in one run: classified ones, plus the remembered ones each new
@@ -189,6 +195,9 @@ pub struct SlideRow {
     /// Static collision tests the machine asked of its world per ghost frame (the same in
     /// every run).
     pub collision_tests_per_frame: f64,
+    /// Distance queries the machine asked of its world per ghost frame (conservative
+    /// advancement), counted apart from the collision tests.
+    pub distance_queries_per_frame: f64,
     /// Visible poses parry found penetrating, over all runs.
     pub penetrations: usize,
 }
@@ -202,12 +211,13 @@ pub fn measure(scenario: &Scenario, runs: usize) -> SlideRow {
     let mut rate = Vec::new();
     let mut penetrations = 0;
     let mut contact_points = 0;
-    let mut collision_tests = 0;
+    let (mut collision_tests, mut distance_queries) = (0, 0);
     for i in 0..runs.max(1) {
         let result = run(scenario, i == 0, threads > 1);
         penetrations += result.penetrations;
         contact_points = result.machine.contacts_classified + result.machine.contacts_projected;
         collision_tests = result.machine.collision_checks;
+        distance_queries = result.machine.distance_queries;
         let contact_us = result.contact_time.as_secs_f64() * 1e6;
         let without_cd = contact_us - result.contact_collision_time.as_secs_f64() * 1e6;
         let contacts = contact_points.max(1) as f64;
@@ -215,17 +225,27 @@ pub fn measure(scenario: &Scenario, runs: usize) -> SlideRow {
         incl.push(contact_us / contacts);
         rate.push(scenario.ghosts.len() as f64 / result.step_time.as_secs_f64());
     }
+    let frames = scenario.ghosts.len().max(1) as f64;
     SlideRow {
         scene: scenario.name.clone(),
         threads,
+        advance: scenario.params.conservative_advancement,
         triangles: scenario.part.triangles().len(),
         contact_points,
         us_per_contact_excl_cd: median(&mut excl),
         us_per_contact_incl_cd: median(&mut incl),
         steps_per_s: median(&mut rate),
-        collision_tests_per_frame: collision_tests as f64 / scenario.ghosts.len().max(1) as f64,
+        collision_tests_per_frame: collision_tests as f64 / frames,
+        distance_queries_per_frame: distance_queries as f64 / frames,
         penetrations,
     }
+}
+
+/// The scenario with conservative advancement on or off.
+fn with_advance(scenario: &Scenario, advance: bool) -> Scenario {
+    let mut scenario = scenario.clone();
+    scenario.params.conservative_advancement = advance;
+    scenario
 }
 
 /// `vas-bench slide`: B5 over the sliding scenes; prints the table, writes JSON and SVG.
@@ -243,12 +263,14 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
     let mut table = Table::new([
         "scene",
         "threads",
+        "advance",
         "triangles",
         "contact_points",
         "us_per_contact_excl_cd",
         "us_per_contact_incl_cd",
         "steps_per_s",
         "collision_tests_per_frame",
+        "distance_queries_per_frame",
         "penetrations",
     ]);
     let mut rows = Vec::new();
@@ -256,23 +278,27 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()?;
-        rows.extend(pool.install(|| {
-            scenarios
-                .iter()
-                .map(|s| measure(s, args.runs))
-                .collect::<Vec<_>>()
-        }));
+        for &advance in &args.advance {
+            rows.extend(pool.install(|| {
+                scenarios
+                    .iter()
+                    .map(|scenario| measure(&with_advance(scenario, advance), args.runs))
+                    .collect::<Vec<_>>()
+            }));
+        }
     }
     for row in &rows {
         table.push_row([
             row.scene.clone(),
             row.threads.to_string(),
+            if row.advance { "on" } else { "off" }.to_owned(),
             row.triangles.to_string(),
             row.contact_points.to_string(),
             format_number(row.us_per_contact_excl_cd),
             format_number(row.us_per_contact_incl_cd),
             format_number(row.steps_per_s),
             format_number(row.collision_tests_per_frame),
+            format_number(row.distance_queries_per_frame),
             row.penetrations.to_string(),
         ]);
     }
@@ -282,7 +308,7 @@ pub fn run_bench(args: &SlideBenchArgs) -> Result<Vec<SlideRow>> {
             name: format!("steps_per_s, {threads} thread(s)"),
             points: rows
                 .iter()
-                .filter(|r| r.scene == "peg_in_hole" && r.threads == threads)
+                .filter(|r| r.scene == "peg_in_hole" && r.threads == threads && !r.advance)
                 .map(|r| (r.triangles as f64, r.steps_per_s))
                 .collect(),
         };
@@ -426,6 +452,40 @@ mod tests {
                 "{}: {error} off",
                 scenario.name
             );
+        }
+    }
+
+    #[test]
+    fn conservative_advancement_never_penetrates_and_ends_where_bisection_does() {
+        let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs");
+        let mut scenarios = vec![
+            block_scene(0, [0.2, 0.1, -0.05], SlidingMetaphor::SpiralSpring, 1_200),
+            block_scene(2, [0.5, 0.5, -0.05], SlidingMetaphor::RubberBand, 1_200),
+            peg_in_hole(2_000),
+            pipe_through_sheet(2_000, true),
+            slide_in_unit(true),
+        ];
+        scenarios.extend(config_scenarios(&configs).unwrap());
+        for scenario in &scenarios {
+            let bisected = run_clean(scenario);
+            let advanced = run_clean(&with_advance(scenario, true));
+            // Every scene but the slide-in unit (which never collides) approaches a contact.
+            assert_eq!(
+                advanced.machine.distance_queries > 0,
+                bisected.machine.contacts_classified > 0,
+                "{}",
+                scenario.name
+            );
+            assert_eq!(bisected.machine.distance_queries, 0);
+            let apart = (advanced.end_pose.translation.vector
+                - bisected.end_pose.translation.vector)
+                .norm();
+            assert!(
+                apart <= 3.0 * advanced.tolerance,
+                "{}: ends {apart} m apart",
+                scenario.name
+            );
+            assert_eq!(advanced.rest, bisected.rest, "{}", scenario.name);
         }
     }
 

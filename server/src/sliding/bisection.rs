@@ -3,7 +3,8 @@
 //! than the contact tolerance.
 //!
 //! [`Bisection`] performs one check per call so that the state machine can hand each check to the
-//! collision loop; [`bisect`] runs it to the end with a closure, for callers that query directly.
+//! collision loop. It usually follows conservative advancement (`advance`), which may ask for
+//! the first cut near the free end, where the contact is expected.
 
 use super::motion::{Pose, interpolate, pose_distance};
 
@@ -18,6 +19,8 @@ pub struct Bisection {
     tolerance: f64,
     radius: f64,
     halvings: u32,
+    /// Where the next cut goes, as a fraction of the interval from its free end.
+    cut: f64,
 }
 
 impl Bisection {
@@ -30,7 +33,18 @@ impl Bisection {
             tolerance,
             radius,
             halvings: 0,
+            cut: 0.5,
         }
+    }
+
+    /// The same interval with its first cut `length` metres from the free end (if that is
+    /// before the middle), where a contact is expected.
+    pub fn first_cut_at(mut self, length: f64) -> Self {
+        let whole = pose_distance(&self.valid, &self.colliding, self.radius);
+        if whole > 0.0 {
+            self.cut = (length / whole).min(0.5);
+        }
+        self
     }
 
     /// True when the interval is within tolerance (or cannot be halved any further).
@@ -39,9 +53,9 @@ impl Bisection {
             || pose_distance(&self.valid, &self.colliding, self.radius) <= self.tolerance
     }
 
-    /// The pose to check next: the middle of the interval.
+    /// The pose to check next: the middle of the interval, or the first cut asked for.
     pub fn trial(&self) -> Pose {
-        interpolate(&self.valid, &self.colliding, 0.5)
+        interpolate(&self.valid, &self.colliding, self.cut)
     }
 
     /// Records whether the part collides at `trial` (a pose returned by [`Bisection::trial`]).
@@ -52,6 +66,7 @@ impl Bisection {
             self.valid = trial;
         }
         self.halvings += 1;
+        self.cut = 0.5;
     }
 
     /// The last pose known to be free.

@@ -10,14 +10,18 @@
 //!     │                                                       Moving ── free ───────────┤
 //!     │                                                         │ collides              │
 //!     │                                                         ▼                       │
+//!     │                                          Advancing (distance, conservative)     │
+//!     │                                                         │ near, or grazing      │
+//!     │                                                         ▼                       │
 //!     │                                                   Approximating (bisection)     │
 //!     │                                                         │ within tolerance      │
 //!     │                                                         ▼                       │
 //!     │                                                    Classifying ── Lifting ──────┘
 //! ```
 //!
-//! Each [`SlideMachine::step`] runs one state and makes at most one collision query, so the
-//! runtime can interleave the machine with its rendezvous. The ghost follows the hand and may
+//! Each [`SlideMachine::step`] runs one state and makes at most one query of the world (a
+//! collision test, a distance query or a contact query), so the runtime can interleave the
+//! machine with its rendezvous. The ghost follows the hand and may
 //! penetrate; trial poses are tried on the collision copy (the [`SlideWorld`]); the visible pose
 //! changes only to poses the collision copy found free. Contacts found by classification are
 //! remembered (in the part's frame) while the part keeps pressing on them, so that a part sliding
@@ -27,6 +31,7 @@
 use nalgebra::{Point3, Translation3, Unit, Vector3, Vector6};
 
 use super::SlidingMetaphor;
+use super::advance::{Advance, Advanced};
 use super::bisection::Bisection;
 use super::contact::{Contact, reduce_contacts};
 use super::direction::{FreeSpace, project_onto_free_space};
@@ -40,6 +45,11 @@ pub trait SlideWorld {
     /// Whether the part, with its mesh frame at `part_pose`, intersects any obstacle (beyond the
     /// obstacle's slide-in allowance).
     fn collides(&mut self, part_pose: &Pose) -> bool;
+
+    /// A lower bound on the distance from the part, with its mesh frame at `part_pose`, to the
+    /// obstacles (0 when it touches one, or may overlap one within its allowance); `None` when
+    /// the distance is at least `d_max`.
+    fn clearance(&mut self, part_pose: &Pose, d_max: f64) -> Option<f64>;
 
     /// Appends the classified contacts of the part at `part_pose` to `out`; `approach` is the
     /// pivot's motion from the last free pose to `part_pose` and `pivot` the pivot's position
@@ -85,6 +95,8 @@ pub enum SlideState {
         /// The pivot pose the part tries to reach.
         goal: Pose,
     },
+    /// Advancing the last free pose towards the first colliding one by the distance measured.
+    Advancing(Advance),
     /// Bisecting between the last free pose and the first colliding one.
     Approximating(Bisection),
     /// Moving the part off the contacts just classified by a fraction of the tolerance, so that
@@ -122,8 +134,14 @@ pub enum Event {
     Moved,
     /// The lift off fresh contacts was free (true) or blocked (false, the part stays).
     Lifted(bool),
-    /// The goal collided: bisection starts.
+    /// The goal collided: contact approximation starts.
     Collided,
+    /// One advancement step: the distance measured at the free end (`None`: more than the rest
+    /// of the motion can cover).
+    Advanced {
+        /// The distance, metres.
+        distance: Option<f64>,
+    },
     /// One bisection check; whether the trial pose collided.
     Bisected {
         /// The trial pose collided.
@@ -147,6 +165,8 @@ pub struct SlideStats {
     pub cycles: u64,
     /// Static collision checks asked of the world.
     pub collision_checks: u64,
+    /// Distance queries asked of the world (conservative advancement).
+    pub distance_queries: u64,
     /// Contact queries asked of the world.
     pub contact_queries: u64,
     /// Contact points classified.
@@ -321,6 +341,7 @@ impl SlideMachine {
             SlideState::Redirecting => self.redirect(),
             SlideState::Moving { goal } => self.move_to(world, goal),
             SlideState::Lifting { goal, fallback } => self.lift_to(world, goal, fallback),
+            SlideState::Advancing(advance) => self.advance(world, advance),
             SlideState::Approximating(bisection) => self.approximate(world, bisection),
             SlideState::Classifying { valid, colliding } => self.classify(world, valid, colliding),
         }
@@ -455,8 +476,15 @@ impl SlideMachine {
     fn move_to(&mut self, world: &mut impl SlideWorld, goal: Pose) -> Event {
         self.stats.collision_checks += 1;
         if world.collides(&self.part_pose(&goal)) {
-            let bisection = Bisection::new(self.visible, goal, self.tolerance, self.radius);
-            self.state = self.approximating(bisection);
+            // Pressed on remembered contacts, the part is within their release distance of an
+            // obstacle: a distance could not advance it, so bisection goes on alone.
+            self.state = if self.params.conservative_advancement && self.remembered.is_empty() {
+                let advance = Advance::new(self.visible, goal, self.tolerance, self.radius);
+                SlideState::Advancing(advance)
+            } else {
+                let bisection = Bisection::new(self.visible, goal, self.tolerance, self.radius);
+                self.approximating(bisection)
+            };
             Event::Collided
         } else {
             self.visible = goal;
@@ -473,6 +501,17 @@ impl SlideMachine {
         self.end_cycle();
         self.state = SlideState::Redirecting;
         Event::Lifted(free)
+    }
+
+    fn advance(&mut self, world: &mut impl SlideWorld, advance: Advance) -> Event {
+        let (from, d_max) = advance.query();
+        self.stats.distance_queries += 1;
+        let distance = world.clearance(&self.part_pose(&from), d_max);
+        self.state = match advance.record(distance) {
+            Advanced::Again(advance) => SlideState::Advancing(advance),
+            Advanced::Bisect(bisection) => self.approximating(bisection),
+        };
+        Event::Advanced { distance }
     }
 
     fn approximate(&mut self, world: &mut impl SlideWorld, mut bisection: Bisection) -> Event {

@@ -3,6 +3,8 @@
 //!
 //! * `machine`: the ghost, the visible part and the collision copy, driven by the finite state
 //!   machine of the paper's Figure 6 under one of three metaphors.
+//! * `advance`: conservative advancement, the first stage of contact approximation: the free
+//!   end moves towards the colliding one by the distance measured to the obstacles.
 //! * `bisection`: contact approximation between the last free and the first colliding pose.
 //! * `contact`: contact classification from intersecting triangle pairs, with normals found
 //!   from the geometry and oriented against the approach.
@@ -23,13 +25,18 @@
 //!   position towards the ghost and leaves the orientation alone; `spiral-spring` pulls position
 //!   and orientation; `incremental` repeats each motion of the ghost from where the part is,
 //!   dropping what a frame could not achieve.
-//! * **One collision query per step**, so the runtime can interleave steps with its rendezvous:
+//! * **One query per step**, so the runtime can interleave steps with its rendezvous:
 //!   `Resting → Validating → Redirecting → Moving → (free) Redirecting … | (colliding)
-//!   Approximating → Classifying → Lifting → Redirecting`, back to `Resting` when the target is
+//!   Advancing → Approximating → Classifying → Lifting → Redirecting`, back to `Resting` when the target is
 //!   reached, the contacts block the rest of the motion, progress stalls, or the frame's
 //!   iterations are used up.
-//! * **Contact approximation**: bisection to the contact tolerance (the distance of two poses is
-//!   the pivot's travel plus the arc a point at the part's radius travels).
+//! * **Contact approximation**: optionally (`conservative_advancement`, off by default) and for a
+//!   part arriving from free space, conservative advancement by
+//!   the distance to the obstacles (the paper's future work: a measure of separation to find
+//!   contacts faster) until it is within the tolerance of one or the steps stall (a part pressed
+//!   on remembered contacts is within the tolerance already); then bisection to the tolerance (the
+//!   distance of two poses is the pivot's travel plus the arc a point at the part's radius
+//!   travels; no point of the part moves farther).
 //! * **Classification**: the paper's counts of adjacent touching triangles decide vertex/face,
 //!   face/vertex and edge/edge; rims of open meshes and shallow touches are decided by which
 //!   triangle's edges cross the other; an edge between coplanar triangles is not a feature. Normals
@@ -50,6 +57,7 @@
 //! with scrambled winding, a slide-in unit with and without its allowance. Time per contact point
 //! and frame rates: benchmark B5 in `BENCHMARKS.md`.
 
+pub(crate) mod advance;
 pub(crate) mod allowance;
 pub(crate) mod bisection;
 pub(crate) mod contact;

@@ -26,6 +26,10 @@ pub struct SlideParams {
     /// colliding pose is shorter, and a target nearer than it counts as reached. Unset: 1e-4 of
     /// the grasped part's size.
     pub contact_tolerance: Option<f64>,
+    /// Whether contact approximation starts with conservative advancement (distance queries)
+    /// before bisecting. Off by default: near a close fit, such as a peg in its hole, one
+    /// distance query costs more than the dozen collision tests it saves.
+    pub conservative_advancement: bool,
     /// Clearance, as a fraction of the tolerance, that the part regains from the surfaces it has
     /// just hit (if that lift is free), so that it glides instead of scraping and the visible
     /// pose is not left arbitrarily close to a surface.
@@ -49,6 +53,7 @@ impl Default for SlideParams {
         SlideParams {
             metaphor: SlidingMetaphor::default(),
             contact_tolerance: None,
+            conservative_advancement: false,
             lift: 0.5,
             max_iterations: 24,
             stall_cycles: 3,
@@ -166,6 +171,7 @@ mod tests {
             r#"
             metaphor = "incremental"
             contact_tolerance = 1e-5
+            conservative_advancement = true
             [force]
             stiffness = 800.0
             [[allowances]]
@@ -177,6 +183,8 @@ mod tests {
         params.validate().unwrap();
         assert_eq!(params.metaphor, SlidingMetaphor::Incremental);
         assert_eq!(params.tolerance_for(1.0), 1e-5);
+        assert!(params.conservative_advancement);
+        assert!(!SlideParams::default().conservative_advancement);
         assert_eq!(params.force.stiffness, 800.0);
         assert_eq!(params.force.damping, ForceParams::default().damping);
         assert_eq!(params.allowance_between("console", "radio"), Some(0.0015));

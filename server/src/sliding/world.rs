@@ -6,6 +6,11 @@
 //! sphere misses, then asks the collider. Obstacles that form a slide-in unit with the part have
 //! an allowance: their intersecting pairs count only when deeper than it.
 //!
+//! The distance query (for conservative advancement) asks each obstacle pair for its distance
+//! below the least found so far, starting from the bound the caller gives, so that an obstacle
+//! farther than that costs one sphere-box test; each pair keeps its own [`DistanceCollider`]
+//! memory from query to query.
+//!
 //! The world keeps the time spent in collision detection apart from the rest, so that benchmarks
 //! can report the sliding algorithm's own cost per contact point.
 
@@ -18,8 +23,9 @@ use super::allowance::triangle_pair_depth;
 use super::contact::{Contact, ContactSide, TouchingPair, classify_pairs};
 use super::machine::SlideWorld;
 use super::motion::{Motion, Pose};
+use crate::collision::distance::DistanceMemory;
 use crate::collision::pipeline::ExactTest;
-use crate::collision::{MeshCollider, QueryStats};
+use crate::collision::{DopTree, MeshCollider, QueryStats};
 use crate::geometry::{EdgeAdjacency, Point, TriMesh};
 
 /// A mesh with what sliding needs of it: edge adjacency and a collision structure.
@@ -70,6 +76,39 @@ impl<C: MeshCollider> SlideBody<C> {
     }
 }
 
+/// A collider that also measures distances between meshes.
+pub trait DistanceCollider: ExactTest {
+    /// What a pair of meshes keeps from one query to the next.
+    type Memory: Default + Clone + Send + std::fmt::Debug;
+
+    /// The least distance between the two meshes (B posed in A's frame by `b_to_a`), 0 when
+    /// they touch or intersect; `None` when it is at least `d_max`.
+    fn distance_below(
+        &self,
+        other: &Self,
+        b_to_a: &Pose,
+        d_max: f64,
+        memory: &mut Self::Memory,
+        stats: &mut QueryStats,
+    ) -> Option<f64>;
+}
+
+impl DistanceCollider for DopTree {
+    type Memory = DistanceMemory;
+
+    fn distance_below(
+        &self,
+        other: &Self,
+        b_to_a: &Pose,
+        d_max: f64,
+        memory: &mut DistanceMemory,
+        stats: &mut QueryStats,
+    ) -> Option<f64> {
+        DopTree::distance_below(self, other, b_to_a, d_max, memory, stats)
+            .map(|closest| closest.distance)
+    }
+}
+
 /// A static obstacle: a body at a pose, with an optional slide-in allowance against the part.
 #[derive(Debug)]
 pub struct Obstacle<C> {
@@ -113,11 +152,13 @@ pub struct WorldStats {
     pub collision_queries: u64,
     /// Contact queries (all pairs, then classification) answered.
     pub contact_queries: u64,
+    /// Distance queries answered.
+    pub distance_queries: u64,
     /// Obstacle tests skipped by the bounding-sphere check.
     pub obstacles_skipped: u64,
     /// Work inside the colliders.
     pub query_stats: QueryStats,
-    /// Time spent in collision detection (collider queries and allowance depths).
+    /// Time spent in collision detection (collider queries, allowance depths and distances).
     pub collision_time: Duration,
     /// Time spent classifying contacts.
     pub classification_time: Duration,
@@ -125,12 +166,14 @@ pub struct WorldStats {
 
 /// The grasped part's collision copy against a set of static obstacles, queried pair by pair.
 #[derive(Debug)]
-pub struct PairwiseWorld<C> {
+pub struct PairwiseWorld<C: DistanceCollider> {
     part: Arc<SlideBody<C>>,
     /// Pivot of the part in its mesh frame, and the radius around it.
     pivot: Point,
     radius: f64,
     obstacles: Vec<Obstacle<C>>,
+    /// Per obstacle, its distance memory with the part.
+    memories: Vec<C::Memory>,
     pairs: Vec<TouchingPair>,
     stats: WorldStats,
     /// Whether a first-hit query may split a long traversal across the current rayon pool
@@ -138,7 +181,7 @@ pub struct PairwiseWorld<C> {
     split_long_queries: bool,
 }
 
-impl<C: MeshCollider> PairwiseWorld<C> {
+impl<C: DistanceCollider> PairwiseWorld<C> {
     /// The part's collision copy against `obstacles`.
     pub fn new(part: Arc<SlideBody<C>>, obstacles: Vec<Obstacle<C>>) -> Self {
         let (pivot, radius) = part.pivot_and_radius();
@@ -146,6 +189,7 @@ impl<C: MeshCollider> PairwiseWorld<C> {
             part,
             pivot,
             radius,
+            memories: vec![C::Memory::default(); obstacles.len()],
             obstacles,
             pairs: Vec::new(),
             stats: WorldStats::default(),
@@ -195,7 +239,7 @@ impl<C: MeshCollider> PairwiseWorld<C> {
     }
 }
 
-impl<C: ExactTest> SlideWorld for PairwiseWorld<C> {
+impl<C: DistanceCollider> SlideWorld for PairwiseWorld<C> {
     fn collides(&mut self, part_pose: &Pose) -> bool {
         let start = Instant::now();
         self.stats.collision_queries += 1;
@@ -225,6 +269,39 @@ impl<C: ExactTest> SlideWorld for PairwiseWorld<C> {
         }
         self.stats.collision_time += start.elapsed();
         hit
+    }
+
+    fn clearance(&mut self, part_pose: &Pose, d_max: f64) -> Option<f64> {
+        let start = Instant::now();
+        self.stats.distance_queries += 1;
+        let centre = part_pose * self.pivot;
+        let mut least = None;
+        let mut bound = d_max;
+        for (obstacle, memory) in self.obstacles.iter().zip(&mut self.memories) {
+            if !obstacle.near(&centre, self.radius + bound) {
+                self.stats.obstacles_skipped += 1;
+                continue;
+            }
+            let distance = if obstacle.allowance.is_some() {
+                // The pair may overlap by design: no distance to go by.
+                Some(0.0)
+            } else {
+                let b_to_a = part_pose.inverse() * obstacle.pose;
+                let (other, stats) = (&obstacle.body.collider, &mut self.stats.query_stats);
+                self.part
+                    .collider
+                    .distance_below(other, &b_to_a, bound, memory, stats)
+            };
+            if let Some(distance) = distance {
+                least = Some(distance);
+                bound = distance;
+                if distance <= 0.0 {
+                    break;
+                }
+            }
+        }
+        self.stats.collision_time += start.elapsed();
+        least
     }
 
     fn contacts(
