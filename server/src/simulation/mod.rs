@@ -3,10 +3,10 @@
 //!
 //! A frame passes three stages, each a loop's work in the server: `grasp_stage` steps the
 //! hands against the parts, `slide_stage` slides the parts they hold, and [`verify`] checks the
-//! candidate frame scene-wide so that nothing leaves at a colliding pose; [`clearance`] watches the
-//! verified poses for part pairs closer than the scene's threshold, beside the loops. [`frames`] are what the
-//! stages hand each other, [`restart`] the changes between frames. [`interaction`] runs the first
-//! two stages in sequence, as the loops do in lockstep.
+//! candidate frame scene-wide so that nothing leaves at a colliding pose; [`clearance`] then
+//! watches the verified poses for part pairs closer than the scene's threshold, beside the
+//! loops. [`frames`] are what the stages hand each other, [`restart`] the changes between
+//! frames. [`interaction`] runs the first two stages in sequence, as the loops do in lockstep.
 //!
 //! No threads and no ports here: those are the runtime's.
 
