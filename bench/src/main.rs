@@ -8,6 +8,7 @@ mod assembly;
 mod baselines;
 mod bounce;
 mod browser;
+mod distance;
 mod e2e;
 mod echo;
 mod grasp;
@@ -164,6 +165,20 @@ page); superseded_% (frames replaced by a newer one before they were drawn); vie
 high-resolution wall clock minus the system's: how far transport figures can be off)."
     )]
     Browser(browser::BrowserArgs),
+    /// B11: exact mesh-mesh distance, coherent and random poses, against coal and FCL.
+    #[command(
+        after_long_help = "Columns: pair (one mesh: two copies of it; A+B); proc (coherent: B1's tumbling poses at
+distance d; random: B2's poses); method (doptree: the DOP-tree with the pair's DistanceMemory
+carried from pose to pose; doptree-cold: a fresh memory at every query, random poses only; coal, fcl: the peers'
+OBBRSS distance, each in its own process, listed when found at build time); touch (poses at
+distance 0); mean_us, p99_us, max_us (time per query, each pose timed as its fastest of --rounds
+passes); coal_x (mean_us over coal's at the same poses); max_diff (largest difference of the
+distance from coal's at one pose); pt_err (largest distance of a closest point from the triangle
+named, or of the two points apart from the distance answered); bv_tests, tri_tests (the
+DOP-tree's mean bounding-volume tests and triangle distances per query). Then the bars, met or
+missed."
+    )]
+    Distance(distance::DistanceArgs),
     /// Answers every input sample at once with a hand frame (the raw path of `e2e`).
     #[command(hide = true)]
     Echo(args::ServerArgs),
@@ -190,6 +205,7 @@ fn main() -> ExitCode {
         Benchmark::Assembly(args) => assembly::run(&args),
         Benchmark::Soak(args) => soak::run(&args),
         Benchmark::Browser(args) => browser::run(&args),
+        Benchmark::Distance(args) => distance::run_cli(&args),
         Benchmark::Echo(args) => echo::run(args.prefix.as_deref()),
     };
     match result {
