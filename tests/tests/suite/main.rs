@@ -3,6 +3,7 @@
 //! iceoryx2 prefix.
 
 mod bench_tools;
+mod clearance;
 mod client_roles;
 mod end_to_end;
 mod examples;
