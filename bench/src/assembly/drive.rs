@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Result, bail};
 use nalgebra::Isometry3;
 use vas_client::recording::InputSample;
-use vas_client::{Client, Frame, Wake};
+use vas_client::{ClearanceFrame, Client, Frame, Wake};
 use vas_protocol::{GloveSample, PART_GRASPED, PART_SLIDING, TrackerSample, wall_clock_ns};
 use vas_testkit::script::Keyframe;
 
@@ -28,6 +28,40 @@ pub struct Drive {
     pub seconds: f64,
     /// What the parts frames said of the bar.
     pub bar: BarWatch,
+    /// What the clearance frames reported (none without a threshold).
+    pub clearance: ClearanceSeen,
+}
+
+/// The clearance frames received over the drive.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ClearanceSeen {
+    /// Clearance frames received.
+    pub frames: u64,
+    /// Frames that listed a pair.
+    pub frames_with_pairs: u64,
+    /// Pairs listed, summed over the frames.
+    pub pairs: u64,
+    /// The most pairs one frame listed.
+    pub most_pairs: u32,
+    /// Pairs listed stale (not measured on their frame's poses in time), summed.
+    pub stale_pairs: u64,
+    /// The least distance listed (metres); infinite when none was.
+    pub closest_m: f64,
+}
+
+impl ClearanceSeen {
+    fn observe(&mut self, frame: &ClearanceFrame) {
+        let listed = frame.listed();
+        if self.frames == 0 {
+            self.closest_m = f64::INFINITY;
+        }
+        self.frames += 1;
+        self.frames_with_pairs += u64::from(!listed.is_empty());
+        self.pairs += listed.len() as u64;
+        self.most_pairs = self.most_pairs.max(frame.pair_count);
+        self.stale_pairs += listed.iter().filter(|pair| pair.is_stale()).count() as u64;
+        self.closest_m = (listed.iter()).fold(self.closest_m, |m, pair| m.min(pair.distance));
+    }
 }
 
 /// The bar as the published parts frames show it.
@@ -45,7 +79,7 @@ pub struct BarWatch {
 }
 
 impl BarWatch {
-    fn observe(&mut self, frame: Frame) {
+    fn observe(&mut self, frame: &Frame) {
         let Frame::Parts(frame) = frame else {
             return;
         };
@@ -67,7 +101,7 @@ impl BarWatch {
 }
 
 /// Sends `samples` ([`RATE_HZ`] apart, numbered from `first_seq`) to the server, each tracker sample
-/// as a round trip of at most `timeout`, and watches part `bar`.
+/// as a round trip of at most `timeout`, and watches part `bar` and the clearance frames.
 pub fn along(
     client: &mut Client,
     samples: &[Keyframe],
@@ -90,7 +124,12 @@ pub fn along(
             bail!("interrupted");
         }
         let sample = InputSample::Tracker(tracker(key, seq));
-        match round_trip(client, sample, timeout, |frame| drive.bar.observe(frame))? {
+        let (bar, clearance) = (&mut drive.bar, &mut drive.clearance);
+        let observe = |frame: Frame| match &frame {
+            Frame::Clearance(listed) => clearance.observe(listed),
+            _ => bar.observe(&frame),
+        };
+        match round_trip(client, sample, timeout, observe)? {
             Some(latency) => drive.latencies.push((key.time, latency)),
             None => drive.unanswered += 1,
         }

@@ -1,7 +1,8 @@
 //! The server's loop figures, read from its log: each loop logs a "loop rate" line with its
 //! frames, their rate, mean, 99th-percentile and longest time at the end of every window
 //! (every ten seconds, at a restart, and when it ends). The lines are tracing's default format,
-//! `TIME LEVEL TARGET: loop rate loop_name="collision" frames=5120 ... p99_us=41.2 ...`, read
+//! `TIME LEVEL TARGET: loop rate loop_name="collision" frames=5120 ... p50_us=20.1 p99_us=41.2 ...`
+//! (the clearance stage logs the same lines, as `loop_name="clearance"`), read
 //! field by field so that their order and any colour codes do not matter.
 
 use std::collections::BTreeMap;
@@ -15,6 +16,8 @@ pub struct Window {
     /// `grasping`, `sliding` or `collision`.
     pub name: String,
     pub frames: u64,
+    /// The window's median, when the line gives it.
+    pub p50_us: Option<f64>,
     pub p99_us: f64,
     pub max_us: f64,
 }
@@ -24,6 +27,9 @@ pub struct Window {
 pub struct LoopFigures {
     /// Frames processed.
     pub frames: u64,
+    /// The largest of the windows' medians (their own when there is one window; 0 when no line
+    /// gives one).
+    pub p50_us: f64,
     /// The largest of the windows' 99th percentiles (their own when there is one window).
     pub p99_us: f64,
     /// The longest frame.
@@ -44,6 +50,7 @@ pub fn figures(windows: &[Window]) -> BTreeMap<String, LoopFigures> {
     for window in windows {
         let loop_figures = figures.entry(window.name.clone()).or_default();
         loop_figures.frames += window.frames;
+        loop_figures.p50_us = loop_figures.p50_us.max(window.p50_us.unwrap_or(0.0));
         loop_figures.p99_us = loop_figures.p99_us.max(window.p99_us);
         loop_figures.max_us = loop_figures.max_us.max(window.max_us);
     }
@@ -76,6 +83,10 @@ fn parse(line: &str) -> Result<Window> {
     Ok(Window {
         name: text("loop_name")?.to_owned(),
         frames: text("frames")?.parse().context("frames is not a count")?,
+        p50_us: fields
+            .contains_key("p50_us")
+            .then(|| number("p50_us"))
+            .transpose()?,
         p99_us: number("p99_us")?,
         max_us: number("max_us")?,
     })
@@ -104,7 +115,7 @@ mod tests {
 2026-12-03T10:00:01.000001Z  INFO vas_server::runtime::loops: loop rate loop_name=\"grasping\" \
 frames=1000 frames_per_s=998 busy_percent=20.0 mean_us=200.0 p99_us=400.5 max_us=900.0 sustains_per_s=5000
 2026-12-03T10:00:01.000002Z  INFO vas_server::runtime::loops: loop rate loop_name=\"collision\" \
-frames=3000 frames_per_s=2990 busy_percent=3.0 mean_us=10.0 p99_us=30.0 max_us=80.0 sustains_per_s=100000
+frames=3000 frames_per_s=2990 busy_percent=3.0 mean_us=10.0 p50_us=9.5 p99_us=30.0 max_us=80.0 sustains_per_s=100000
 2026-12-03T10:00:02.000001Z  INFO vas_server::runtime::loops: loop rate loop_name=\"grasping\" \
 frames=3000 frames_per_s=1000 busy_percent=60.0 mean_us=600.0 p99_us=300.0 max_us=1000.0 sustains_per_s=1666
 ";
@@ -119,6 +130,7 @@ frames=3000 frames_per_s=1000 busy_percent=60.0 mean_us=600.0 p99_us=300.0 max_u
         assert_eq!(grasping.frames, 4000);
         assert_eq!((grasping.p99_us, grasping.max_us), (400.5, 1000.0));
         assert_eq!(figures["collision"].frames, 3000);
+        assert_eq!((figures["collision"].p50_us, grasping.p50_us), (9.5, 0.0));
         assert!(!figures.contains_key("sliding"));
     }
 

@@ -8,6 +8,10 @@
 //! along. Each tracker sample is timed to its answer (B7's procedure), the loops' rates and
 //! 99th percentiles come from the server's log ([`loop_log`]), and every published pose of the
 //! bar is checked against the static parts near its path with parry.
+//!
+//! B12 is the same run with `--clearance 0.005`: the scene watches the held bar against every
+//! other part for pairs closer than 5 mm, and the report adds the clearance stage's time per
+//! frame (its "loop rate" lines) and the pairs the clearance frames listed.
 
 mod drive;
 mod generate;
@@ -37,7 +41,7 @@ use drive::{Drive, RATE_HZ};
 use generate::{Assembly, AssemblySpec, BAR_ID};
 use loop_log::LoopFigures;
 use path::ScriptedPath;
-use report::AssemblyReport;
+use report::{AssemblyReport, ClearanceFigures};
 
 /// Command line of `vas-bench assembly`.
 #[derive(Debug, clap::Args)]
@@ -54,6 +58,10 @@ pub struct AssemblyArgs {
     /// Seed of the fittings' kinds, sizes and places.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// B12: watch the clearance of the held bar against every other part, reporting pairs
+    /// closer than this many metres (the scene's `[params.clearance] threshold`).
+    #[arg(long, value_name = "METRES", value_parser = clearance_threshold)]
+    clearance: Option<f64>,
     /// Where to write the meshes, the scene, the tree cache and the servers' logs (kept);
     /// default: a temporary folder, removed at the end.
     #[arg(long, value_name = "DIR")]
@@ -85,6 +93,30 @@ fn slide_seconds(text: &str) -> Result<f64, String> {
     }
 }
 
+/// clap's parser of the clearance threshold: above 0 and at most a metre, as scenes take it.
+fn clearance_threshold(text: &str) -> Result<f64, String> {
+    let metres = crate::args::finite_number(text)?;
+    if metres > 0.0 && metres <= 1.0 {
+        Ok(metres)
+    } else {
+        Err(format!("{metres} is not above 0 and at most 1 metre"))
+    }
+}
+
+/// Adds the clearance watch of the held part at `threshold` metres to the scene file `scene`.
+fn watch_clearance(scene: &Path, threshold: f64) -> Result<()> {
+    use std::io::Write;
+    let mut file = std::fs::OpenOptions::new()
+        .append(true)
+        .open(scene)
+        .with_context(|| format!("opening {}", scene.display()))?;
+    write!(
+        file,
+        "\n[params.clearance]\nthreshold = {threshold:?}\nparts = \"held\"\n"
+    )
+    .with_context(|| format!("writing {}", scene.display()))
+}
+
 pub fn run(args: &AssemblyArgs) -> Result<()> {
     let scratch = match &args.dir {
         Some(dir) => {
@@ -105,6 +137,9 @@ pub fn run(args: &AssemblyArgs) -> Result<()> {
     let path = ScriptedPath::new(args.seconds);
     let started = Instant::now();
     let assembly = generate::generate(dir, &spec, &args.hand, &path)?;
+    if let Some(threshold) = args.clearance {
+        watch_clearance(&assembly.scene, threshold)?;
+    }
     let generate_s = started.elapsed().as_secs_f64();
     println!(
         "generated {} parts, {} triangles, in {} s",
@@ -183,6 +218,23 @@ pub fn run(args: &AssemblyArgs) -> Result<()> {
         e2e_p50_us: latency.p50_us,
         e2e_p99_us: latency.p99_us,
         e2e_max_us: latency.max_us,
+        clearance: args.clearance.map(|threshold| {
+            let stage = cached.loops.get("clearance").copied().unwrap_or_default();
+            let seen = drive.clearance;
+            ClearanceFigures {
+                threshold_mm: threshold * 1e3,
+                stage_frames: stage.frames,
+                stage_p50_us: stage.p50_us,
+                stage_p99_us: stage.p99_us,
+                stage_max_us: stage.max_us,
+                frames: seen.frames,
+                frames_with_pairs: seen.frames_with_pairs,
+                pairs: seen.pairs,
+                most_pairs: seen.most_pairs,
+                stale_pairs: seen.stale_pairs,
+                closest_mm: seen.closest_m * 1e3,
+            }
+        }),
     };
     print!("{}", report::render(&report));
     let marks = [

@@ -54,6 +54,28 @@ pub struct AssemblyReport {
     pub e2e_p50_us: f64,
     pub e2e_p99_us: f64,
     pub e2e_max_us: f64,
+    /// B12, with `--clearance`: the clearance watch's figures.
+    pub clearance: Option<ClearanceFigures>,
+}
+
+/// B12: the clearance stage over the drive, and what the clearance frames listed.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ClearanceFigures {
+    pub threshold_mm: f64,
+    /// Frames the stage measured, and its median, 99th-percentile (each the largest of its
+    /// log windows') and longest time per frame.
+    pub stage_frames: u64,
+    pub stage_p50_us: f64,
+    pub stage_p99_us: f64,
+    pub stage_max_us: f64,
+    /// Clearance frames received, those listing a pair, the pairs listed in all, the most in
+    /// one frame, the stale ones in all, and the least distance listed.
+    pub frames: u64,
+    pub frames_with_pairs: u64,
+    pub pairs: u64,
+    pub most_pairs: u32,
+    pub stale_pairs: u64,
+    pub closest_mm: f64,
 }
 
 /// The report as a table of figures.
@@ -111,8 +133,27 @@ pub fn render(report: &AssemblyReport) -> String {
             format_number(max),
         ]);
     }
+    let clearance = report.clearance.map_or_else(String::new, |c| {
+        let mut table = Table::new(["clearance", "value"]);
+        for (name, value) in [
+            ("threshold_mm", format_number(c.threshold_mm)),
+            ("stage_frames", c.stage_frames.to_string()),
+            ("stage_p50_us", format_number(c.stage_p50_us)),
+            ("stage_p99_us", format_number(c.stage_p99_us)),
+            ("stage_max_us", format_number(c.stage_max_us)),
+            ("frames", c.frames.to_string()),
+            ("frames_with_pairs", c.frames_with_pairs.to_string()),
+            ("pairs", c.pairs.to_string()),
+            ("most_pairs", c.most_pairs.to_string()),
+            ("stale_pairs", c.stale_pairs.to_string()),
+            ("closest_mm", format_number(c.closest_mm)),
+        ] {
+            table.push_row([name.to_owned(), value]);
+        }
+        format!("\n{}", table.render())
+    });
     format!(
-        "B8 big assembly: {} parts, {} triangles (the grasped bar {}), seed {}, generated in {} s\n{}\n{}",
+        "B8 big assembly: {} parts, {} triangles (the grasped bar {}), seed {}, generated in {} s\n{}\n{}{clearance}",
         report.parts,
         report.triangles,
         report.bar_triangles,
