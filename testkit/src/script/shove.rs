@@ -179,7 +179,7 @@ mod tests {
 
     #[test]
     fn a_shoved_peg_is_held_and_never_penetrates_its_block() {
-        let scene = scene();
+        let mut scene = scene();
         let shoves = shoves_in(&scene, 1, 6);
         let recording = Recording {
             header: RecordingHeader::new(scene.name.clone(), "shoves"),
@@ -191,8 +191,14 @@ mod tests {
                 })
                 .collect(),
         };
-        let run = offline::replay(&scene, &recording).expect("the recording replays");
-        assert!(!run.events.is_empty(), "the peg was never grasped");
-        assert!(run.penetrations.is_empty(), "{:?}", run.penetrations);
+        // With contact approximation by bisection alone, and with conservative advancement.
+        for advance in [false, true] {
+            scene.params.sliding.conservative_advancement = advance;
+            let run = offline::replay(&scene, &recording).expect("the recording replays");
+            assert!(!run.events.is_empty(), "the peg was never grasped");
+            assert!(run.penetrations.is_empty(), "{:?}", run.penetrations);
+            // The block held the shoved peg back by centimetres.
+            assert!(run.max_held_back > 0.01, "{}", run.max_held_back);
+        }
     }
 }
