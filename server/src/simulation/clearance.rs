@@ -283,11 +283,12 @@ impl ClearanceStage {
         let reach = self.threshold * (1.0 + HYSTERESIS);
         let mut keys: Vec<(PartId, PartId)> = Vec::new();
         for &part in &watched {
-            for other in (0..count).filter(|&other| scene.pair_of_interest(part, other)) {
+            for other in 0..count {
                 let gap = (centres[part] - centres[other]).norm()
                     - self.spheres[part].1
                     - self.spheres[other].1;
-                if gap >= reach {
+                // The spheres first: the interest rules compare group names.
+                if gap >= reach || !scene.pair_of_interest(part, other) {
                     continue;
                 }
                 let key = ordered(part as PartId, other as PartId);
