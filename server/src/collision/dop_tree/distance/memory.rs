@@ -1,20 +1,42 @@
-//! What a pair's distance queries carry from one to the next.
+//! What a pair's distance queries carry from one to the next: the last closest triangles, and
+//! the front where the last walk ended.
+
+use nalgebra::{Matrix3, Vector3};
 
 use super::super::tree::DopTree;
 
-/// What the last distance query between two objects found: keep one per pair of objects (it is
-/// `Send`, and cheap when empty) and pass it to every query of that pair. At a nearby pose, the
-/// last closest triangles are still (nearly) the closest, so their distance is an upper bound
-/// that prunes almost the whole walk; after a jump they cost one triangle test more than a cold
+/// A node pair with a lower bound on its distance.
+pub(super) type BoundedPair = (u32, u32, f64);
+
+/// The trees' ids and B's pose in A's frame (rotation, translation) a front holds for.
+type FrontPose = ((u64, u64), Matrix3<f64>, Vector3<f64>);
+
+/// What the last distance queries between two objects found: keep one per pair of objects (it is
+/// `Send`, and cheap when empty) and pass it to every query of that pair.
+///
+/// At a nearby pose, the last closest triangles are still (nearly) the closest, so their distance
+/// is an upper bound that prunes most of the walk; and the front where the last walk ended (every
+/// node pair it did not open, with its lower bound) still holds, less how far the motion since
+/// can have brought each pair closer: the next walk opens only the pairs whose bound no longer
+/// exceeds the best distance, instead of walking down from the roots. After a jump most of the
+/// front no longer holds and the walk starts from the roots: a jump costs little more than a cold
 /// query. A memory used with other trees than its last ones is ignored, so a mix-up costs speed,
 /// never a wrong answer.
 #[derive(Debug, Clone, Default)]
 pub struct DistanceMemory {
     /// The two trees' ids and the closest triangles' positions in leaf order.
     last: Option<((u64, u64), [u32; 2])>,
-    /// The walk's stack, reused: node pairs with their lower bounds.
-    stack: Vec<(u32, u32, f64)>,
+    /// The front of the last complete walk, and the trees' ids and B's pose in A's frame it
+    /// holds for.
+    front: Vec<BoundedPair>,
+    front_of: Option<FrontPose>,
+    /// Buffers reused across queries: the walk's stack and the front it records.
+    stack: Vec<BoundedPair>,
+    next_front: Vec<BoundedPair>,
 }
+
+/// A front longer than this is not carried: scanning it would cost as much as a walk.
+const FRONT_LIMIT: usize = 1 << 16;
 
 impl DistanceMemory {
     /// The closest triangles (leaf order) the last query of `a` and `b` found.
@@ -29,9 +51,69 @@ impl DistanceMemory {
         self.last = Some(((a.id, b.id), pair));
     }
 
-    /// The walk's stack, emptied.
-    pub(super) fn stack(&mut self) -> &mut Vec<(u32, u32, f64)> {
+    /// Sets up a walk of `a` and `b` with B at (`rotation`, `translation`) in A's frame, the best
+    /// distance known being `best`: the pairs of the last front that the motion since may have
+    /// brought below `best` go on the walk's stack (nearest on top); those still proved apart go
+    /// straight to the new front. Returns the stack and the new front, and whether the walk
+    /// must start from the roots instead (no front, another pair of trees, or a jump).
+    pub(super) fn start_walk(
+        &mut self,
+        a: &DopTree,
+        b: &DopTree,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+        best: f64,
+    ) -> (&mut Vec<BoundedPair>, &mut Vec<BoundedPair>, bool) {
         self.stack.clear();
-        &mut self.stack
+        self.next_front.clear();
+        let usable = self.front.len() <= FRONT_LIMIT
+            && self.front_of.is_some_and(|(ids, ..)| ids == (a.id, b.id));
+        if !usable {
+            return (&mut self.stack, &mut self.next_front, true);
+        }
+        let (_, old_rotation, old_translation) = self.front_of.expect("checked usable");
+        let turn = rotation - old_rotation;
+        let (turn_norm, shift) = (turn.norm(), translation - old_translation);
+        // How far any point of B's node `ib` moved in A's frame: its sphere's centre moved by
+        // `turn c + shift`, and its points turned about the centre by at most |turn| r.
+        let motion = |ib: u32| {
+            let sphere = b.nodes[ib as usize].sphere;
+            (turn * sphere.centre() + shift).norm() + turn_norm * f64::from(sphere.radius)
+        };
+        for &(ia, ib, bound) in &self.front {
+            let bound = bound - motion(ib);
+            if bound >= best {
+                self.next_front.push((ia, ib, bound));
+            } else {
+                self.stack.push((ia, ib, bound));
+            }
+        }
+        if 2 * self.stack.len() > self.front.len() {
+            // A jump: most of the front must be opened again, the roots are a shorter way.
+            self.stack.clear();
+            self.next_front.clear();
+            return (&mut self.stack, &mut self.next_front, true);
+        }
+        self.stack.sort_unstable_by(|x, y| y.2.total_cmp(&x.2));
+        (&mut self.stack, &mut self.next_front, false)
+    }
+
+    /// Keeps the front the walk recorded, when it is `complete` (the walk ran to its end), as
+    /// the front of `a` and `b` at this pose; forgets the old one otherwise.
+    pub(super) fn finish_walk(
+        &mut self,
+        a: &DopTree,
+        b: &DopTree,
+        rotation: &Matrix3<f64>,
+        translation: &Vector3<f64>,
+        complete: bool,
+    ) {
+        if complete {
+            std::mem::swap(&mut self.front, &mut self.next_front);
+            self.front_of = Some(((a.id, b.id), *rotation, *translation));
+        } else {
+            self.front.clear();
+            self.front_of = None;
+        }
     }
 }

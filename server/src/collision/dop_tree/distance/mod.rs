@@ -6,9 +6,14 @@
 //!    ([`DopTree::distance_below`]) ends here;
 //! 2. the closest triangles of the pair's last query ([`DistanceMemory`]), measured at the new
 //!    pose, give an upper bound: at a nearby pose it is already (nearly) the answer;
-//! 3. the depth-first walk (`walk`) opens only the node pairs whose lower bound (`bounds`: the
-//!    nodes' spheres, then their DOPs re-aligned in O(k)) is below the best distance found so far,
-//!    nearer pairs first, and measures the triangle pairs of the leaves it reaches exactly.
+//! 3. the front where the pair's last walk ended ([`DistanceMemory`]) is carried to the new pose:
+//!    its node pairs whose lower bounds, less the motion since, still exceed the best distance
+//!    stay closed; the others are where the walk starts (from the roots without a front);
+//! 4. the depth-first walk (`walk`) opens only the node pairs whose lower bound (`bounds`: the
+//!    nodes' spheres, their boxes or DOPs along the best pair's direction, their DOPs re-aligned
+//!    in O(k)) is below the best distance found so far, nearer pairs first, measures the
+//!    triangle pairs of the leaves it reaches exactly, and records the pairs it leaves closed as
+//!    the new front.
 
 mod bounds;
 mod memory;
@@ -93,7 +98,7 @@ impl DopTree {
     }
 }
 
-/// Stages 2 and 3 with A's orientation count `K`.
+/// Stages 2 to 4 with A's orientation count `K`.
 fn closest<const K: usize>(
     a: &DopTree,
     b: &DopTree,
@@ -111,7 +116,10 @@ fn closest<const K: usize>(
     if let Some(last) = memory.last_pair(a, b) {
         pair.measure_triangles(last, &mut closest, stats);
     }
-    pair.walk_closest(&mut closest, memory.stack(), stats);
+    let (stack, front, from_roots) =
+        memory.start_walk(a, b, &pair.rotation, &pair.translation, closest.distance);
+    let complete = pair.walk_closest(&mut closest, stack, front, from_roots, stats);
+    memory.finish_walk(a, b, &pair.rotation, &pair.translation, complete);
     closest
 }
 

@@ -58,7 +58,7 @@ fn assert_matches(a: &TriMesh, b: &TriMesh, b_to_a: &Isometry3<f64>, found: &Clo
 fn random_soups_with_slivers_agree_with_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let mut touching = 0;
-    for case in 0..1200 {
+    for case in 0..800 {
         let (n, m) = (rng.random_range(1..60), rng.random_range(1..60));
         let (a, b) = (
             soup_with_slivers(&mut rng, n),
@@ -75,10 +75,7 @@ fn random_soups_with_slivers_agree_with_brute_force() {
         assert_matches(&a, &b, &pose, &found);
         touching += (found.distance == 0.0) as usize;
     }
-    assert!(
-        touching > 120 && touching < 1080,
-        "{touching} touching poses"
-    );
+    assert!(touching > 80 && touching < 720, "{touching} touching poses");
 }
 
 #[test]
@@ -170,7 +167,13 @@ fn a_memory_carried_along_a_tumble_gives_the_same_answers_for_less_work() {
         let pose = tumble_pose(3.0 - 0.01 * step as f64, step, 400);
         let carried = ta.distance(&tb, &pose, &mut memory, &mut coherent);
         let fresh = ta.distance(&tb, &pose, &mut DistanceMemory::default(), &mut cold);
-        assert_eq!(carried.distance, fresh.distance, "step {step}");
+        // Equal up to the rounding of a tie between neighbouring triangles.
+        assert!(
+            (carried.distance - fresh.distance).abs() <= 1e-12 * fresh.distance,
+            "step {step}: {} against {}",
+            carried.distance,
+            fresh.distance
+        );
         if step % 25 == 0 {
             assert_matches(&a, &b, &pose, &carried);
         }

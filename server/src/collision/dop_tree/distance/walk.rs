@@ -6,7 +6,8 @@ use nalgebra::Point3;
 
 use super::super::realign::{AffineRealign, RealignCache, Scratch, with_scratch};
 use super::super::traverse::TreePair;
-use super::bounds::{spheres_gap, triangle_sphere};
+use super::bounds::{Direction, triangles_gap};
+use super::memory::BoundedPair;
 use crate::collision::QueryStats;
 use crate::collision::distance::{TriangleDistance, triangle_distance};
 
@@ -47,6 +48,14 @@ impl Closest {
     }
 }
 
+/// One walk's state: the best pair, the pairs still to open, the pairs left closed.
+struct Walk<'w> {
+    closest: &'w mut Closest,
+    stack: &'w mut Vec<BoundedPair>,
+    front: &'w mut Vec<BoundedPair>,
+    from_roots: bool,
+}
+
 impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     /// Measures A's triangle `ia` against B's `ib` (leaf order), keeping them if closer.
     pub(super) fn measure_triangles(
@@ -64,22 +73,32 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         closest.offer(found, [ia as u32, ib as u32]);
     }
 
-    /// Walks from the root pair, improving `closest`; `stack` is scratch space.
+    /// Walks the node pairs on `stack` (or from the root pair, with `from_roots`), improving
+    /// `closest` and recording in `front` every pair it leaves closed with its bound. Returns
+    /// whether the walk ran to its end (it stops at a distance of 0), so that the front is whole.
     pub(super) fn walk_closest(
         &self,
         closest: &mut Closest,
-        stack: &mut Vec<(u32, u32, f64)>,
+        stack: &mut Vec<BoundedPair>,
+        front: &mut Vec<BoundedPair>,
+        from_roots: bool,
         stats: &mut QueryStats,
-    ) {
+    ) -> bool {
+        let mut walk = Walk {
+            closest,
+            stack,
+            front,
+            from_roots,
+        };
         with_scratch(|scratch| {
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2")
                 && std::arch::is_x86_feature_detected!("fma")
             {
                 // SAFETY: the CPU supports AVX2 and FMA, checked just above.
-                return unsafe { self.walk_avx2(scratch, closest, stack, stats) };
+                return unsafe { self.walk_avx2(scratch, &mut walk, stats) };
             }
-            self.walk::<false>(scratch, closest, stack, stats)
+            self.walk::<false>(scratch, &mut walk, stats)
         })
     }
 
@@ -89,80 +108,131 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     fn walk_avx2(
         &self,
         scratch: &mut Scratch,
-        closest: &mut Closest,
-        stack: &mut Vec<(u32, u32, f64)>,
+        walk: &mut Walk<'_>,
         stats: &mut QueryStats,
-    ) {
-        self.walk::<true>(scratch, closest, stack, stats)
+    ) -> bool {
+        self.walk::<true>(scratch, walk, stats)
     }
 
     #[inline(always)]
     fn walk<const FUSED: bool>(
         &self,
         scratch: &mut Scratch,
-        closest: &mut Closest,
-        stack: &mut Vec<(u32, u32, f64)>,
+        walk: &mut Walk<'_>,
         stats: &mut QueryStats,
-    ) {
+    ) -> bool {
         scratch.begin();
         let mut cache = RealignCache {
             stamp: scratch.stamp,
             tags: &mut scratch.tags,
             realigned: &mut scratch.realigned,
         };
-        if let Some(bound) = self.lower_bound::<FUSED>(&mut cache, (0, 0), closest.distance, stats)
-        {
+        let Walk {
+            closest,
+            stack,
+            front,
+            from_roots,
+        } = walk;
+        let mut direction = self.best_direction(closest);
+        if *from_roots {
+            let bound = self.lower_bound::<FUSED>(
+                &mut cache,
+                (0, 0),
+                direction.as_ref(),
+                closest.distance,
+                stats,
+            );
             stack.push((0, 0, bound));
         }
         while let Some((ia, ib, bound)) = stack.pop() {
             // The best distance may have improved since the pair was pushed.
             if bound >= closest.distance {
+                front.push((ia, ib, bound));
                 continue;
             }
             stats.nodes_visited += 1;
             let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
             if na.is_leaf() && nb.is_leaf() {
-                self.closest_in_leaves(ia, ib, closest, stats);
+                let before = closest.distance;
+                let bound = self.closest_in_leaves(ia, ib, direction.as_ref(), closest, stats);
                 if closest.distance == 0.0 {
-                    return;
+                    return false;
+                }
+                front.push((ia, ib, bound));
+                if closest.distance < before {
+                    direction = self.best_direction(closest);
                 }
                 continue;
             }
             let [first, second] = self.children(ia, ib);
-            let bounds = [first, second]
-                .map(|pair| self.lower_bound::<FUSED>(&mut cache, pair, closest.distance, stats));
+            let [x, y] = [first, second].map(|pair| {
+                self.lower_bound::<FUSED>(
+                    &mut cache,
+                    pair,
+                    direction.as_ref(),
+                    closest.distance,
+                    stats,
+                )
+            });
             // Nearer pair on top of the stack: it is walked first and tightens the best soonest.
-            let (near, far) = match bounds {
-                [Some(x), Some(y)] if y < x => ((second, y), Some((first, x))),
-                [Some(x), y] => ((first, x), y.map(|y| (second, y))),
-                [None, Some(y)] => ((second, y), None),
-                [None, None] => continue,
+            let (near, far) = if y < x {
+                ((second, y), (first, x))
+            } else {
+                ((first, x), (second, y))
             };
-            if let Some(((fa, fb), bound)) = far {
-                stack.push((fa, fb, bound));
+            for ((pa, pb), bound) in [far, near] {
+                if bound >= closest.distance {
+                    front.push((pa, pb, bound));
+                } else {
+                    stack.push((pa, pb, bound));
+                }
             }
-            stack.push((near.0.0, near.0.1, near.1));
+        }
+        true
+    }
+
+    /// The direction of the best pair found, or before any, from A's centre to B's.
+    fn best_direction(&self, closest: &Closest) -> Option<Direction> {
+        match closest.pair {
+            Some(_) => self.direction(&closest.on_a, &closest.on_b),
+            None => self.direction(
+                &self.a.bounding_centre,
+                &(self.rotation * self.b.bounding_centre.coords + self.translation).into(),
+            ),
         }
     }
 
-    /// Measures the triangle pairs of two leaves whose triangles' spheres do not already prove
-    /// them no closer than the best.
-    fn closest_in_leaves(&self, ia: u32, ib: u32, closest: &mut Closest, stats: &mut QueryStats) {
+    /// Measures the triangle pairs of two leaves that their projections (`triangles_gap`) do not
+    /// already prove no closer than the best; returns a lower bound on the leaves' distance (the
+    /// least of the measures and of the bounds that spared a measure).
+    fn closest_in_leaves(
+        &self,
+        ia: u32,
+        ib: u32,
+        direction: Option<&Direction>,
+        closest: &mut Closest,
+        stats: &mut QueryStats,
+    ) -> f64 {
         let (la, lb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
+        let mut least = f64::INFINITY;
         for tb in lb.first..lb.first + lb.count {
             let moved = self.b_triangle_in_a(tb as usize);
-            let sphere_b = triangle_sphere(&moved);
             for ta in la.first..la.first + la.count {
                 let triangle = &self.a.triangles[ta as usize];
-                if spheres_gap(&triangle_sphere(triangle), &sphere_b) >= closest.distance {
+                let gap = triangles_gap(triangle, &moved, direction.map(|d| &d.u));
+                if gap >= closest.distance {
+                    least = least.min(gap);
                     continue;
                 }
                 stats.tri_tests += 1;
-                closest.offer(triangle_distance(triangle, &moved), [ta, tb]);
+                let found = triangle_distance(triangle, &moved);
+                least = least.min(found.distance);
+                closest.offer(found, [ta, tb]);
                 if closest.distance == 0.0 {
-                    return;
+                    return 0.0;
                 }
             }
         }
+        least
     }
 }
