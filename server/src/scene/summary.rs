@@ -57,12 +57,19 @@ impl Scene {
         let contact_tolerance = sl
             .contact_tolerance
             .map_or("1e-4 of the part's size".to_owned(), |t| format!("{t} m"));
+        let clearance = match p.clearance.threshold {
+            Some(threshold) => match p.clearance.parts {
+                super::ClearanceParts::Held => format!("{threshold} m, held parts"),
+                super::ClearanceParts::Movable => format!("{threshold} m, movable parts"),
+            },
+            None => "off".to_owned(),
+        };
         let _ = writeln!(
             s,
             "params: {}-DOPs; sliding {} (contact tolerance {contact_tolerance}, lift {}, \
              {} iterations, {} stall cycles, cluster angle {} rad, {} slide-in units); \
              clasp (flex tolerance {} rad, root tolerance {} m, {} steps, max motion {} m); \
-             tracking (lost after {} s, grace {} s)",
+             tracking (lost after {} s, grace {} s); clearance {clearance}",
             p.dop_orientations,
             sl.metaphor,
             sl.lift,
