@@ -7,8 +7,9 @@
 //! that frame's parts, events and hand are out; the thread measures while the collision loop
 //! verifies the next one. A frame's report carries the number of the parts frame it measured.
 //! When the next frame is already waiting, the stage stops between pairs (the pairs left keep
-//! their last reading, flagged stale, and go first next time), so that the reports keep up with
-//! the frames and every frame gets one. The thread runs at the normal priority even when the
+//! their last reading, flagged stale, and go first next time), and a frame that finds the next
+//! one already waiting is reported all stale without a query, so that the reports keep up with
+//! the frames however slow one query is, and every frame gets one. The thread runs at the normal priority even when the
 //! loops run under `SCHED_FIFO`: it takes only the time they leave.
 //!
 //! In lockstep it measures every pair of every frame (no deadline), and the I/O thread hands the
@@ -168,8 +169,14 @@ fn run(inbox: &Receiver<Work>, outbox: &Sender<ClearanceReport>, waker: &Waker, 
                 let started = Instant::now();
                 let measured = stage.as_mut().filter(|_| job.epoch == epoch);
                 let threshold = measured.as_ref().map_or(0.0, |stage| stage.threshold());
+                // A frame that finds the next one waiting is not measured at all: one slow pair
+                // (a peg deep in its hole) must not let the frames pile up behind it.
                 let outcome = measured.map(|stage| {
-                    stage.measure(&job.poses, &job.held, || lockstep || inbox.is_empty())
+                    if lockstep || inbox.is_empty() {
+                        stage.measure(&job.poses, &job.held, || lockstep || inbox.is_empty())
+                    } else {
+                        stage.unmeasured()
+                    }
                 });
                 if outcome.is_some() {
                     meter.frame_done(started);

@@ -263,6 +263,27 @@ impl ClearanceStage {
         outcome
     }
 
+    /// A frame with no time to measure at all (a newer one already waits): every pair below
+    /// keeps its last reading, stale; no events.
+    pub fn unmeasured(&mut self) -> ClearanceOutcome {
+        let mut below: Vec<ClearanceReading> = (self.pairs.values_mut())
+            .filter(|state| state.below)
+            .filter_map(|state| state.reading.as_mut())
+            .map(|reading| {
+                reading.stale = true;
+                *reading
+            })
+            .collect();
+        below.sort_by(|x, y| {
+            (x.distance.total_cmp(&y.distance)).then((x.part, x.other).cmp(&(y.part, y.other)))
+        });
+        ClearanceOutcome {
+            stale: below.len(),
+            below,
+            ..ClearanceOutcome::default()
+        }
+    }
+
     /// The pairs to measure on this frame, overdue ones first, then by ids: the selected pairs
     /// whose bounding spheres are closer than their bound, and every pair below. Each gets a
     /// state.

@@ -140,6 +140,11 @@ fn pairs_past_the_deadline_are_stale_and_measured_first_next_time() {
         .expect("listed");
     assert!(!spare.stale && (spare.distance - 0.001).abs() < 1e-9);
     assert!(peg.stale && (peg.distance - 0.004).abs() < 1e-9, "{peg:?}");
+    // No time at all: both keep their readings, stale, and nothing changes state.
+    let outcome = stage.unmeasured();
+    assert!(outcome.events.is_empty() && outcome.queried == 0);
+    assert_eq!(outcome.below.len(), 2);
+    assert!(outcome.below.iter().all(|reading| reading.stale));
     // With time, everything is fresh again.
     let outcome = stage.measure(&poses(0.003, 0.001), &[], || true);
     assert!(outcome.below.iter().all(|reading| !reading.stale));
