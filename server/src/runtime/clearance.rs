@@ -19,7 +19,7 @@
 
 use std::sync::Arc;
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, Sender, TryRecvError};
 use nalgebra::Isometry3;
@@ -79,8 +79,31 @@ pub(super) struct ClearanceWatch {
     active: bool,
     /// Frames handed over whose reports have not been taken.
     pending: usize,
-    /// Ends with the sender: the thread ends when [`ClearanceWatch`] is dropped.
-    _thread: JoinHandle<()>,
+    /// Ends when `jobs` is dropped; joined on drop, so that it logs its last window.
+    thread: Option<JoinHandle<()>>,
+}
+
+/// How long a dropped [`ClearanceWatch`] waits for its thread to log and end.
+const JOIN_PATIENCE: Duration = Duration::from_millis(500);
+
+impl Drop for ClearanceWatch {
+    /// Closes the thread's inbox and waits for it (for at most [`JOIN_PATIENCE`]: a thread
+    /// still in a long first query is left behind; it holds no shared memory).
+    fn drop(&mut self) {
+        drop(std::mem::replace(
+            &mut self.jobs,
+            crossbeam_channel::bounded(0).0,
+        ));
+        let deadline = Instant::now() + JOIN_PATIENCE;
+        if let Some(thread) = self.thread.take() {
+            while !thread.is_finished() && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            if thread.is_finished() && thread.join().is_err() {
+                tracing::error!("the clearance stage ended by panicking");
+            }
+        }
+    }
 }
 
 impl ClearanceWatch {
@@ -96,7 +119,7 @@ impl ClearanceWatch {
             reports,
             active: false,
             pending: 0,
-            _thread: thread,
+            thread: Some(thread),
         })
     }
 
