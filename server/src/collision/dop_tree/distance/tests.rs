@@ -7,7 +7,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::DistanceMemory;
-use crate::collision::distance::{ClosestPoints, brute_force_distance, triangle_distance};
+use crate::collision::distance::{
+    ClosestPoints, PairsWithin, brute_force_distance, triangle_distance,
+};
 use crate::collision::oracle_tests::{random_pose, random_soup, torus};
 use crate::collision::{DopTree, MeshCollider, QueryStats};
 use crate::geometry::TriMesh;
@@ -200,4 +202,52 @@ fn a_memory_of_other_trees_or_a_jump_changes_no_answer() {
         let found = trees[i].distance(&trees[j], &pose, &mut memory, &mut QueryStats::default());
         assert_matches(&meshes[i], &meshes[j], &pose, &found);
     }
+}
+
+#[test]
+fn pairs_within_a_clearance_are_those_the_brute_force_finds() {
+    let mut rng = ChaCha8Rng::seed_from_u64(16);
+    let meshes: Vec<TriMesh> = (0..6)
+        .map(|i| match i % 2 {
+            0 => torus(0.3, 12, 6),
+            _ => random_soup(&mut rng, 20, 0.3),
+        })
+        .collect();
+    let trees: Vec<DopTree> = meshes.iter().map(DopTree::build).collect();
+    let mut within = PairsWithin::default();
+    let mut found_any = 0;
+    for _ in 0..40 {
+        let poses: Vec<Isometry3<f64>> = (0..6).map(|_| random_pose(&mut rng, 3.0)).collect();
+        let objects: Vec<(&DopTree, Isometry3<f64>)> =
+            trees.iter().zip(poses.iter().copied()).collect();
+        let candidates: Vec<(usize, usize)> = (0..6)
+            .flat_map(|i| (i + 1..6).map(move |j| (i, j)))
+            .collect();
+        let mut out = Vec::new();
+        within.find(
+            &objects,
+            candidates.iter().copied(),
+            0.4,
+            &mut QueryStats::default(),
+            &mut out,
+        );
+        let expected: Vec<(usize, usize)> = candidates
+            .into_iter()
+            .filter(|&(i, j)| {
+                let b_to_a = poses[i].inv_mul(&poses[j]);
+                brute_force_distance(&meshes[i], &meshes[j], &b_to_a)
+                    .unwrap()
+                    .distance
+                    < 0.4
+            })
+            .collect();
+        let reported: Vec<(usize, usize)> = out.iter().map(|pair| (pair.a, pair.b)).collect();
+        assert_eq!(reported, expected);
+        for pair in &out {
+            let b_to_a = poses[pair.a].inv_mul(&poses[pair.b]);
+            assert_matches(&meshes[pair.a], &meshes[pair.b], &b_to_a, &pair.closest);
+        }
+        found_any += out.len();
+    }
+    assert!(found_any > 20, "{found_any} pairs within the clearance");
 }
