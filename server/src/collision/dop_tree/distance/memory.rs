@@ -30,13 +30,19 @@ pub struct DistanceMemory {
     /// holds for.
     front: Vec<BoundedPair>,
     front_of: Option<FrontPose>,
+    /// The length of the front of the last walk from the roots: a carried front only refines
+    /// (a reopened pair is replaced by its children), so it is dropped once it has grown to
+    /// [`FRONT_GROWTH`] times that, and the walk starts from the roots again.
+    roots_front_len: usize,
     /// Buffers reused across queries: the walk's stack and the front it records.
     stack: Vec<BoundedPair>,
     next_front: Vec<BoundedPair>,
 }
 
-/// A front longer than this is not carried: scanning it would cost as much as a walk.
-const FRONT_LIMIT: usize = 1 << 16;
+/// How much a carried front may grow over the front of a walk from the roots: scanning it costs
+/// a comparison a pair, a walk a bound test a pair, so beyond a few times the scan costs more
+/// than the walk it saves.
+const FRONT_GROWTH: usize = 2;
 
 impl DistanceMemory {
     /// The closest triangles (leaf order) the last query of `a` and `b` found.
@@ -66,7 +72,7 @@ impl DistanceMemory {
     ) -> (&mut Vec<BoundedPair>, &mut Vec<BoundedPair>, bool) {
         self.stack.clear();
         self.next_front.clear();
-        let usable = self.front.len() <= FRONT_LIMIT
+        let usable = self.front.len() <= FRONT_GROWTH * self.roots_front_len.max(64)
             && self.front_of.is_some_and(|(ids, ..)| ids == (a.id, b.id));
         if !usable {
             return (&mut self.stack, &mut self.next_front, true);
@@ -107,7 +113,11 @@ impl DistanceMemory {
         rotation: &Matrix3<f64>,
         translation: &Vector3<f64>,
         complete: bool,
+        from_roots: bool,
     ) {
+        if complete && from_roots {
+            self.roots_front_len = self.next_front.len();
+        }
         if complete {
             std::mem::swap(&mut self.front, &mut self.next_front);
             self.front_of = Some(((a.id, b.id), *rotation, *translation));

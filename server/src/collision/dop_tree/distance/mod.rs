@@ -119,7 +119,14 @@ fn closest<const K: usize>(
     let (stack, front, from_roots) =
         memory.start_walk(a, b, &pair.rotation, &pair.translation, closest.distance);
     let complete = pair.walk_closest(&mut closest, stack, front, from_roots, stats);
-    memory.finish_walk(a, b, &pair.rotation, &pair.translation, complete);
+    memory.finish_walk(
+        a,
+        b,
+        &pair.rotation,
+        &pair.translation,
+        complete,
+        from_roots,
+    );
     closest
 }
 
