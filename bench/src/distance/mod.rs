@@ -160,22 +160,18 @@ pub fn run_cli(args: &DistanceArgs) -> Result<()> {
     }
     // Cold queries only at random poses: on the tumbling path they would only repeat what a
     // cold query costs, at the price of the slowest runs of the benchmark.
-    let coherent: Vec<Method> = [Method::Ours(Memory::Carried)]
-        .into_iter()
-        .chain(
-            peers
-                .iter()
-                .map(|&(peer, harness)| Method::Peer(peer, harness)),
-        )
-        .collect();
-    let random: Vec<Method> = [Method::Ours(Memory::Carried), Method::Ours(Memory::Cold)]
-        .into_iter()
-        .chain(
-            peers
-                .iter()
-                .map(|&(peer, harness)| Method::Peer(peer, harness)),
-        )
-        .collect();
+    let with_peers = |ours: &[Memory]| -> Vec<Method> {
+        ours.iter()
+            .map(|&memory| Method::Ours(memory))
+            .chain(
+                peers
+                    .iter()
+                    .map(|&(peer, harness)| Method::Peer(peer, harness)),
+            )
+            .collect()
+    };
+    let coherent = with_peers(&[Memory::Carried]);
+    let random = with_peers(&[Memory::Carried, Memory::Cold]);
     let mut rows = Vec::new();
     for spec in &args.pairs {
         let (label, a, b) = parse_pair(spec)?;

@@ -56,6 +56,25 @@ fn assert_matches(a: &TriMesh, b: &TriMesh, b_to_a: &Isometry3<f64>, found: &Clo
     );
 }
 
+/// A cold query of `tb` posed at `b_to_a` against `ta` (the trees of `a` and `b`), checked by
+/// [`assert_matches`]; whether the two touch.
+fn cold_query_matches(
+    a: &TriMesh,
+    b: &TriMesh,
+    ta: &DopTree,
+    tb: &DopTree,
+    b_to_a: &Isometry3<f64>,
+) -> bool {
+    let found = ta.distance(
+        tb,
+        b_to_a,
+        &mut DistanceMemory::default(),
+        &mut QueryStats::default(),
+    );
+    assert_matches(a, b, b_to_a, &found);
+    found.distance == 0.0
+}
+
 #[test]
 fn random_soups_with_slivers_agree_with_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
@@ -68,14 +87,7 @@ fn random_soups_with_slivers_agree_with_brute_force() {
         );
         let (ta, tb) = (DopTree::build(&a), DopTree::build(&b));
         let pose = random_pose(&mut rng, [0.5, 2.0, 4.0][case % 3]);
-        let found = ta.distance(
-            &tb,
-            &pose,
-            &mut DistanceMemory::default(),
-            &mut QueryStats::default(),
-        );
-        assert_matches(&a, &b, &pose, &found);
-        touching += (found.distance == 0.0) as usize;
+        touching += cold_query_matches(&a, &b, &ta, &tb, &pose) as usize;
     }
     assert!(touching > 80 && touching < 720, "{touching} touching poses");
 }
@@ -88,14 +100,7 @@ fn tori_agree_with_brute_force_at_every_distance() {
     let mut touching = 0;
     for case in 0..600 {
         let pose = random_pose(&mut rng, [1.0, 2.5, 5.0][case % 3]);
-        let found = ta.distance(
-            &tb,
-            &pose,
-            &mut DistanceMemory::default(),
-            &mut QueryStats::default(),
-        );
-        assert_matches(&a, &b, &pose, &found);
-        touching += (found.distance == 0.0) as usize;
+        touching += cold_query_matches(&a, &b, &ta, &tb, &pose) as usize;
     }
     assert!(touching > 30 && touching < 570, "{touching} touching poses");
 }
