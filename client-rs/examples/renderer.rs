@@ -3,20 +3,23 @@
 //! The scene's geometry (each part's mesh with its scale applied, each hand segment's mesh)
 //! arrives on connecting and after every load or reset. Each wake-up "draws" the newest state,
 //! as a renderer does (frames that arrived meanwhile are skipped): a line per part of a new
-//! parts frame, and a line per hand segment of a new hand frame.
+//! parts frame, and for each hand (right, then left) with a new frame, a line for the hand and
+//! one per segment.
 //!
 //! ```text
 //! cargo run --release -p vas-server -- run --prefix demo
 //! cargo run --release -p vas-client --example renderer -- --prefix demo --frames 20
 //! ```
 
+use std::collections::HashMap;
 use std::time::Duration;
 
 use clap::Parser;
-use vas_client::words::{grasp_name, hand_name};
-use vas_client::{Client, HandSegment, Wake};
+use vas_client::{
+    Client, GraspType, HandFrame, HandSegment, HandSide, PartsFrame, Roles, SceneGeometry, Wake,
+};
 
-/// Prints the scene's meshes, then its parts and hand as the server moves them.
+/// Prints the scene's meshes, then its parts and hands as the server moves them.
 #[derive(Parser)]
 struct Args {
     /// The server's iceoryx2 prefix (its `--prefix`).
@@ -29,14 +32,17 @@ struct Args {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
-    // With the signals handled, Ctrl-C ends the loop below and the client leaves cleanly.
+    // With the signals handled, Ctrl-C ends the loop below and the client leaves cleanly. A
+    // renderer only reads: it takes the render role, and no input ports.
     let mut client = Client::builder()
         .handle_termination_signals(true)
         .prefix(args.prefix.as_deref())
+        .roles(Roles::RENDER)
         .connect()?;
     // What was drawn last: a renderer redraws when the newest state differs, whichever poll
-    // brought it (the meshes may come after the first frames, or before).
-    let (mut drawn, mut generation, mut parts_frame, mut hand_frame) = (0, None, None, None);
+    // brought it (the meshes may come after the first frames, or before); each hand has its own.
+    let (mut drawn, mut generation, mut parts_frame) = (0, None, None);
+    let mut hand_frames = HashMap::new();
     while args.frames.is_none_or(|limit| drawn < limit) {
         match client.wait(Duration::from_secs(1))? {
             Wake::Ready => client.poll()?,
@@ -47,57 +53,63 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue; // Nothing to draw before the meshes.
         };
         if generation.replace(geometry.generation) != Some(geometry.generation) {
-            // Once per scene: a real renderer uploads the meshes here.
-            for (id, mesh) in geometry.parts.iter().enumerate() {
-                let (min, max) = mesh.bounds().unwrap_or_default();
-                let triangles = mesh.triangles.len();
-                println!(
-                    "mesh part={id} name={:?} triangles={triangles} min={min:?} max={max:?}",
-                    mesh.name
-                );
-            }
+            upload_meshes(geometry); // Once per scene.
         }
         let parts = (client.latest_parts()).filter(|f| parts_frame != Some(f.header.frame));
-        let hand = (client.latest_hand()).filter(|hand| hand_frame != Some(hand.frame));
-        if parts.is_none() && hand.is_none() {
+        let hands: Vec<&HandFrame> = (client.latest_hands().iter())
+            .filter(|hand| hand_frames.get(&hand.side()) != Some(&hand.frame))
+            .collect();
+        if parts.is_none() && hands.is_empty() {
             continue; // Events or force frames alone draw nothing.
         }
         drawn += 1;
         if let Some(frame) = parts {
             parts_frame = Some(frame.header.frame);
-            for part in &frame.parts {
-                let name = geometry
-                    .parts
-                    .get(part.id as usize)
-                    .map_or("?", |m| &m.name);
-                let (frame, position, rotation) =
-                    (frame.header.frame, part.position, part.rotation);
-                println!(
-                    "part frame={frame} id={} name={name:?} position={position:?} rotation={rotation:?}",
-                    part.id
-                );
-            }
+            draw_parts(geometry, frame);
         }
-        if let Some(hand) = hand {
-            hand_frame = Some(hand.frame);
-            let (frame, side, grasp) = (
-                hand.frame,
-                hand_name(hand.hand),
-                grasp_name(hand.grasp_type),
-            );
-            println!(
-                "hand frame={frame} side={side} grasp={grasp} position={:?}",
-                hand.root.position
-            );
-            // Each segment's mesh goes where the server verified the segment: no kinematics here.
-            for (segment, pose) in HandSegment::ALL.iter().zip(hand.segment_poses()) {
-                let (position, rotation) = (pose.position, pose.rotation);
-                println!(
-                    "segment frame={frame} name={} position={position:?} rotation={rotation:?}",
-                    segment.name()
-                );
-            }
+        for hand in hands {
+            hand_frames.insert(hand.side(), hand.frame);
+            draw_hand(hand);
         }
     }
     Ok(())
+}
+
+/// Where a real renderer uploads the scene's meshes: a line per part's mesh.
+fn upload_meshes(geometry: &SceneGeometry) {
+    for (id, mesh) in geometry.parts.iter().enumerate() {
+        let (min, max) = mesh.bounds().unwrap_or_default();
+        let triangles = mesh.triangles.len();
+        println!(
+            "mesh part={id} name={:?} triangles={triangles} min={min:?} max={max:?}",
+            mesh.name
+        );
+    }
+}
+
+/// Each part's mesh goes to its pose: a line per part.
+fn draw_parts(geometry: &SceneGeometry, frame: &PartsFrame) {
+    for part in &frame.parts {
+        let name = (geometry.parts.get(part.id as usize)).map_or("?", |mesh| &mesh.name);
+        let (frame, position, rotation) = (frame.header.frame, part.position, part.rotation);
+        println!(
+            "part frame={frame} id={} name={name:?} position={position:?} rotation={rotation:?}",
+            part.id
+        );
+    }
+}
+
+/// Each segment's mesh of the hand goes where the server verified the segment, no kinematics
+/// here: a line for the hand, then one per segment.
+fn draw_hand(hand: &HandFrame) {
+    let (frame, side) = (hand.frame, hand.side().map_or("unknown", HandSide::name));
+    let grasp = hand.grasp().map_or("unknown", GraspType::name);
+    let position = hand.root.position;
+    println!("hand frame={frame} side={side} grasp={grasp} position={position:?}");
+    for (segment, pose) in HandSegment::ALL.iter().zip(hand.segment_poses()) {
+        let (name, position, rotation) = (segment.name(), pose.position, pose.rotation);
+        println!(
+            "segment frame={frame} side={side} name={name} position={position:?} rotation={rotation:?}"
+        );
+    }
 }

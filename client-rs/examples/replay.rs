@@ -17,7 +17,7 @@ use std::time::Duration;
 
 use clap::Parser;
 use vas_client::recording::Recording;
-use vas_client::{Client, EventKind, Frame, GraspType, HAND_PART_ID, wall_clock_ns};
+use vas_client::{Client, Frame, HAND_PART_ID, Roles, wall_clock_ns};
 
 /// How long to wait for the answer to a sample.
 const ANSWER_TIMEOUT: Duration = Duration::from_secs(10);
@@ -35,7 +35,11 @@ struct Args {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     let recording = Recording::load(&args.recording)?;
-    let mut client = Client::connect(args.prefix.as_deref())?;
+    // A lockstep replay reads the answer to each sample and the events it caused.
+    let mut client = Client::builder()
+        .prefix(args.prefix.as_deref())
+        .roles(Roles::INPUT | Roles::RENDER)
+        .connect()?;
     // Waits for the server (it may still be loading its scene): samples sent before it listens
     // would be lost.
     let scene = client.scene_info(Duration::from_secs(30))?;
@@ -69,9 +73,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             },
         )?;
         for event in events {
-            let kind = EventKind::try_from(event.kind)?;
+            let kind = event.kind().ok_or("an event of an unknown kind")?;
             *counts.entry(format!("{kind:?}")).or_insert(0) += 1;
-            let grasp = GraspType::try_from(event.grasp_type)?;
+            let grasp = event.grasp().ok_or("an event with an unknown grasp")?;
             println!(
                 "event frame={} kind={kind:?} part={:?} other={:?} grasp={grasp:?}",
                 event.frame,

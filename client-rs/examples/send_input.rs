@@ -15,7 +15,7 @@ use std::time::Duration;
 use clap::Parser;
 use vas_client::recording::InputSample;
 use vas_client::{
-    Client, FLEX_COUNT, GloveSample, GraspType, TrackerSample, WirePose, wall_clock_ns,
+    Client, FLEX_COUNT, GloveSample, GraspType, Roles, TrackerSample, WirePose, wall_clock_ns,
 };
 
 /// How long to wait for the answer to a sample.
@@ -37,7 +37,11 @@ struct Args {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
-    let mut client = Client::connect(args.prefix.as_deref())?;
+    // A device that reads the answers to its samples: it sends input and renders.
+    let mut client = Client::builder()
+        .prefix(args.prefix.as_deref())
+        .roles(Roles::INPUT | Roles::RENDER)
+        .connect()?;
     // Inputs have no history: a sample sent before the server listens is lost. Once the server
     // answers a control request (it may still be loading its scene), it listens.
     let scene = client.scene_info(Duration::from_secs(30))?;
@@ -80,8 +84,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let bend = BENDING_JOINTS.iter().map(|&j| answer.flex[j]).sum::<f32>()
             / BENDING_JOINTS.len() as f32;
-        let grasp =
-            GraspType::try_from(answer.grasp_type).map_or("unknown".into(), |g| format!("{g:?}"));
+        let grasp = answer.grasp().map_or("unknown", GraspType::name);
         println!(
             "answer input={stream} seq={seq} frame={} position={:?} bend={bend:.3} grasp={grasp} touching={:#x}",
             answer.frame, answer.root.position, answer.touching

@@ -1,7 +1,7 @@
 //! vas client library: what a renderer (or any tool) links to talk to a vas server.
 //!
 //! [`Client`] connects to a server's services on an iceoryx2 prefix, sends tracker, glove and
-//! hand-joints samples, keeps the latest parts and hand frames, waits for new frames on a WaitSet, and asks
+//! hand-joints samples, keeps the latest parts frame and each hand's latest frame, waits for new frames on a WaitSet, and asks
 //! the control service for scene information; its [`Roles`] say which of these it does, so that
 //! it holds only the ports it uses (a renderer takes [`Roles::RENDER`]). [`InputTap`] listens to the input streams (what
 //! `vas-client record` writes), and [`recording`] is the JSON Lines recording format.
@@ -54,7 +54,7 @@ pub use vas_protocol::{
     CLEARANCE_STALE, ClearanceFrame, ClearancePair, ControlStatus, EventKind, FLEX_COUNT,
     FLEX_JOINT_NAMES, FLEX_LIMITS_RAD, ForceFrame, GloveSample, GraspType, HAND_JOINT_COUNT,
     HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame, HandGeometry, HandJointsSample, HandSegment,
-    HandSide, InputStamp, InputStats, JointLocation, MeshData, PART_GRASPED, PART_SLIDING,
-    PART_TOUCHING, PartState, PartsFrameHeader, SceneGeometry, SimEvent, SlidingMetaphor,
-    TrackerSample, WirePose, wall_clock_ns,
+    HandSide, InputStamp, InputStats, JointLocation, MeshData, PART_GRASPED, PART_PUSHED,
+    PART_SLIDING, PART_TOUCHING, PartState, PartsFrameHeader, SceneGeometry, SimEvent,
+    SlidingMetaphor, TrackerSample, WirePose, wall_clock_ns,
 };

@@ -75,8 +75,8 @@ pub use input::{
 pub use number::Readable;
 pub use output::{
     EventKind, ForceFrame, GraspType, HAND_PART_ID, HAND_SEGMENT_COUNT, HandFrame, HandSegment,
-    HandSide, InputStamp, PART_GRASPED, PART_SLIDING, PART_TOUCHING, PartState, PartsFrameHeader,
-    SimEvent,
+    HandSide, InputStamp, PART_GRASPED, PART_PUSHED, PART_SLIDING, PART_TOUCHING, PartState,
+    PartsFrameHeader, SimEvent,
 };
 pub use pose::WirePose;
 pub use text::{WireText, WireTextError};

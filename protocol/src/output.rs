@@ -45,6 +45,8 @@ pub const PART_GRASPED: u32 = 1 << 0;
 pub const PART_TOUCHING: u32 = 1 << 1;
 /// [`PartState::flags`] bit: the part slides along a contact.
 pub const PART_SLIDING: u32 = 1 << 2;
+/// [`PartState::flags`] bit: a hand pushes the part without holding it.
+pub const PART_PUSHED: u32 = 1 << 3;
 
 /// The valid pose and state of one part.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize)]
@@ -53,7 +55,7 @@ pub const PART_SLIDING: u32 = 1 << 2;
 pub struct PartState {
     /// The part's id: its index in the scene (see the control service's part info).
     pub id: u32,
-    /// State bits: [`PART_GRASPED`], [`PART_TOUCHING`], [`PART_SLIDING`].
+    /// State bits: [`PART_GRASPED`], [`PART_TOUCHING`], [`PART_SLIDING`], [`PART_PUSHED`].
     pub flags: u32,
     /// Position in metres.
     pub position: [f64; 3],
@@ -68,6 +70,26 @@ impl PartState {
             position: self.position,
             rotation: self.rotation,
         }
+    }
+
+    /// Whether a hand holds the part ([`PART_GRASPED`]).
+    pub fn is_grasped(&self) -> bool {
+        self.flags & PART_GRASPED != 0
+    }
+
+    /// Whether the part touches another part or a hand ([`PART_TOUCHING`]).
+    pub fn is_touching(&self) -> bool {
+        self.flags & PART_TOUCHING != 0
+    }
+
+    /// Whether the part slides along a contact ([`PART_SLIDING`]).
+    pub fn is_sliding(&self) -> bool {
+        self.flags & PART_SLIDING != 0
+    }
+
+    /// Whether a hand pushes the part without holding it ([`PART_PUSHED`]).
+    pub fn is_pushed(&self) -> bool {
+        self.flags & PART_PUSHED != 0
     }
 }
 
@@ -171,6 +193,26 @@ impl HandFrame {
     /// The segments that have a pose.
     pub fn segment_poses(&self) -> &[WirePose] {
         &self.segments[..(self.segment_count as usize).min(HAND_SEGMENT_COUNT)]
+    }
+
+    /// The hand; `None` for a code this build does not know.
+    pub fn side(&self) -> Option<HandSide> {
+        HandSide::try_from(self.hand).ok()
+    }
+
+    /// The recognised grasp; `None` for a code this build does not know.
+    pub fn grasp(&self) -> Option<GraspType> {
+        GraspType::try_from(self.grasp_type).ok()
+    }
+
+    /// Whether the hand follows its input ([`HandFrame::tracked`]).
+    pub fn is_tracked(&self) -> bool {
+        self.tracked != 0
+    }
+
+    /// Whether `segment` touches a part ([`HandFrame::touching`]).
+    pub fn is_touching(&self, segment: HandSegment) -> bool {
+        self.touching & segment.bit() != 0
     }
 }
 
@@ -391,6 +433,27 @@ pub struct SimEvent {
     pub distance: f64,
 }
 
+impl SimEvent {
+    /// What the event reports; `None` for a code this build does not know.
+    pub fn kind(&self) -> Option<EventKind> {
+        EventKind::try_from(self.kind).ok()
+    }
+
+    /// The hand the event is about; `None` for a clearance event (its code 0 names no hand) and
+    /// for a code this build does not know.
+    pub fn side(&self) -> Option<HandSide> {
+        match self.kind() {
+            Some(EventKind::ClearanceBelow | EventKind::ClearanceRestored) => None,
+            _ => HandSide::try_from(self.hand).ok(),
+        }
+    }
+
+    /// A grasp event's grasp; `None` for a code this build does not know.
+    pub fn grasp(&self) -> Option<GraspType> {
+        GraspType::try_from(self.grasp_type).ok()
+    }
+}
+
 /// Force and torque a force-feedback device should render, on `vas/output/force`.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
 #[type_name("vas::output::ForceFrame::v2")]
@@ -412,4 +475,11 @@ pub struct ForceFrame {
     pub torque: [f64; 3],
     /// The hand whose held part pulls, a [`HandSide`] code.
     pub hand: u32,
+}
+
+impl ForceFrame {
+    /// The hand whose held part pulls; `None` for a code this build does not know.
+    pub fn side(&self) -> Option<HandSide> {
+        HandSide::try_from(self.hand).ok()
+    }
 }

@@ -87,6 +87,65 @@ fn parts_state_pose_matches_its_fields() {
 }
 
 #[test]
+fn typed_accessors_read_each_flag_and_code() {
+    let flags = [PART_GRASPED, PART_TOUCHING, PART_SLIDING, PART_PUSHED];
+    for (index, &flag) in flags.iter().enumerate() {
+        let state = PartState {
+            flags: flag,
+            ..PartState::default()
+        };
+        let read = [
+            state.is_grasped(),
+            state.is_touching(),
+            state.is_sliding(),
+            state.is_pushed(),
+        ];
+        let expected: Vec<bool> = (0..flags.len()).map(|i| i == index).collect();
+        assert_eq!(read.to_vec(), expected, "flag {flag:#x}");
+    }
+
+    let mut hand = HandFrame {
+        hand: HandSide::Left as u32,
+        grasp_type: GraspType::TipPinch as u32,
+        touching: HandSegment::IndexDistal.bit(),
+        tracked: 1,
+        ..HandFrame::default()
+    };
+    assert_eq!(hand.side(), Some(HandSide::Left));
+    assert_eq!(hand.grasp(), Some(GraspType::TipPinch));
+    assert!(hand.is_tracked());
+    assert!(hand.is_touching(HandSegment::IndexDistal));
+    assert!(!hand.is_touching(HandSegment::ThumbDistal));
+    (hand.hand, hand.grasp_type) = (2, 99);
+    assert_eq!((hand.side(), hand.grasp()), (None, None));
+
+    let mut event = SimEvent {
+        frame: 1,
+        tracker: InputStamp::default(),
+        glove: InputStamp::default(),
+        joints: InputStamp::default(),
+        timestamp_ns: 0,
+        kind: EventKind::Grasp as u32,
+        grasp_type: GraspType::Power as u32,
+        part: 0,
+        other: HAND_PART_ID,
+        hand: HandSide::Left as u32,
+        segment: 0,
+        point: [0.0; 3],
+        normal: [0.0; 3],
+        other_point: [0.0; 3],
+        distance: 0.0,
+    };
+    assert_eq!(event.kind(), Some(EventKind::Grasp));
+    assert_eq!(event.side(), Some(HandSide::Left));
+    assert_eq!(event.grasp(), Some(GraspType::Power));
+    (event.kind, event.hand) = (EventKind::ClearanceBelow as u32, 0);
+    assert_eq!(event.side(), None, "a clearance event is about no hand");
+    event.kind = 0;
+    assert_eq!(event.kind(), None);
+}
+
+#[test]
 fn non_finite_tracker_values_are_rejected_naming_the_field() {
     let nan_hand = tracker(
         pose([f64::NAN, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
@@ -197,7 +256,7 @@ fn enumeration_codes_round_trip_and_unknown_codes_are_errors() {
             code: 10
         })
     );
-    for code in 1..=7 {
+    for code in 1..=9 {
         assert_eq!(EventKind::try_from(code).map(|k| k as u32), Ok(code));
     }
     for code in 1..=5 {

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use vas_client::recording::InputSample;
 use vas_client::{Client, ClientError, InputTap, Wake};
-use vas_protocol::{FLEX_COUNT, GloveSample, TrackerSample, WirePose};
+use vas_protocol::{FLEX_COUNT, GloveSample, HandSide, TrackerSample, WirePose};
 
 /// A prefix no other test (or process) uses.
 fn prefix(test: &str) -> String {
@@ -75,7 +75,8 @@ fn waiting_without_frames_times_out() {
     );
     assert_eq!(client.poll().expect("poll"), Default::default());
     assert!(client.latest_parts().is_none());
-    assert!(client.latest_hand().is_none());
+    assert!(client.latest_hands().is_empty());
+    assert!(client.latest_hand_of(HandSide::Right).is_none());
     drop(client);
     // SAFETY: the client was the prefix's only node.
     unsafe { forget(&prefix) };

@@ -94,7 +94,9 @@ fn a_tracker_sample_is_answered_by_a_hand_frame_carrying_its_seq() {
     assert_eq!(frame.tracker.seq, 42);
     assert_eq!(frame.root.position, [0.1, -0.2, 1.3], "cart * hand");
     assert!(frame.timestamp_ns >= sample.timestamp_ns);
-    assert_eq!(client.latest_hand(), Some(&frame));
+    let side = frame.side().expect("a hand frame names its side");
+    assert_eq!(client.latest_hand_of(side), Some(&frame));
+    assert!(client.latest_hands().contains(&frame));
     let stats = client.input_stats(PATIENCE).expect("stats");
     assert_eq!(stats.tracker_accepted, 1);
 }

@@ -1,0 +1,333 @@
+//! The [`Client`]: the renderer's connection to a vas server.
+//!
+//! One concept a file: [`Roles`] (which ports a client holds), the [`ClientBuilder`] that
+//! connects, the role's ports, the frames received and the newest state kept of them, and the
+//! control requests; this file holds the client and its frame loop.
+
+mod builder;
+mod control;
+mod frames;
+mod latest;
+mod ports;
+mod roles;
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use iceoryx2::port::client::Client as ControlPort;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+use vas_protocol::{
+    ClearanceFrame, ControlRequest, ControlResponse, GloveSample, HandFrame, HandJointsSample,
+    HandSide, SceneGeometry, TrackerSample,
+};
+
+pub use builder::ClientBuilder;
+pub(crate) use builder::create_node;
+pub use control::{HandInfo, PartInfo, SceneInfo};
+pub use frames::{Frame, PartsFrame, Received};
+pub use roles::Roles;
+
+use crate::ClientError;
+use crate::recording::InputSample;
+use crate::wait::{Wake, wait_until_ready};
+use latest::Latest;
+use ports::{Inputs, Outputs};
+
+/// A connection to a vas server: sends input, receives frames, asks the control service.
+///
+/// It holds the ports of its [`Roles`] only: a client opened without the render role cannot
+/// [`Client::wait`] or [`Client::receive`], one without the input role cannot send samples
+/// (both are [`ClientError::MissingRole`]). All ports belong to one iceoryx2 node on the chosen
+/// prefix. The client is not `Send` (iceoryx2 ports are bound to their thread): create it on
+/// the thread that uses it.
+pub struct Client {
+    node: Node<ipc::Service>,
+    control: ControlPort<ipc::Service, ControlRequest, (), ControlResponse, ()>,
+    control_notifier: Notifier<ipc::Service>,
+    control_listener: Listener<ipc::Service>,
+    /// The render role's ports, when it was taken.
+    outputs: Option<Outputs>,
+    /// The input role's ports, when it was taken.
+    inputs: Option<Inputs>,
+    waitset: WaitSet<ipc::Service>,
+    /// The newest state received, for the `latest_*` accessors and [`Client::geometry`].
+    latest: Latest,
+}
+
+impl Client {
+    /// Connects on `prefix` (the server's `--prefix`, or the configured default for `None`)
+    /// with every role ([`Roles::ALL`]), leaving signal handling to the application.
+    pub fn connect(prefix: Option<&str>) -> Result<Self, ClientError> {
+        ClientBuilder::default().prefix(prefix).connect()
+    }
+
+    /// Options for a connection: its prefix, its roles, signal handling.
+    pub fn builder() -> ClientBuilder {
+        ClientBuilder::default()
+    }
+
+    /// The roles this client holds the ports of.
+    pub fn roles(&self) -> Roles {
+        let mut roles = Roles::CONTROL;
+        if self.outputs.is_some() {
+            roles |= Roles::RENDER;
+        }
+        if self.inputs.is_some() {
+            roles |= Roles::INPUT;
+        }
+        roles
+    }
+
+    /// Takes `roles` as well, creating the ports of those the client does not hold yet: e.g. a
+    /// viewer takes the input role once a headset sends hand joints. On an error (such as
+    /// [`ClientError::Full`]) the client keeps the roles it had.
+    pub fn take_roles(&mut self, roles: Roles) -> Result<(), ClientError> {
+        if roles.contains(Roles::RENDER) && self.outputs.is_none() {
+            self.outputs = Some(Outputs::open(&self.node)?);
+        }
+        if roles.contains(Roles::INPUT) && self.inputs.is_none() {
+            self.inputs = Some(Inputs::open(&self.node)?);
+        }
+        Ok(())
+    }
+
+    /// The input role's ports, or the error saying this client did not take it.
+    fn inputs(&self, action: &'static str) -> Result<&Inputs, ClientError> {
+        self.inputs.as_ref().ok_or(ClientError::MissingRole {
+            role: Roles::INPUT,
+            action,
+        })
+    }
+
+    /// The render role's ports, or the error saying this client did not take it.
+    fn outputs(&self, action: &'static str) -> Result<&Outputs, ClientError> {
+        self.outputs.as_ref().ok_or(ClientError::MissingRole {
+            role: Roles::RENDER,
+            action,
+        })
+    }
+
+    /// Sends a tracker sample and wakes the server.
+    pub fn send_tracker(&self, sample: &TrackerSample) -> Result<(), ClientError> {
+        self.inputs("send a tracker sample")?.tracker.send(sample)
+    }
+
+    /// Returns once the server has taken in every sample this client sent before the call; call
+    /// it before dropping a client whose last samples matter.
+    ///
+    /// A sent sample stays in this client's shared memory until the server takes it, and goes
+    /// with the client: a program that sends and exits at once loses the samples the server has
+    /// not taken yet. The server takes in input before it answers a control request, so one
+    /// round trip is enough.
+    pub fn flush_inputs(&self, timeout: Duration) -> Result<(), ClientError> {
+        self.input_stats(timeout).map(drop)
+    }
+
+    /// Sends a glove sample and wakes the server.
+    pub fn send_glove(&self, sample: &GloveSample) -> Result<(), ClientError> {
+        self.inputs("send a glove sample")?.glove.send(sample)
+    }
+
+    /// Sends a hand-joints sample (one hand's 26 OpenXR joints) and wakes the server.
+    pub fn send_hand_joints(&self, sample: &HandJointsSample) -> Result<(), ClientError> {
+        (self.inputs("send a hand-joints sample")?.hand_joints).send(sample)
+    }
+
+    /// Sends a sample of any input stream and wakes the server.
+    pub fn send_input(&self, input: &InputSample) -> Result<(), ClientError> {
+        match input {
+            InputSample::Tracker(sample) => self.send_tracker(sample),
+            InputSample::Glove(sample) => self.send_glove(sample),
+            InputSample::HandJoints(sample) => self.send_hand_joints(sample),
+        }
+    }
+
+    /// Blocks until an output frame (geometry, parts, hand, event, force or clearance) is ready to be
+    /// received, the timeout passes, or (with signal handling on) a termination signal arrives.
+    /// Frames stay queued for [`Client::poll`] or [`Client::receive`]. Needs the render role.
+    pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
+        let outputs = self.outputs("wait for frames")?;
+        let (parts, hand, events, force) = (
+            &outputs.parts,
+            &outputs.hand,
+            &outputs.events,
+            &outputs.force,
+        );
+        let (geometry, clearance) = (&outputs.geometry, &outputs.clearance);
+        wait_until_ready(
+            &self.waitset,
+            &[
+                &outputs.geometry_listener,
+                &outputs.parts_listener,
+                &outputs.hand_listener,
+                &outputs.events_listener,
+                &outputs.force_listener,
+                &outputs.clearance_listener,
+            ],
+            timeout,
+            || {
+                let has = |result: Result<bool, _>| {
+                    result.map_err(|error| ClientError::ipc("check a subscriber", error))
+                };
+                Ok(has(geometry.has_samples())?
+                    || has(parts.has_samples())?
+                    || has(hand.has_samples())?
+                    || has(events.has_samples())?
+                    || has(force.has_samples())?
+                    || has(clearance.has_samples())?)
+            },
+        )
+    }
+
+    /// Receives every queued frame, keeps the newest of each kind for [`Client::geometry`],
+    /// [`Client::latest_parts`] and [`Client::latest_hands`], and returns them all in arrival
+    /// order per kind: geometry, parts frames, events, force frames, clearance frames, then hand frames (the
+    /// server publishes a frame's hand last, so the parts and events of a hand frame's own frame
+    /// come with it or before it, and a new scene's geometry before its frames).
+    pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
+        let outputs = self.outputs("receive frames")?;
+        let mut frames = Vec::new();
+        while let Some(sample) = outputs
+            .geometry
+            .receive()
+            .map_err(|error| ClientError::ipc("receive the geometry", error))?
+        {
+            let geometry = SceneGeometry::decode(sample.user_header(), sample.payload())?;
+            frames.push(Frame::Geometry(Arc::new(geometry)));
+        }
+        while let Some(sample) = outputs
+            .parts
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a parts frame", error))?
+        {
+            frames.push(Frame::Parts(PartsFrame {
+                header: *sample.user_header(),
+                parts: sample.payload().to_vec(),
+            }));
+        }
+        while let Some(sample) = outputs
+            .events
+            .receive()
+            .map_err(|error| ClientError::ipc("receive an event", error))?
+        {
+            frames.push(Frame::Event(*sample.payload()));
+        }
+        while let Some(sample) = outputs
+            .force
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a force frame", error))?
+        {
+            frames.push(Frame::Force(*sample.payload()));
+        }
+        while let Some(sample) = outputs
+            .clearance
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a clearance frame", error))?
+        {
+            frames.push(Frame::Clearance(Box::new(*sample.payload())));
+        }
+        while let Some(sample) = outputs
+            .hand
+            .receive()
+            .map_err(|error| ClientError::ipc("receive a hand frame", error))?
+        {
+            frames.push(Frame::Hand(*sample.payload()));
+        }
+        for frame in &frames {
+            self.latest.keep(frame);
+        }
+        Ok(frames)
+    }
+
+    /// Waits until a hand frame that `answers` accepts arrives and returns it; `None` on timeout
+    /// or a handled termination signal. Every other frame received meanwhile goes to `others`,
+    /// in [`Client::receive`]'s order, so that the events a sample caused reach the caller before
+    /// the answer to it (pass `drop` to ignore them). With [`InputSample::is_answered_by`] this
+    /// waits for the answer to one input sample.
+    pub fn wait_for_hand_frame(
+        &mut self,
+        timeout: Duration,
+        answers: impl Fn(&HandFrame) -> bool,
+        mut others: impl FnMut(Frame),
+    ) -> Result<Option<HandFrame>, ClientError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            if self.wait(remaining)? != Wake::Ready {
+                return Ok(None);
+            }
+            let mut answer = None;
+            for frame in self.receive()? {
+                match frame {
+                    Frame::Hand(hand) if answer.is_none() && answers(&hand) => answer = Some(hand),
+                    other => others(other),
+                }
+            }
+            if answer.is_some() {
+                return Ok(answer);
+            }
+        }
+    }
+
+    /// Receives every queued frame, keeping only the newest of each kind.
+    pub fn poll(&mut self) -> Result<Received, ClientError> {
+        let mut received = Received::default();
+        for frame in self.receive()? {
+            match frame {
+                Frame::Parts(_) => received.parts += 1,
+                Frame::Hand(_) => received.hand += 1,
+                Frame::Event(_) => received.events += 1,
+                Frame::Force(_) => received.force += 1,
+                Frame::Clearance(_) => received.clearance += 1,
+                Frame::Geometry(_) => received.geometry += 1,
+            }
+        }
+        Ok(received)
+    }
+
+    /// The newest parts frame received so far (by [`Client::poll`] or [`Client::receive`]).
+    pub fn latest_parts(&self) -> Option<&PartsFrame> {
+        self.latest.parts.as_ref()
+    }
+
+    /// The newest frame of each hand received so far (by [`Client::poll`] or
+    /// [`Client::receive`]), right then left (by [`HandSide`] code): one per hand of the
+    /// current scene. The server publishes every hand's frame each frame, and a client that
+    /// connects gets them all at once; a load or reset forgets the hands the new scene does not
+    /// have.
+    pub fn latest_hands(&self) -> &[HandFrame] {
+        &self.latest.hands
+    }
+
+    /// The newest frame of the hand on `side` (see [`Client::latest_hands`]); `None` before one
+    /// arrived or when the current scene has no such hand.
+    pub fn latest_hand_of(&self, side: HandSide) -> Option<&HandFrame> {
+        self.latest.hand_of(side)
+    }
+
+    /// The newest clearance frame received so far (by [`Client::poll`] or [`Client::receive`]):
+    /// the part pairs closer than the scene's threshold, on the parts frame it names. The server
+    /// publishes one per frame it measures, shortly after that frame's parts, and none while its
+    /// scene has no `[params.clearance]` threshold.
+    pub fn latest_clearance(&self) -> Option<&ClearanceFrame> {
+        self.latest.clearance.as_deref()
+    }
+
+    /// The render meshes of the newest scene generation received so far (by [`Client::poll`]
+    /// or [`Client::receive`]): every part's mesh in its own frame with its scale applied, and
+    /// every hand segment's mesh in the segment's frame. A client that connects gets the
+    /// current generation at once.
+    pub fn geometry(&self) -> Option<&Arc<SceneGeometry>> {
+        self.latest.geometry.as_ref()
+    }
+
+    /// Sleeps for `duration`; [`Wake::Terminated`] if a handled termination signal arrived.
+    pub fn sleep(&self, duration: Duration) -> Wake {
+        match self.node.wait(duration) {
+            Ok(()) => Wake::Timeout,
+            Err(_) => Wake::Terminated,
+        }
+    }
+}
