@@ -11,7 +11,6 @@
 //! cargo run --release -p vas-client --example renderer -- --prefix demo --frames 20
 //! ```
 
-use std::collections::HashMap;
 use std::time::Duration;
 
 use clap::Parser;
@@ -40,9 +39,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .roles(Roles::RENDER)
         .connect()?;
     // What was drawn last: a renderer redraws when the newest state differs, whichever poll
-    // brought it (the meshes may come after the first frames, or before); each hand has its own.
-    let (mut drawn, mut generation, mut parts_frame) = (0, None, None);
-    let mut hand_frames = HashMap::new();
+    // brought it (the meshes may come after the first frames, or before).
+    let (mut drawn, mut generation, mut parts_frame, mut hand_frame) = (0, None, None, None);
     while args.frames.is_none_or(|limit| drawn < limit) {
         match client.wait(Duration::from_secs(1))? {
             Wake::Ready => client.poll()?,
@@ -56,10 +54,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             upload_meshes(geometry); // Once per scene.
         }
         let parts = (client.latest_parts()).filter(|f| parts_frame != Some(f.header.frame));
-        let hands: Vec<&HandFrame> = (client.latest_hands().iter())
-            .filter(|hand| hand_frames.get(&hand.side()) != Some(&hand.frame))
-            .collect();
-        if parts.is_none() && hands.is_empty() {
+        // Every hand, right then left, published each frame under one number: a frame's hands
+        // are drawn together (a poll may end between two of them).
+        let hands = client.latest_hands();
+        let new_hands = (hands.first().map(|hand| hand.frame)).filter(|&frame| {
+            hand_frame != Some(frame) && hands.iter().all(|hand| hand.frame == frame)
+        });
+        if parts.is_none() && new_hands.is_none() {
             continue; // Events or force frames alone draw nothing.
         }
         drawn += 1;
@@ -67,9 +68,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             parts_frame = Some(frame.header.frame);
             draw_parts(geometry, frame);
         }
-        for hand in hands {
-            hand_frames.insert(hand.side(), hand.frame);
-            draw_hand(hand);
+        if new_hands.is_some() {
+            hand_frame = new_hands;
+            hands.iter().for_each(draw_hand);
         }
     }
     Ok(())

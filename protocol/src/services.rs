@@ -94,8 +94,13 @@ pub mod output {
     pub const MAX_SUBSCRIBERS: usize = super::clients::READERS;
     /// Frames buffered per subscriber; readers want the latest frame, older ones are dropped.
     pub const SUBSCRIBER_BUFFER: usize = 16;
-    /// A reader that (re)connects gets the latest frame at once (parts, hand, force, clearance).
+    /// A reader that (re)connects gets the latest frame at once (parts, force, clearance).
     pub const HISTORY: usize = 1;
+    /// The hand service keeps one frame per hand a scene may have: the server publishes every
+    /// hand's frame each frame, so the last [`crate::MAX_HANDS`] samples are the latest frame of
+    /// each hand, and a reader that (re)connects gets every hand at once, not only the hand
+    /// published last.
+    pub const HAND_HISTORY: usize = crate::MAX_HANDS;
     /// Events are not state: a late reader gets no history of them.
     pub const EVENTS_HISTORY: usize = 0;
     /// Nodes that may take part in the service: the server's, every reader's, and spares. A
@@ -328,9 +333,10 @@ pub fn open_geometry<S: Service>(node: &Node<S>) -> Result<GeometryService<S>, S
         .map_err(|error| open_failed(GEOMETRY, error))
 }
 
-/// Opens (or creates) the hand output service.
+/// Opens (or creates) the hand output service: history [`output::HAND_HISTORY`], so that a
+/// reader that connects gets every hand's latest frame at once.
 pub fn open_hand<S: Service>(node: &Node<S>) -> Result<HandService<S>, ServiceOpenError> {
-    open_output(node, HAND, output::HISTORY)
+    open_output(node, HAND, output::HAND_HISTORY)
 }
 
 /// Opens (or creates) the events output service.

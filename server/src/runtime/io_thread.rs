@@ -581,7 +581,9 @@ impl Io {
                     .collect(),
             });
         // The hand frames go last: a client that waits for the answer to its sample has the
-        // parts and events of the same frame by then.
+        // parts and events of the same frame by then. Every hand's frame goes out every frame,
+        // moved or not, so that the hand service's last `services::output::HAND_HISTORY`
+        // samples are one per hand and a reader that connects late gets every hand at once.
         let hands = (frame.hands.iter().enumerate()).map(|(index, hand)| {
             let segments = &hand.segments;
             HandFrame {

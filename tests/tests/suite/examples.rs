@@ -2,12 +2,14 @@
 //! each client example against a real `vas-server` on its own prefix, the server example on its
 //! own. Each must end successfully within [`PATIENCE`] and print what it is there to show.
 
+use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
 use std::process::Stdio;
+use std::sync::mpsc;
 use std::time::Instant;
 
 use vas_client::recording::Recording;
-use vas_client::{Frame, HandSegment, Wake};
+use vas_client::{Client, Frame, HandFrame, HandSegment, Wake, wall_clock_ns};
 use vas_testkit::{PATIENCE, Server, Spawned, configs_dir, example, fixtures_dir, tracker};
 
 /// Runs the example `name` with `args`, and returns its stdout lines once it exited
@@ -302,4 +304,214 @@ fn the_readme_shows_the_renderer_example_as_it_is() {
         shown.lines().count() > 20 && example.contains(shown),
         "README.md's renderer block is not an excerpt of the example:\n{shown}"
     );
+}
+
+/// A renderer example running beside the test, its stdout read as it prints (a pipe left
+/// unread would stall it).
+struct RunningRenderer {
+    process: Spawned,
+    printed: mpsc::Receiver<String>,
+    lines: Vec<String>,
+}
+
+impl RunningRenderer {
+    /// Starts the renderer on `prefix`, drawing until it is stopped.
+    fn start(prefix: &str) -> Self {
+        let mut process =
+            Spawned::start(&example("renderer"), &["--prefix", prefix], Stdio::piped());
+        let stdout = process.take_stdout().expect("piped");
+        let (sender, printed) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if sender.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Self {
+            process,
+            printed,
+            lines: Vec::new(),
+        }
+    }
+
+    /// Waits until what it printed so far satisfies `done`.
+    fn wait_for(&mut self, what: &str, done: impl Fn(&[String]) -> bool) {
+        let deadline = Instant::now() + PATIENCE;
+        while !done(&self.lines) {
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            match self.printed.recv_timeout(remaining) {
+                Ok(line) => self.lines.push(line),
+                Err(_) => panic!("the renderer printed no {what}: {:#?}", self.lines),
+            }
+        }
+    }
+
+    /// Stops it as Ctrl-C does (it leaves cleanly) and returns everything it printed.
+    fn stop(mut self) -> Vec<String> {
+        self.process.signal(libc::SIGINT);
+        let status = (self.process.wait_exit(PATIENCE)).expect("the renderer ends on SIGINT");
+        assert!(
+            status.success(),
+            "the renderer failed: {}",
+            self.process.log()
+        );
+        self.lines.extend(self.printed.iter());
+        self.lines
+    }
+}
+
+/// One hand as the renderer drew it: its `hand` line and the `segment` lines after it.
+struct DrawnHand<'a> {
+    line: &'a str,
+    segments: Vec<&'a str>,
+}
+
+impl DrawnHand<'_> {
+    fn frame(&self) -> u64 {
+        field(self.line, "frame").parse().expect("a frame number")
+    }
+
+    fn side(&self) -> &str {
+        field(self.line, "side")
+    }
+
+    /// Checks the drawing against the hand frame the server published: side, grasp, root, and
+    /// each segment's name and pose, to the last digit printed.
+    fn assert_draws(&self, published: &HandFrame) {
+        let side = published.side().expect("a known side");
+        assert_eq!(self.side(), side.name(), "{}", self.line);
+        let grasp = published.grasp().expect("a known grasp");
+        assert_eq!(field(self.line, "grasp"), grasp.name(), "{}", self.line);
+        let root = &published.root.position;
+        assert!(close(field(self.line, "position"), root), "{}", self.line);
+        let poses = published.segment_poses();
+        assert_eq!(self.segments.len(), poses.len(), "{}", self.line);
+        for ((line, segment), pose) in self.segments.iter().zip(HandSegment::ALL).zip(poses) {
+            let frame = published.frame.to_string();
+            assert_eq!(
+                (field(line, "frame"), field(line, "side")),
+                (&*frame, side.name())
+            );
+            assert_eq!(field(line, "name"), segment.name(), "{line}");
+            assert!(close(field(line, "position"), &pose.position), "{line}");
+            assert!(close(field(line, "rotation"), &pose.rotation), "{line}");
+        }
+    }
+}
+
+/// The hands the renderer drew, in the order it drew them.
+fn drawn_hands(lines: &[String]) -> Vec<DrawnHand<'_>> {
+    let mut hands: Vec<DrawnHand> = Vec::new();
+    for line in lines {
+        if line.starts_with("hand ") {
+            hands.push(DrawnHand {
+                line,
+                segments: Vec::new(),
+            });
+        } else if line.starts_with("segment ") {
+            let hand = hands
+                .last_mut()
+                .expect("a segment line follows a hand line");
+            hand.segments.push(line);
+        }
+    }
+    hands
+}
+
+/// The hand frames each drawn frame has (by frame number), in the order they were drawn.
+fn drawn_frames<'a>(hands: &'a [DrawnHand<'a>]) -> Vec<(u64, Vec<&'a DrawnHand<'a>>)> {
+    let mut frames: Vec<(u64, Vec<&DrawnHand>)> = Vec::new();
+    for hand in hands {
+        match frames.last_mut() {
+            Some((frame, drawn)) if *frame == hand.frame() => drawn.push(hand),
+            _ => frames.push((hand.frame(), vec![hand])),
+        }
+    }
+    frames
+}
+
+/// Replays `recording` in lockstep, each sample once every hand's frame of its answer came, and
+/// returns each frame's hand frames as `Client::latest_hands` has them, by frame number.
+fn replay_every_hand(client: &mut Client, recording: &Recording) -> BTreeMap<u64, Vec<HandFrame>> {
+    let start_ns = wall_clock_ns().saturating_sub(recording.duration_ns());
+    let mut published = BTreeMap::new();
+    for (index, recorded) in recording.samples.iter().enumerate() {
+        let input = recorded.stamped(start_ns);
+        client.send_input(&input).expect("send");
+        let answer = client
+            .wait_for_hand_frame(PATIENCE, |hand| input.is_answered_by(hand), drop)
+            .expect("wait")
+            .unwrap_or_else(|| panic!("sample {index}: no answer"));
+        // The other hand's frame of the same frame comes just before or just after the answer.
+        while client.latest_hands().len() < 2
+            || (client.latest_hands().iter()).any(|hand| hand.frame != answer.frame)
+        {
+            assert_eq!(
+                client.wait(PATIENCE).expect("wait"),
+                Wake::Ready,
+                "sample {index}"
+            );
+            client.poll().expect("poll");
+        }
+        published.insert(answer.frame, client.latest_hands().to_vec());
+    }
+    published
+}
+
+/// Both hands of a two-hand scene, as renderer.rs draws them: a renderer connected through the
+/// hand-over draws the right and the left hand of every frame it draws, where the server put
+/// them; one started after it gets both hands at once, its first hands drawn being both hands
+/// of the last frame.
+#[test]
+fn the_renderer_example_poses_both_hands_through_a_hand_over() {
+    let scene = configs_dir().join("two_hand_handover.toml");
+    let recording = Recording::load(&fixtures_dir().join("two_hand_handover.jsonl"))
+        .expect("the fixture loads");
+    let mut server = Server::start_with(
+        "ex_renderer_hands",
+        &["--lockstep", "--scene", scene.to_str().expect("utf-8")],
+    );
+    let mut client = server.connect();
+    let mut early = RunningRenderer::start(server.prefix());
+    early.wait_for("meshes", |lines| {
+        lines.iter().any(|line| line.starts_with("mesh "))
+    });
+    let published = replay_every_hand(&mut client, &recording);
+    let lines = early.stop();
+
+    let hands = drawn_hands(&lines);
+    let frames = drawn_frames(&hands);
+    assert!(!frames.is_empty(), "no hand drawn: {lines:#?}");
+    assert!(
+        frames.windows(2).all(|pair| pair[0].0 < pair[1].0),
+        "{lines:#?}"
+    );
+    for (frame, drawn) in &frames {
+        let sides: Vec<&str> = drawn.iter().map(|hand| hand.side()).collect();
+        assert_eq!(sides, ["right", "left"], "frame {frame}");
+        let published = (published.get(frame)).unwrap_or_else(|| panic!("frame {frame} drawn"));
+        for (hand, published) in drawn.iter().zip(published) {
+            hand.assert_draws(published);
+        }
+    }
+
+    let (&last, last_hands) = published.last_key_value().expect("frames published");
+    let mut late = RunningRenderer::start(server.prefix());
+    late.wait_for("two hands", |lines| {
+        lines
+            .iter()
+            .filter(|line| line.starts_with("hand "))
+            .count()
+            >= 2
+    });
+    let lines = late.stop();
+    let hands = drawn_hands(&lines);
+    let (frame, first) = drawn_frames(&hands).swap_remove(0);
+    assert_eq!(frame, last, "{lines:#?}");
+    let sides: Vec<&str> = first.iter().map(|hand| hand.side()).collect();
+    assert_eq!(sides, ["right", "left"], "{lines:#?}");
+    for (hand, published) in first.iter().zip(last_hands) {
+        hand.assert_draws(published);
+    }
 }
