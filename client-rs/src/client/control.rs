@@ -36,7 +36,7 @@ pub struct SceneInfo {
     /// How many scenes the server may load by name ([`Client::scene_names`]).
     pub scenes_offered: u32,
     /// The scene's generation: one more after every load or reset, the same number as its
-    /// geometry's ([`SceneGeometry::generation`]).
+    /// geometry's ([`SceneGeometry::generation`](vas_protocol::SceneGeometry::generation)).
     pub generation: u64,
 }
 

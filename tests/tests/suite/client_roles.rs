@@ -1,46 +1,59 @@
 //! Clients take only the ports of their roles, and the control service keeps a reserve for
 //! operators (issue 50, point 8): with 16 `vas-client watch` processes and an input device
-//! connected, an operator's `vas-client reset` still connects. Before, every client held an
-//! input publisher and a control client, so that 15 watchers and a viewer refused every other
-//! client "too many clients".
+//! connected, an operator's `vas-client reset` still connects, and so with 16 renderer examples
+//! (issue 52). Before, every client held an input publisher and a control client, so that 15
+//! watchers and a viewer refused every other client "too many clients".
 
 use std::io::{BufRead, BufReader, Read};
 use std::process::Stdio;
 
 use vas_client::{Client, ClientError, Roles};
 use vas_protocol::services::clients::{OPERATORS, READERS, SENDERS};
-use vas_testkit::{PATIENCE, Server, Spawned, tracker};
+use vas_testkit::{PATIENCE, Server, Spawned, example, tracker};
 
 /// How many renderers the services take ([`vas_protocol::services::output::MAX_SUBSCRIBERS`]
 /// leaves room for input devices that read their answers beside them).
 const RENDERERS: usize = 16;
 
-/// Starts `vas-client watch` and returns it once it has printed its first frame (so that it
-/// holds its ports); its output is read on until it ends, so that it never blocks on a full
-/// pipe.
-fn watcher(server: &Server) -> Spawned {
-    let mut watch = server.client_tool(&["watch"], Stdio::piped());
-    let mut stdout = BufReader::new(watch.take_stdout().expect("piped"));
-    let mut first = String::new();
-    stdout.read_line(&mut first).expect("read the watcher");
+/// Returns `process` once it has printed a first line starting with `first` (so that it holds
+/// its ports); its output is read on until it ends, so that it never blocks on a full pipe.
+fn holding_its_ports(mut process: Spawned, first: &str) -> Spawned {
+    let mut stdout = BufReader::new(process.take_stdout().expect("piped"));
+    let mut line = String::new();
+    stdout.read_line(&mut line).expect("read its output");
     assert!(
-        first.starts_with('{'),
-        "a watcher prints no frame: {first:?}\n{}",
-        watch.log()
+        line.starts_with(first),
+        "it prints no {first:?} line: {line:?}\n{}",
+        process.log()
     );
     std::thread::spawn(move || std::io::copy(&mut stdout.take(u64::MAX), &mut std::io::sink()));
-    watch
+    process
 }
 
-#[test]
-fn sixteen_watchers_and_an_input_device_leave_room_for_an_operators_reset() {
-    let mut server = Server::start("operator_reserve");
-    drop(server.connect());
-    let mut watchers: Vec<Spawned> = (0..RENDERERS).map(|_| watcher(&server)).collect();
+/// `vas-client watch`, once it has printed its first frame.
+fn watcher(server: &Server) -> Spawned {
+    holding_its_ports(server.client_tool(&["watch"], Stdio::piped()), "{")
+}
 
-    // An input device that reads the answers to its samples: the default roles, as a headset's
-    // bridge or a lockstep replay connects.
-    let mut device = Client::connect(Some(server.prefix())).expect("the input device connects");
+/// The renderer example, once it has drawn the scene's meshes.
+fn renderer(server: &Server) -> Spawned {
+    let args = ["--prefix", server.prefix()];
+    holding_its_ports(
+        Spawned::start(&example("renderer"), &args, Stdio::piped()),
+        "mesh ",
+    )
+}
+
+/// With `renderers` running, an input device connects and its sample is answered, and an
+/// operator's `vas-client reset` connects and succeeds; the renderers run on.
+fn an_input_device_and_an_operator_find_room_beside(server: &Server, mut renderers: Vec<Spawned>) {
+    // An input device that reads the answers to its samples, as a headset's bridge or a
+    // lockstep replay connects.
+    let mut device = Client::builder()
+        .prefix(Some(server.prefix()))
+        .roles(Roles::INPUT | Roles::RENDER)
+        .connect()
+        .expect("the input device connects");
     let sample = tracker(1, [0.1, 0.0, 0.2]);
     device.send_tracker(&sample).expect("send");
     let answer = device
@@ -62,11 +75,33 @@ fn sixteen_watchers_and_an_input_device_leave_room_for_an_operators_reset() {
     assert!(status.success(), "the operator's reset: {}", reset.log());
     assert!(printed.contains("\"scene\""), "{printed}");
 
-    for watch in &mut watchers {
-        assert!(watch.is_running(), "a watcher ended: {}", watch.log());
+    for renderer in &mut renderers {
+        assert!(
+            renderer.is_running(),
+            "a renderer ended: {}",
+            renderer.log()
+        );
     }
     drop(device);
-    drop(watchers);
+    drop(renderers);
+}
+
+#[test]
+fn sixteen_watchers_and_an_input_device_leave_room_for_an_operators_reset() {
+    let mut server = Server::start("operator_reserve");
+    drop(server.connect());
+    let watchers = (0..RENDERERS).map(|_| watcher(&server)).collect();
+    an_input_device_and_an_operator_find_room_beside(&server, watchers);
+}
+
+/// The renderer example takes the render role only: were it to take the input ports too, 16 of
+/// them would fill the input streams and refuse the input device.
+#[test]
+fn sixteen_renderer_examples_and_an_input_device_leave_room_for_an_operators_reset() {
+    let mut server = Server::start("renderer_reserve");
+    drop(server.connect());
+    let renderers = (0..RENDERERS).map(|_| renderer(&server)).collect();
+    an_input_device_and_an_operator_find_room_beside(&server, renderers);
 }
 
 /// A client of `roles` on the server's prefix.
