@@ -11,6 +11,12 @@
 //! samples. Uncalibrated, the retargeting still turns every joint as measured, and its
 //! refinement brings the model's fingertips as near the tracked tips as the model's segments
 //! allow.
+//!
+//! The retargeted root and flex values, not the 26 joints, go through the hand's One Euro
+//! filter ([`StreamFilter`]): they are what drives the hand, so smoothing them is what holds a
+//! still hand still, with 23 streams instead of 52; the retargeting's checks see the joints as
+//! tracked; and a weighted mean of flex values within the joint limits stays within them, where
+//! smoothed joints could make a hand the retargeting no longer fits as well.
 
 use nalgebra::{Isometry3, Point3, Quaternion};
 use vas_protocol::{
@@ -22,6 +28,8 @@ use crate::grasping::HandModel;
 use crate::grasping::retarget::{
     HandJoints, JointFlags, JointPose, JointsError, RetargetError, Retargeter,
 };
+use crate::scene::TrackingParams;
+use crate::simulation::filter::{NonFiniteSample, Passage, Sample, StreamFilter, TimeFault};
 
 /// Why a hand-joints sample was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -40,6 +48,9 @@ pub enum JointsRejection {
     /// clock).
     #[error(transparent)]
     Sample(InputRejection),
+    /// The retargeted hand is not finite (the filter refuses it).
+    #[error(transparent)]
+    Filter(NonFiniteSample),
 }
 
 /// What an accepted hand-joints sample says.
@@ -69,20 +80,23 @@ pub struct JointsTarget {
     pub tracked_ns: Option<u64>,
 }
 
-/// A hand that hand-joints samples can drive: its retargeter and latest target.
+/// A hand that hand-joints samples can drive: its retargeter, filter and latest target.
 #[derive(Debug, Clone)]
 pub struct JointsHand {
     retargeter: Retargeter,
+    filter: StreamFilter<FLEX_COUNT>,
     target: Option<JointsTarget>,
 }
 
 impl JointsHand {
-    /// Joint samples onto `model`; `None`, with the reason logged, for a model the retargeting
-    /// cannot split into its degrees of freedom (it still takes tracker and glove input).
-    pub fn new(model: &HandModel) -> Option<JointsHand> {
+    /// Joint samples onto `model`, smoothed as `tracking` says; `None`, with the reason logged,
+    /// for a model the retargeting cannot split into its degrees of freedom (it still takes
+    /// tracker and glove input).
+    pub fn new(model: &HandModel, tracking: &TrackingParams) -> Option<JointsHand> {
         match Retargeter::new(model.clone()) {
             Ok(retargeter) => Some(JointsHand {
                 retargeter,
+                filter: StreamFilter::new(tracking),
                 target: None,
             }),
             Err(error) => {
@@ -106,32 +120,51 @@ impl JointsHand {
         self.target.as_ref()
     }
 
-    /// Forgets the target (a reset).
+    /// Forgets the target and the filter's samples (a reset).
     pub fn forget_target(&mut self) {
         self.target = None;
+        self.filter.restart();
     }
 
     /// Retargets a sample of this hand (its side already matched), taken in at `at_ns` on the
-    /// inputs' tracking clock, and makes it the target.
+    /// inputs' tracking clock, smooths it and makes it the target. With the outcome, the fault
+    /// of the sample's timestamp if the filter restarted for it (not after the previous one's).
     pub fn apply(
         &mut self,
         sample: &HandJointsSample,
         at_ns: u64,
-    ) -> Result<JointsOutcome, JointsRejection> {
+    ) -> Result<(JointsOutcome, Option<TimeFault>), JointsRejection> {
         let joints = read_joints(sample, self.retargeter.model().side());
         let stamp = sample.stamp();
         match self.retargeter.fit(&joints) {
             Ok(fit) => {
+                // The filter times the samples by their own timestamps, whatever the tracking
+                // clock, so that a replay is smoothed alike however fast it is played.
+                let at_s = sample.timestamp_ns as f64 * 1e-9;
+                let raw = Sample {
+                    root: fit.root,
+                    values: fit.flex,
+                };
+                let filtered = (self.filter.apply(at_s, raw)).map_err(JointsRejection::Filter)?;
                 self.target = Some(JointsTarget {
                     stamp,
                     at_ns,
-                    pose: Some((fit.root, fit.flex.map(|v| v as f32))),
+                    pose: Some((
+                        filtered.sample.root,
+                        filtered.sample.values.map(|v| v as f32),
+                    )),
                     tracked: true,
                     tracked_ns: Some(at_ns),
                 });
-                Ok(JointsOutcome::Tracked)
+                let fault = match filtered.passage {
+                    Passage::Restarted(fault) => Some(fault),
+                    Passage::Unfiltered | Passage::Started | Passage::Smoothed => None,
+                };
+                Ok((JointsOutcome::Tracked, fault))
             }
             Err(RetargetError::Joints(JointsError::NotValid { .. })) => {
+                // Tracking is lost: the filter starts afresh when it is regained.
+                self.filter.restart();
                 self.target = Some(JointsTarget {
                     stamp,
                     at_ns,
@@ -139,7 +172,7 @@ impl JointsHand {
                     tracked: false,
                     tracked_ns: self.target.and_then(|target| target.tracked_ns),
                 });
-                Ok(JointsOutcome::Untracked)
+                Ok((JointsOutcome::Untracked, None))
             }
             Err(RetargetError::Joints(error)) => Err(JointsRejection::Joints(error)),
             // Neither happens (the joints are read as the model's side, and the model was

@@ -16,6 +16,14 @@
 //! offline, so that a replay gives the same outcome every time; the system clock in a
 //! free-running server, so that a hand whose samples simply stop (a headset taken off, a browser
 //! closed) is noticed while no other input comes ([`Inputs::tick`]).
+//!
+//! Tracked input is smoothed by the scene's One Euro filter (`params.tracking.filter`): each
+//! joints-driven hand's retargeted root and flex values ([`JointsHand`]), and the tracker's
+//! hand root. Not the cart: it navigates, carries every hand, and comes from a device that is
+//! not hand tracking, so smoothing it would only make every hand trail a moving cart. Nor the
+//! glove's flex values, measured by bend sensors rather than fitted to noisy joints. A sample
+//! whose timestamp is not after its stream's previous one restarts the stream's filter from it
+//! and is counted ([`Inputs::filter_restarts`]).
 
 use std::time::Duration;
 
@@ -29,6 +37,7 @@ use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection, JointsTarge
 use crate::grasping::retarget::JointsError;
 use crate::grasping::{HandInput, HandModel};
 use crate::scene::TrackingParams;
+use crate::simulation::filter::{Passage, Sample, StreamFilter, TimeFault};
 use crate::simulation::frames::{HandTarget, InputFrame, Stamps};
 
 /// The clock that times a joints-driven hand's tracking.
@@ -47,6 +56,8 @@ pub enum TrackingClock {
 #[derive(Debug, Default)]
 pub struct Inputs {
     tracker: Option<TrackerTarget>,
+    /// The filter of the tracker's hand root.
+    tracker_filter: StreamFilter<0>,
     glove: Option<GloveTarget>,
     /// The scene's hands, in its order, as hand-joints samples drive them (`None` for a model
     /// the retargeting cannot take); empty without hand models.
@@ -59,6 +70,8 @@ pub struct Inputs {
     clock: TrackingClock,
     tracking: TrackingParams,
     stats: InputStats,
+    /// Samples whose stream's filter restarted for a timestamp not after the previous one's.
+    filter_restarts: u64,
 }
 
 impl Inputs {
@@ -69,7 +82,10 @@ impl Inputs {
         tracking: TrackingParams,
     ) -> Inputs {
         Inputs {
-            hands: models.into_iter().map(JointsHand::new).collect(),
+            hands: (models.into_iter())
+                .map(|model| JointsHand::new(model, &tracking))
+                .collect(),
+            tracker_filter: StreamFilter::new(&tracking),
             tracking,
             ..Inputs::default()
         }
@@ -128,10 +144,42 @@ impl Inputs {
         self.stats
     }
 
+    /// Samples, since the server started, whose timestamp was not after their stream's previous
+    /// one, so that the stream's filter started afresh from them.
+    pub fn filter_restarts(&self) -> u64 {
+        self.filter_restarts
+    }
+
+    /// Counts a filter restart for a faulty timestamp of `stream`.
+    fn count_restart(&mut self, stream: &'static str, fault: TimeFault) {
+        self.filter_restarts += 1;
+        tracing::debug!(stream, %fault, "the input filter restarted");
+    }
+
+    /// The tracker `target` with its hand root smoothed.
+    fn smooth_tracker(
+        &mut self,
+        mut target: TrackerTarget,
+        timestamp_ns: u64,
+    ) -> Result<TrackerTarget, InputRejection> {
+        let raw = Sample {
+            root: target.hand,
+            values: [],
+        };
+        let filtered = (self.tracker_filter.apply(timestamp_ns as f64 * 1e-9, raw))
+            .map_err(|_| InputRejection::NonFinite { field: "hand" })?;
+        if let Passage::Restarted(fault) = filtered.passage {
+            self.count_restart("tracker", fault);
+        }
+        target.hand = filtered.sample.root;
+        Ok(target)
+    }
+
     /// Validates a tracker sample and, if valid, makes it the hand root target; counts it
     /// either way.
     pub fn apply_tracker(&mut self, sample: &TrackerSample) -> Result<(), InputRejection> {
-        match (self.not_ahead(sample.timestamp_ns)).and_then(|()| sample.validate()) {
+        let validated = (self.not_ahead(sample.timestamp_ns)).and_then(|()| sample.validate());
+        match validated.and_then(|target| self.smooth_tracker(target, sample.timestamp_ns)) {
             Ok(target) => {
                 self.stats.tracker_accepted += 1;
                 self.tracker = Some(target);
@@ -190,7 +238,12 @@ impl Inputs {
         let hand = (self.hands.iter_mut().flatten()).find(|hand| Some(hand.side()) == side);
         let outcome = match (ahead, hand) {
             (Err(rejection), _) => Err(JointsRejection::Sample(rejection)),
-            (Ok(()), Some(hand)) => hand.apply(sample, at_ns),
+            (Ok(()), Some(hand)) => hand.apply(sample, at_ns).map(|(outcome, fault)| {
+                if let Some(fault) = fault {
+                    self.count_restart("hand_joints", fault);
+                }
+                outcome
+            }),
             (Ok(()), None) => Err(JointsRejection::NoSuchHand { side: sample.side }),
         };
         if outcome.is_ok() {
@@ -203,6 +256,7 @@ impl Inputs {
             Ok(JointsOutcome::Untracked) => &mut stats.joints_untracked,
             Err(JointsRejection::NoSuchHand { .. }) => &mut stats.joints_rejected_no_such_hand,
             Err(JointsRejection::Sample(_)) => &mut stats.rejected_ahead,
+            Err(JointsRejection::Filter(_)) => &mut stats.joints_rejected_non_finite,
             Err(JointsRejection::Joints(error)) => match error {
                 JointsError::NonFinite { .. } => &mut stats.joints_rejected_non_finite,
                 JointsError::NotUnit { .. } => &mut stats.joints_rejected_quaternion,
@@ -305,6 +359,7 @@ impl Inputs {
     ) {
         *self = Inputs {
             stats: self.stats,
+            filter_restarts: self.filter_restarts,
             clock: self.clock,
             ..Inputs::for_hands(models, tracking)
         };

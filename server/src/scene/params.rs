@@ -50,7 +50,17 @@ impl Default for AlgorithmParams {
 }
 
 /// How a hand driven by hand-joints samples rides out a loss of tracking, in seconds of sample
-/// time (the samples' timestamps, so that a lockstep replay gives the same outcome every time).
+/// time (the samples' timestamps, so that a lockstep replay gives the same outcome every time),
+/// and how tracked input is smoothed: the One Euro filter
+/// ([`simulation::filter`](crate::simulation::filter)) of the tracker's hand root and of each
+/// joints-driven hand's retargeted root and flex values.
+///
+/// The filter's defaults suit a headset's hand tracking (about 1-2 mm and 1° of noise at 50 to
+/// 90 Hz): at rest a cut-off of 0.2 Hz, which takes the jitter of a still hand down more than
+/// fivefold; moving, the cut-off rises by `beta` per m/s so that at 1 m/s the root trails by
+/// about 10 ms (`vas-bench filter`, BENCHMARKS.md). A rotation's and the flex values' cut-off
+/// rises more slowly with their speed (`beta_angular`), as retargeting turns the joints'
+/// noise into more jitter of angles than of the root's position.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TrackingParams {
@@ -62,6 +72,17 @@ pub struct TrackingParams {
     /// (where the part is); until then the part stays held. 0.5 s by default, as users of
     /// hand-tracking SDKs ask for.
     pub grace: f64,
+    /// Whether tracked input is smoothed (true by default); false passes it on as it comes.
+    pub filter: bool,
+    /// The filter's cut-off frequency at rest, Hz (0.2 by default).
+    pub min_cutoff: f64,
+    /// How much the cut-off rises with the root's speed, Hz per m/s (20 by default).
+    pub beta: f64,
+    /// How much the cut-off rises with the speed of the root's rotation and of each flex value,
+    /// Hz per rad/s (0.5 by default).
+    pub beta_angular: f64,
+    /// The cut-off frequency of the filter's speed estimate, Hz (1 by default).
+    pub d_cutoff: f64,
 }
 
 impl Default for TrackingParams {
@@ -69,12 +90,53 @@ impl Default for TrackingParams {
         TrackingParams {
             lost_after: 0.1,
             grace: 0.5,
+            filter: true,
+            min_cutoff: 0.2,
+            beta: 20.0,
+            beta_angular: 0.5,
+            d_cutoff: 1.0,
         }
     }
 }
 
 /// The longest tracking time accepted (seconds).
 const MAX_TRACKING_S: f64 = 60.0;
+
+/// The range of the filter's cut-off frequencies (Hz): positive, and at most far beyond any
+/// tracker's rate (where the filter passes samples on all but unchanged).
+const FILTER_CUTOFF_HZ: (f64, f64) = (1e-3, 1e3);
+
+/// The range of the filter's speed coefficients (Hz per m/s or per rad/s); 0 makes the filter a
+/// plain low-pass at `min_cutoff`.
+const FILTER_BETA: (f64, f64) = (0.0, 1e4);
+
+impl TrackingParams {
+    /// Checks every value; keys are named as in the config.
+    fn validate(&self) -> Result<(), Problem> {
+        let tracking = (0.0, MAX_TRACKING_S);
+        within("params.tracking.lost_after", self.lost_after, tracking, "s")?;
+        within("params.tracking.grace", self.grace, tracking, "s")?;
+        within(
+            "params.tracking.min_cutoff",
+            self.min_cutoff,
+            FILTER_CUTOFF_HZ,
+            "Hz",
+        )?;
+        within(
+            "params.tracking.d_cutoff",
+            self.d_cutoff,
+            FILTER_CUTOFF_HZ,
+            "Hz",
+        )?;
+        within("params.tracking.beta", self.beta, FILTER_BETA, "Hz per m/s")?;
+        within(
+            "params.tracking.beta_angular",
+            self.beta_angular,
+            FILTER_BETA,
+            "Hz per rad/s",
+        )
+    }
+}
 
 /// Rates of the runtime loops, in hertz (each loop runs at most this often).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -157,14 +219,7 @@ impl AlgorithmParams {
             key: format!("params.clearance.{}", e.key),
             reason: e.reason,
         })?;
-        let tracking = (0.0, MAX_TRACKING_S);
-        within(
-            "params.tracking.lost_after",
-            self.tracking.lost_after,
-            tracking,
-            "s",
-        )?;
-        within("params.tracking.grace", self.tracking.grace, tracking, "s")
+        self.tracking.validate()
     }
 }
 
@@ -210,11 +265,31 @@ mod tests {
         params.tracking = TrackingParams {
             lost_after: f64::NAN,
             grace: 0.5,
+            ..TrackingParams::default()
         };
         assert_eq!(
             params.validate().unwrap_err().key,
             "params.tracking.lost_after"
         );
+        for (key, edit) in [
+            (
+                "min_cutoff",
+                (|t| t.min_cutoff = 0.0) as fn(&mut TrackingParams),
+            ),
+            ("d_cutoff", |t| t.d_cutoff = f64::INFINITY),
+            ("beta", |t| t.beta = -1.0),
+            ("beta_angular", |t| t.beta_angular = f64::NAN),
+        ] {
+            let mut params = AlgorithmParams::default();
+            edit(&mut params.tracking);
+            let problem = params.validate().unwrap_err();
+            assert_eq!(problem.key, format!("params.tracking.{key}"));
+            assert!(
+                problem.reason.starts_with("must be between"),
+                "{}",
+                problem.reason
+            );
+        }
         let mut params = AlgorithmParams::default();
         params.clearance.threshold = Some(-0.005);
         assert_eq!(

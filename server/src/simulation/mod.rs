@@ -11,6 +11,7 @@
 //! No threads and no ports here: those are the runtime's.
 
 pub mod clearance;
+pub mod filter;
 pub mod frames;
 pub(crate) mod grasp_stage;
 pub mod hand_bodies;

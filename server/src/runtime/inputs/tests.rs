@@ -350,6 +350,7 @@ fn a_joints_hand_untracked_or_silent_is_lost_and_lets_go_after_the_grace() {
     let tracking = TrackingParams {
         lost_after: 0.1,
         grace: 0.5,
+        ..TrackingParams::default()
     };
     let mut inputs = Inputs::for_hands([&right_hand()], tracking);
     const MS: u64 = 1_000_000;
@@ -471,4 +472,73 @@ fn samples_stamped_beyond_the_servers_clock_are_rejected_and_keep_no_hand_untrac
     assert_eq!((stats.rejected_ahead, stats.rejected()), (3, 3));
     assert_eq!(stats.joints_accepted, 2);
     assert!(inputs.frame().hands[0].tracked);
+}
+
+#[test]
+fn the_tracker_root_is_smoothed_and_a_timestamp_going_back_restarts_it() {
+    const MS: u64 = 1_000_000;
+    let stamped = |seq: u64, ms: u64, x: f64| TrackerSample {
+        timestamp_ns: ms * MS,
+        ..tracker(seq, at(x, 0.0, 0.0), at(0.0, 0.0, 0.0))
+    };
+    let root_x = |inputs: &Inputs| inputs.frame().hands[0].input.tracker.translation.x;
+    let mut inputs = Inputs::for_hands([], TrackingParams::default());
+    inputs.apply_tracker(&stamped(1, 10, 0.0)).expect("valid");
+    inputs.apply_tracker(&stamped(2, 30, 0.002)).expect("valid");
+    let smoothed = root_x(&inputs);
+    assert!(0.0 < smoothed && smoothed < 0.002, "{smoothed}");
+    assert_eq!(inputs.filter_restarts(), 0);
+    // Back in time: taken as it is, the filter restarted from it, and counted.
+    inputs.apply_tracker(&stamped(3, 20, 0.005)).expect("valid");
+    assert_eq!(root_x(&inputs), 0.005);
+    assert_eq!(inputs.filter_restarts(), 1);
+    // A restart (reset or another scene) forgets the samples, not the count.
+    inputs.restart([], TrackingParams::default());
+    inputs.apply_tracker(&stamped(4, 0, 0.01)).expect("valid");
+    assert_eq!((root_x(&inputs), inputs.filter_restarts()), (0.01, 1));
+
+    let off = TrackingParams {
+        filter: false,
+        ..TrackingParams::default()
+    };
+    let mut inputs = Inputs::for_hands([], off);
+    inputs.apply_tracker(&stamped(1, 10, 0.0)).expect("valid");
+    inputs.apply_tracker(&stamped(2, 30, 0.002)).expect("valid");
+    assert_eq!(root_x(&inputs), 0.002);
+}
+
+#[test]
+fn a_joints_hand_is_smoothed_and_starts_afresh_when_tracking_returns() {
+    const MS: u64 = 1_000_000;
+    let model = right_hand();
+    let retargeter = Retargeter::new(model.clone()).expect("the right hand retargets");
+    let pinch = captured("webxr_pinch.json", HandSide::Right);
+    let moved = pinch.transformed(&Isometry3::translation(0.002, 0.0, 0.0));
+    let mut inputs = Inputs::for_hands([&model], TrackingParams::default());
+    let root = |inputs: &Inputs| inputs.frame().hands[0].input.tracker;
+    inputs
+        .apply_hand_joints(&wire_joints(&pinch, 1, 10 * MS))
+        .expect("a hand");
+    assert_eq!(root(&inputs), retargeter.fit(&pinch).unwrap().root);
+    inputs
+        .apply_hand_joints(&wire_joints(&moved, 2, 30 * MS))
+        .expect("a hand");
+    let (start, end) = (pinch.joints[0].position.x, moved.joints[0].position.x);
+    let fitted = retargeter.fit(&moved).unwrap().root;
+    let smoothed = root(&inputs);
+    let travelled = smoothed.translation.x - retargeter.fit(&pinch).unwrap().root.translation.x;
+    assert!(0.0 < travelled && travelled < end - start, "{travelled}");
+    assert_ne!(smoothed, fitted);
+    // Lost, then tracked again: the filter starts from the first tracked sample.
+    let mut lost = wire_joints(&moved, 3, 50 * MS);
+    lost.joints.iter_mut().for_each(|joint| joint.flags = 0);
+    assert_eq!(
+        inputs.apply_hand_joints(&lost),
+        Ok(JointsOutcome::Untracked)
+    );
+    inputs
+        .apply_hand_joints(&wire_joints(&moved, 4, 70 * MS))
+        .expect("a hand");
+    assert_eq!(root(&inputs), fitted);
+    assert_eq!(inputs.filter_restarts(), 0);
 }
