@@ -12,6 +12,7 @@ mod distance;
 mod e2e;
 mod echo;
 mod grasp;
+mod filter;
 mod oracle;
 mod orbit;
 mod process;
@@ -181,6 +182,16 @@ missed."
     Distance(distance::DistanceArgs),
     /// Answers every input sample at once with a hand frame (the raw path of `e2e`).
     #[command(hide = true)]
+    /// B13: the One Euro filter of hand tracking on the real captures, with noise added.
+    #[command(
+        after_long_help = "Columns: capture; jitter_mm, filtered_mm (the palm's RMS distance from its mean position with
+the hand held still, unfiltered and filtered); reduction_x (their ratio); jitter_deg,
+filtered_deg, reduction_deg_x (the same for its rotation); flex_deg, filtered_flex_deg (the flex
+values' RMS deviation from their means); lag_ms (how far the filtered palm trails the noise-free
+one at --speed, in time, over the second half of the motion); max_lag_ms (the most over the
+motion). Then the bars, met or missed."
+    )]
+    Filter(filter::FilterArgs),
     Echo(args::ServerArgs),
 }
 
@@ -208,6 +219,7 @@ fn main() -> ExitCode {
         Benchmark::Distance(args) => distance::run_cli(&args),
         Benchmark::Echo(args) => echo::run(args.prefix.as_deref()),
     };
+        Benchmark::Filter(args) => filter::run(&args),
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
