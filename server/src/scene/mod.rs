@@ -54,6 +54,7 @@ mod error;
 mod file;
 mod groups;
 mod loader;
+mod overlaps;
 mod params;
 mod part;
 mod part_tree;

@@ -5,4 +5,5 @@ mod assemblies;
 mod counts;
 mod formats;
 mod mesh_files;
+mod overlaps;
 mod scenes;
