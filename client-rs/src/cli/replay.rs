@@ -1,11 +1,12 @@
-//! `vas-client replay`: a recording into the server, in real time or in lockstep.
+//! `vas-client replay`: a recording into the server, in real time or in lockstep (paced at the
+//! recording's timing or as fast as the server answers).
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use vas_client::recording::Recording;
+use vas_client::recording::{RecordedSample, Recording};
 use vas_client::{Client, Frame, Roles, SceneWords, Wake};
 use vas_protocol::wall_clock_ns;
 
@@ -26,10 +27,21 @@ pub struct ReplayArgs {
     /// first use.
     #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=super::MAX_TIMEOUT_MS))]
     answer_timeout_ms: u64,
+    /// In lockstep, send no sample before its recorded time since the replay started (and then
+    /// wait for its answer), so that the replay plays at the recording's pace for a person to
+    /// watch; a sample whose turn came while the previous answer was awaited goes at once.
+    #[arg(long, requires = "lockstep")]
+    pace: bool,
 }
 
+/// How far before the replay starts a lockstep replay's last sample is stamped, when it is not
+/// paced: its stamps lie in the past whatever its pace, and so far in it that a renderer does
+/// not take them for live input (vas-viewer shows latency only for answers published within a
+/// second of their sample's stamp).
+const UNPACED_STAMPS_BEFORE: Duration = Duration::from_secs(1);
+
 /// Plays the recording. Samples keep their sequence numbers and are stamped with the replay's
-/// start plus their recorded time, so that they keep their recorded spacing in either mode (a
+/// start plus their recorded time, so that they keep their recorded spacing in every mode (a
 /// server counts sample times); the latencies are measured from when each was sent.
 pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
     let recording = Recording::load(&args.file)?;
@@ -52,6 +64,7 @@ pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
         file = %args.file.display(),
         samples = recording.samples.len(),
         lockstep = args.lockstep,
+        paced = args.pace,
         "replaying"
     );
     if args.lockstep {
@@ -60,6 +73,7 @@ pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
             &recording,
             &SceneWords::new(&scene),
             Duration::from_millis(args.answer_timeout_ms),
+            args.pace,
         )?;
     } else {
         real_time(&client, &recording)?;
@@ -70,15 +84,10 @@ pub fn run(prefix: Option<&str>, args: &ReplayArgs) -> anyhow::Result<()> {
 }
 
 fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
-    let start = Instant::now();
     let start_ns = wall_clock_ns();
+    let start = Instant::now();
     for (sent, recorded) in recording.samples.iter().enumerate() {
-        let due = Duration::try_from_secs_f64(recorded.time)
-            .ok()
-            .and_then(|offset| start.checked_add(offset))
-            .with_context(|| format!("sample {sent}: time {} s is out of range", recorded.time))?;
-        if client.sleep(due.saturating_duration_since(Instant::now())) == Wake::Terminated {
-            tracing::info!(sent, "replay interrupted");
+        if !wait_for_turn(client, start, sent, recorded)? {
             return Ok(());
         }
         client.send_input(&recorded.stamped(start_ns))?;
@@ -87,21 +96,52 @@ fn real_time(client: &Client, recording: &Recording) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Waits until `recorded` (the replay's sample number `sent`, from 0) is due: its recorded time
+/// after `start`. False when the replay was told to stop meanwhile.
+fn wait_for_turn(
+    client: &Client,
+    start: Instant,
+    sent: usize,
+    recorded: &RecordedSample,
+) -> anyhow::Result<bool> {
+    let due = Duration::try_from_secs_f64(recorded.time)
+        .ok()
+        .and_then(|offset| start.checked_add(offset))
+        .with_context(|| format!("sample {sent}: time {} s is out of range", recorded.time))?;
+    if client.sleep(due.saturating_duration_since(Instant::now())) == Wake::Terminated {
+        tracing::info!(sent, "replay interrupted");
+        return Ok(false);
+    }
+    Ok(true)
+}
+
 fn lockstep(
     client: &mut Client,
     recording: &Recording,
     words: &SceneWords,
     timeout: Duration,
+    paced: bool,
 ) -> anyhow::Result<()> {
     let mut round_trips = Vec::with_capacity(recording.samples.len());
     let mut server_latencies = Vec::with_capacity(recording.samples.len());
     let mut unanswered = 0usize;
     let mut out = std::io::stdout().lock();
-    // Not in real time: the stamps keep the recorded spacing and end now, so that they lie in
-    // the past whatever pace the replay takes (a latency a renderer takes from them is never
-    // negative; this replay measures its own from when it sends).
-    let start_ns = wall_clock_ns().saturating_sub(recording.duration_ns());
-    for recorded in &recording.samples {
+    // Paced, samples are stamped as in real time. Not paced, the stamps keep the recorded
+    // spacing and end before the replay starts (`UNPACED_STAMPS_BEFORE`), so that they lie in
+    // the past whatever pace the replay takes; this replay measures its own latencies from when
+    // it sends.
+    // The clock read before the instant: no paced sample is stamped later than it is sent.
+    let start_ns = if paced {
+        wall_clock_ns()
+    } else {
+        let before = recording.duration_ns() + UNPACED_STAMPS_BEFORE.as_nanos() as u64;
+        wall_clock_ns().saturating_sub(before)
+    };
+    let start = Instant::now();
+    for (sent, recorded) in recording.samples.iter().enumerate() {
+        if paced && !wait_for_turn(client, start, sent, recorded)? {
+            break;
+        }
         let input = recorded.stamped(start_ns);
         let stamp = input.stamp();
         let sent_at = Instant::now();
@@ -135,13 +175,18 @@ fn lockstep(
                 // every remaining sample.
                 if client.scene_info(super::CONTROL_TIMEOUT).is_err() {
                     anyhow::bail!(
-                        "no vas server answers on this prefix any more; stopped at sample {} \
-                         of {}",
-                        stamp.seq,
-                        recording.samples.len()
+                        "no vas server answers on this prefix any more; stopped at the \
+                         recording's sample {} of {} (its stream's sample {})",
+                        sent + 1,
+                        recording.samples.len(),
+                        stamp.seq
                     );
                 }
-                tracing::warn!(seq = stamp.seq, "no answer within the timeout");
+                tracing::warn!(
+                    sample = sent + 1,
+                    seq = stamp.seq,
+                    "no answer within the timeout"
+                );
                 unanswered += 1;
             }
         }

@@ -11,6 +11,7 @@ mod faults;
 mod fixtures;
 mod hand_joints;
 mod hostile_input;
+mod paced_replay;
 mod replays;
 mod report;
 mod retarget;
