@@ -11,10 +11,9 @@
 //! flex values), timed by the samples' own timestamps ([`SampleClock`]) so that a lockstep
 //! replay gives the same output every time.
 //!
-//! It lives in the simulation layer, beside the frames it feeds: it is plain state with no
-//! threads, reads its tuning from the scene's `[params.tracking]`, and both the runtime's I/O
-//! thread and the offline replays that drive the simulation without it apply it to the same
-//! samples.
+//! It lives in the simulation layer, beside the frames it feeds, rather than in the runtime
+//! that applies it to the samples it takes in: it is plain state with no threads or ports, it
+//! reads its tuning from the scene's `[params.tracking]`, and the benchmarks measure it alone.
 
 mod clock;
 mod gain;
