@@ -1,14 +1,15 @@
 //! `vas-bench e2e`, benchmark B7: the latency from an input sample published by this
 //! process to the hand frame that answers it, beside the bare iceoryx2 round trip measured in
-//! the same run.
+//! the same run (and, with `--c-library`, that round trip through the C library).
 //!
 //! Both paths use the same client code: send a sample, then sleep on the client's WaitSet until
 //! the hand frame carrying the sample's stamp arrives. The `vas` path goes through the server;
 //! the `raw` path through an echo process ([`crate::echo`]) that this command starts on a private
-//! prefix, which opens the same services and answers every tracker sample at once. The two
-//! paths alternate sample by sample, so that both see the same machine load. The first
-//! `--warmup` exchanges of each path (page faults, connection set-up, cold caches) are left out
-//! of the figures.
+//! prefix, which opens the same services and answers every tracker sample at once. The `c` path
+//! ([`crate::c_library`]) sends the `raw` path's samples to the same echo through the C
+//! library's calls. The paths alternate sample by sample, so that all see the same machine
+//! load. The first `--warmup` exchanges of each path (page faults, connection set-up, cold
+//! caches) are left out of the figures.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -25,6 +26,7 @@ use vas_client::{Client, Frame, Wake};
 use vas_protocol::services::remove_prefix_segment;
 use vas_protocol::wall_clock_ns;
 
+use crate::c_library::CLibraryClient;
 use crate::echo::READY_LINE;
 use crate::process::stop_child;
 use crate::synthetic;
@@ -59,6 +61,10 @@ pub struct E2eArgs {
     /// drifting in free space), on both paths; the server's scene needs both hands.
     #[arg(long)]
     hand_joints: bool,
+    /// Measure the `c` path as well: the `raw` path's round trip through the C library's calls
+    /// (send, wait, poll, read the hand frames), against the same echo.
+    #[arg(long)]
+    c_library: bool,
     #[command(flatten)]
     output: OutputArgs,
     #[command(flatten)]
@@ -71,11 +77,43 @@ pub struct E2eArgs {
 /// One row of the results: the latency of one path.
 #[derive(Debug, Clone, Serialize)]
 pub struct PathRow {
-    /// `raw` or `vas`.
+    /// `raw`, `c` or `vas`.
     pub path: &'static str,
     /// Latency summary of the measured exchanges.
     #[serde(flatten)]
     pub latency: LatencySummary,
+    /// Samples that got no answer within the timeout (after the warm-up).
+    pub unanswered: u64,
+}
+
+/// The round trips of one path, as they are measured.
+#[derive(Default)]
+struct PathTimes {
+    latencies: Vec<Duration>,
+    unanswered: u64,
+}
+
+impl PathTimes {
+    /// Records one exchange's outcome, if it is `measured` (not in the warm-up).
+    fn record(&mut self, measured: bool, round_trip: Option<Duration>) {
+        match round_trip {
+            Some(latency) if measured => self.latencies.push(latency),
+            None if measured => self.unanswered += 1,
+            _ => {}
+        }
+    }
+
+    /// The row of the path named `path`.
+    fn row(&self, path: &'static str) -> anyhow::Result<PathRow> {
+        let latency = LatencySummary::from_durations(&self.latencies)
+            .with_context(|| format!("no {path} sample was answered"))?;
+        let unanswered = self.unanswered;
+        Ok(PathRow {
+            path,
+            latency,
+            unanswered,
+        })
+    }
 }
 
 /// Everything `vas-bench e2e` reports.
@@ -88,12 +126,11 @@ pub struct E2eReport {
     pub input: String,
     /// Exchanges per path left out before measuring.
     pub warmup: u64,
-    /// The `raw` and `vas` rows.
+    /// The `raw`, `c` (with `--c-library`) and `vas` rows.
     pub rows: Vec<PathRow>,
-    /// Samples per path that got no answer within the timeout (after the warm-up).
-    pub unanswered_raw: u64,
-    /// See `unanswered_raw`.
-    pub unanswered_vas: u64,
+    /// With `--c-library`: how much the C library adds to the round trip at the 99th
+    /// percentile, the `c` row's p99 less the `raw` row's, in microseconds.
+    pub c_library_p99_added_us: Option<f64>,
     /// Samples per second the server answers when each sample is sent as soon as the previous
     /// one is answered: measured `vas` exchanges divided by their total time.
     pub vas_samples_per_s: f64,
@@ -126,6 +163,9 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     let echo_prefix = format!("{}raw{}_", prefix.unwrap_or("vas_"), std::process::id());
     let _echo = EchoProcess::spawn(&echo_prefix)?;
     let mut echo = crate::args::connect(Some(&echo_prefix))?;
+    let mut c_echo = (args.c_library)
+        .then(|| CLibraryClient::connect(&echo_prefix))
+        .transpose()?;
     tracing::info!(
         scene,
         samples = args.samples,
@@ -134,37 +174,40 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
     );
 
     let timeout = Duration::from_millis(args.answer_timeout_ms);
-    let mut raw = Vec::new();
-    let mut vas = Vec::new();
-    let (mut unanswered_raw, mut unanswered_vas) = (0, 0);
+    let [mut raw, mut c, mut vas]: [PathTimes; 3] = Default::default();
     let mut inputs = inputs.numbered();
     for index in 0..warmup + args.samples {
         let measured = index >= warmup;
-        match round_trip(&mut echo, inputs.raw_sample(index + 1), timeout, drop)? {
-            Some(latency) if measured => raw.push(latency),
-            None if measured => unanswered_raw += 1,
-            _ => {}
+        let sample = inputs.raw_sample(index + 1);
+        // The raw and c paths take turns at going first, so that neither alone follows the
+        // server's exchange, whose work may still be settling.
+        let c_first = index % 2 == 1;
+        for c_turn in [c_first, !c_first] {
+            match &mut c_echo {
+                Some(c_echo) if c_turn => c.record(measured, c_echo.round_trip(sample, timeout)?),
+                _ if !c_turn => raw.record(measured, round_trip(&mut echo, sample, timeout, drop)?),
+                _ => {}
+            }
         }
-        match round_trip(&mut server, inputs.next_sample(), timeout, drop)? {
-            Some(latency) if measured => vas.push(latency),
-            None if measured => unanswered_vas += 1,
-            _ => {}
-        }
+        let sample = inputs.next_sample();
+        vas.record(measured, round_trip(&mut server, sample, timeout, drop)?);
     }
+    // The C library's client goes before the echo's prefix is removed.
+    drop(c_echo);
 
-    let summary = |path: &'static str, latencies: &[Duration]| -> anyhow::Result<PathRow> {
-        let latency = LatencySummary::from_durations(latencies)
-            .with_context(|| format!("no {path} sample was answered"))?;
-        Ok(PathRow { path, latency })
-    };
+    let raw_row = raw.row("raw")?;
+    let c_row = (args.c_library).then(|| c.row("c")).transpose()?;
+    let c_library_p99_added_us =
+        (c_row.as_ref()).map(|c| c.latency.p99_us - raw_row.latency.p99_us);
+    let rows = [Some(raw_row), c_row, Some(vas.row("vas")?)];
     let report = E2eReport {
         scene,
         input,
         warmup,
-        vas_samples_per_s: vas.len() as f64 / vas.iter().sum::<Duration>().as_secs_f64(),
-        rows: vec![summary("raw", &raw)?, summary("vas", &vas)?],
-        unanswered_raw,
-        unanswered_vas,
+        vas_samples_per_s: vas.latencies.len() as f64
+            / vas.latencies.iter().sum::<Duration>().as_secs_f64(),
+        rows: rows.into_iter().flatten().collect(),
+        c_library_p99_added_us,
     };
     print!("{}", render(&report));
     args.output.write(&report, || plot(&report))
@@ -241,16 +284,20 @@ fn render(report: &E2eReport) -> String {
          path    p50_us    p99_us    max_us  samples  unanswered\n",
         report.input, report.scene, report.warmup
     );
-    for (row, unanswered) in report
-        .rows
-        .iter()
-        .zip([report.unanswered_raw, report.unanswered_vas])
-    {
+    for row in &report.rows {
         let latency = &row.latency;
         text += &format!(
             "{:<4}  {:>8.1}  {:>8.1}  {:>8.1}  {:>7}  {:>10}\n",
-            row.path, latency.p50_us, latency.p99_us, latency.max_us, latency.samples, unanswered
+            row.path,
+            latency.p50_us,
+            latency.p99_us,
+            latency.max_us,
+            latency.samples,
+            row.unanswered
         );
+    }
+    if let Some(added) = report.c_library_p99_added_us {
+        text += &format!("c p99 - raw p99 = {added:.1} us (what the C library adds)\n");
     }
     text += &format!(
         "vas sustains {:.0} samples/s, each sent once the one before was answered\n",

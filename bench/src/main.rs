@@ -8,6 +8,7 @@ mod assembly;
 mod baselines;
 mod bounce;
 mod browser;
+mod c_library;
 mod distance;
 mod e2e;
 mod echo;
@@ -120,9 +121,10 @@ the analysis recognised; a warning follows when it is not the expected one)."
     Grasp(grasp::GraspArgs),
     /// B7: input-to-answer latency through a running server beside the raw iceoryx2 round trip.
     #[command(
-        after_long_help = "Columns: path (raw: the bare iceoryx2 round trip through an echo process; vas: through the
-server); p50_us, p99_us, max_us (from publishing a sample to receiving the hand frame that
-answers it); samples (measured exchanges); unanswered (no answer within the timeout)."
+        after_long_help = "Columns: path (raw: the bare iceoryx2 round trip through an echo process; c, with
+--c-library: the same through the C library's calls; vas: through the server); p50_us, p99_us,
+max_us (from publishing a sample to receiving the hand frame that answers it); samples
+(measured exchanges); unanswered (no answer within the timeout)."
     )]
     E2e(e2e::E2eArgs),
     /// B8: a car-like assembly of 1,000 parts and 5M triangles: start-up cold and cached,

@@ -27,8 +27,8 @@ fn run_tool(server: &Server, args: &[&str]) {
 }
 
 /// Runs `vas-bench e2e` with 40 measured samples (and `extra` arguments) against `server`,
-/// writing into `dir`; checks that both paths answered every sample with ordered percentiles and
-/// returns the report.
+/// writing into `dir`; checks that every path (`raw`, `c` with `--c-library`, `vas`) answered
+/// every sample with ordered percentiles and returns the report.
 fn short_e2e(server: &Server, dir: &std::path::Path, extra: &[&str]) -> serde_json::Value {
     let e2e_out = dir.join("b7.json");
     let e2e_svg = dir.join("b7.svg");
@@ -46,15 +46,20 @@ fn short_e2e(server: &Server, dir: &std::path::Path, extra: &[&str]) -> serde_js
     args.extend_from_slice(extra);
     run_tool(server, &args);
     let e2e = report(&e2e_out);
-    assert_plot(&e2e_svg, &["raw", "vas"]);
+    let expected_paths: &[&str] = match extra.contains(&"--c-library") {
+        true => &["raw", "c", "vas"],
+        false => &["raw", "vas"],
+    };
+    assert_plot(&e2e_svg, expected_paths);
     let rows = e2e["rows"].as_array().expect("rows");
     let paths: Vec<&str> = rows
         .iter()
         .map(|row| row["path"].as_str().unwrap_or(""))
         .collect();
-    assert_eq!(paths, ["raw", "vas"]);
+    assert_eq!(paths, expected_paths);
     for row in rows {
         assert_eq!(row["samples"], 40, "{row}");
+        assert_eq!(row["unanswered"], 0, "{row}");
         let [p50, p99, max] = ["p50_us", "p99_us", "max_us"].map(|key| {
             row[key]
                 .as_f64()
@@ -62,13 +67,6 @@ fn short_e2e(server: &Server, dir: &std::path::Path, extra: &[&str]) -> serde_js
         });
         assert!(0.0 < p50 && p50 <= p99 && p99 <= max, "{row}");
     }
-    assert_eq!(
-        (
-            e2e["unanswered_raw"].as_u64(),
-            e2e["unanswered_vas"].as_u64()
-        ),
-        (Some(0), Some(0))
-    );
     assert!(
         e2e["vas_samples_per_s"]
             .as_f64()
@@ -158,6 +156,19 @@ fn bench_e2e_takes_two_hands_joints() {
         ),
         (45, 0, 0)
     );
+}
+
+/// B7 with the C library's path: the `raw` path's samples through the C library's calls, every
+/// one answered, and the p99 it adds reported as the `c` row's less the `raw` row's.
+#[test]
+fn bench_e2e_measures_the_c_library() {
+    let mut server = Server::start("benchclib");
+    server.connect();
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let e2e = short_e2e(&server, dir.path(), &["--c-library"]);
+    let p99 = |row: usize| e2e["rows"][row]["p99_us"].as_f64().expect("a p99");
+    let added = e2e["c_library_p99_added_us"].as_f64();
+    assert_eq!(added, Some(p99(1) - p99(0)), "{e2e}");
 }
 
 /// `tree-build` reports each mesh's DOP-tree build and, when FCL was found as vas-bench was
