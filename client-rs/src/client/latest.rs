@@ -18,7 +18,8 @@ pub(super) struct Latest {
 }
 
 impl Latest {
-    /// Keeps `frame` if it is newer state than what is kept.
+    /// Keeps `frame` as the newest of its kind (a hand frame: of its hand); events and force
+    /// frames are not state.
     pub(super) fn keep(&mut self, frame: &Frame) {
         match frame {
             Frame::Geometry(geometry) => self.keep_geometry(geometry),
