@@ -30,6 +30,7 @@ impl SceneWords {
     }
 
     /// The event in a sentence: "grasp peg (power) at sample 44", "release peg at sample 90",
+    /// "push begin block by the right hand at sample 30",
     /// "contact begin peg – block at sample 61", "clearance peg – block 0.8 mm at sample 177",
     /// "clearance restored peg – block 5.6 mm at sample 198". The sample is the input that caused it (the
     /// newest of the frame's tracker, glove and hand-joints samples).
@@ -50,6 +51,10 @@ impl SceneWords {
             Ok(EventKind::Release) => format!("release {part}"),
             Ok(EventKind::HandOver) => {
                 format!("hand over {part} from the {} hand", hand_name(event.hand))
+            }
+            Ok(kind @ (EventKind::PushBegin | EventKind::PushEnd)) => {
+                let verb = kind.name().replace('_', " ");
+                format!("{verb} {part} by the {} hand", hand_name(event.hand))
             }
             Ok(kind @ (EventKind::ContactBegin | EventKind::ContactEnd)) => {
                 let verb = kind.name().replace('_', " ");
@@ -180,6 +185,16 @@ mod tests {
         assert_eq!(
             words.event(&hand_over),
             "hand over peg from the left hand at sample 44"
+        );
+        let push = event(EventKind::PushBegin, GraspType::None, 1, HAND_PART_ID);
+        assert_eq!(
+            words.event(&push),
+            "push begin peg by the right hand at sample 44"
+        );
+        let push_end = event(EventKind::PushEnd, GraspType::None, 1, HAND_PART_ID);
+        assert_eq!(
+            words.event(&push_end),
+            "push end peg by the right hand at sample 44"
         );
         let mut below = event(EventKind::ClearanceBelow, GraspType::None, 1, 0);
         below.distance = 0.000_8;

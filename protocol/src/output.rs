@@ -357,6 +357,11 @@ wire_code_enum! {
         /// `part` and `other` are apart again by the threshold and its hysteresis (or one of them
         /// left the watch while apart, see `vas/output/clearance`).
         ClearanceRestored = 7,
+        /// The hand started pushing `part`: it touches the part without holding it, and its
+        /// motion into the part moves it.
+        PushBegin = 8,
+        /// The hand stopped pushing `part`.
+        PushEnd = 9,
     }
 }
 
@@ -389,6 +394,8 @@ impl EventKind {
             Self::HandOver => "hand_over",
             Self::ClearanceBelow => "clearance_below",
             Self::ClearanceRestored => "clearance_restored",
+            Self::PushBegin => "push_begin",
+            Self::PushEnd => "push_end",
         }
     }
 }

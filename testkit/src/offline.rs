@@ -38,14 +38,14 @@ pub enum OfflineError {
     Unplaced,
 }
 
-/// A grasp, release or hand-over during the replay.
+/// A grasp, release, hand-over, push begin or push end during the replay.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReplayEvent {
     /// The frame (input sample index, from 0) it happened in.
     pub frame: usize,
     /// The hand, by its place in the scene's hands.
     pub hand: usize,
-    /// Grasp, release or hand-over.
+    /// Grasp, release, hand-over, push begin or push end.
     pub kind: EventKind,
     /// The part's name.
     pub part: String,
@@ -60,7 +60,7 @@ pub struct OfflineRun {
     pub frames: usize,
     /// Input samples refused as invalid.
     pub rejected: usize,
-    /// Grasps and releases, in order.
+    /// Grasps, releases, hand-overs and pushes, in order (as the server publishes them).
     pub events: Vec<ReplayEvent>,
     /// Every part's visible pose after the last frame, by id.
     pub final_poses: Vec<Isometry3<f64>>,
@@ -232,6 +232,7 @@ impl Oracle {
 pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, OfflineError> {
     let mut replay = Replay::new(scene)?;
     let mut oracle = None;
+    let mut pushed = Vec::new();
     let mut run = OfflineRun {
         frames: 0,
         rejected: 0,
@@ -256,6 +257,7 @@ pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, Offlin
             .interaction()
             .map_or_else(Vec::new, |i| i.part_poses().collect());
         record_frame(scene, &mut run, frame, &steps);
+        record_pushes(scene, &mut run, frame, &steps, &mut pushed);
         let hands: Vec<VisibleHand> = steps
             .iter()
             .map(|step| VisibleHand {
@@ -272,6 +274,38 @@ pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, Offlin
     run.rejected = replay.rejected();
     run.final_poses = interaction.part_poses().collect();
     Ok(run)
+}
+
+/// Adds one frame's push begins and ends to `run`, as the server's verifier makes them: the
+/// pushes that ended, then those that began, each by part and hand; `pushed` holds the last
+/// frame's (part, hand) pairs.
+fn record_pushes(
+    scene: &Scene,
+    run: &mut OfflineRun,
+    frame: usize,
+    steps: &[InteractionFrame],
+    pushed: &mut Vec<(usize, usize)>,
+) {
+    let mut now: Vec<(usize, usize)> = (steps.iter().enumerate())
+        .flat_map(|(hand, step)| step.pushed.iter().map(move |&part| (part as usize, hand)))
+        .collect();
+    now.sort_unstable();
+    now.dedup();
+    let event = |kind, &(part, hand): &(usize, usize)| ReplayEvent {
+        frame,
+        hand,
+        kind,
+        part: scene.parts[part].name.clone(),
+        grasp: WireGrasp::None,
+    };
+    let ended = pushed.iter().filter(|push| !now.contains(push));
+    let ended: Vec<ReplayEvent> = ended.map(|push| event(EventKind::PushEnd, push)).collect();
+    let began = now.iter().filter(|push| !pushed.contains(push));
+    let began: Vec<ReplayEvent> = began
+        .map(|push| event(EventKind::PushBegin, push))
+        .collect();
+    run.events.extend(ended.into_iter().chain(began));
+    *pushed = now;
 }
 
 /// Adds one frame's events, touches and held-back distance to `run`.

@@ -19,7 +19,7 @@ use crate::captured::CapturedMotion;
 pub struct ExpectedEvent {
     /// The hand, by its place in the scene's hands.
     pub hand: usize,
-    /// Grasp, release or hand-over.
+    /// Grasp, release, hand-over, push begin or push end.
     pub kind: EventKind,
     /// The part's name in the scene.
     pub part: &'static str,
@@ -103,7 +103,7 @@ pub struct Scenario {
     pub motion: Motion,
     /// The scene file, in `configs/`.
     pub scene: &'static str,
-    /// The grasp and release events, in order; no other grasp or release may happen.
+    /// The grasp, release and push events, in order; no others may happen.
     pub events: &'static [ExpectedEvent],
     /// Where the scenario's part ends.
     pub final_pose: ExpectedPose,
@@ -195,14 +195,18 @@ pub const EXPECTED: [Scenario; 10] = [
     Scenario {
         motion: Motion::Script(RecordedScenario::Push),
         scene: "push.toml",
-        events: &[],
-        // Never grasped, so never moved.
+        events: &[
+            by(0, EventKind::PushBegin, "block", GraspType::None),
+            by(0, EventKind::PushEnd, "block", GraspType::None),
+        ],
+        // Never grasped; pushed the 2 cm the palm aims past the face it meets, along x, and left
+        // there.
         final_pose: ExpectedPose {
             part: "block",
-            position: [0.1, 0.0, 0.2],
+            position: [0.12, 0.0, 0.2],
             rpy_degrees: [0.0, 0.0, 0.0],
-            position_tolerance: 1e-12,
-            angle_tolerance: 1e-12,
+            position_tolerance: 0.001,
+            angle_tolerance: 1e-9,
         },
         min_held_back: 0.0,
     },

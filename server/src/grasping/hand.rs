@@ -27,6 +27,7 @@ use super::clasp::{
 use super::collider::{HandGeometry, Obstacle, PartId, SceneCollider};
 use super::flex::{FlexReport, sanitize_flex};
 use super::model::{FLEX_COUNT, HandModel};
+use super::push::{Push, pushes};
 use super::segment_mesh::SegmentMeshError;
 use crate::collision::QueryStats;
 use crate::collision::orientation::DEFAULT_K;
@@ -158,6 +159,8 @@ pub struct HandStep {
     pub held: Option<(PartId, Isometry3<f64>)>,
     /// Grasps and releases of this frame.
     pub events: Vec<GraspEvent>,
+    /// The parts the hand pushes (touches in a push, holding none of them).
+    pub pushes: Vec<Push>,
     /// The clasp minimisation of this frame; `None` when it did not run (navigation, waiting
     /// for a free hand).
     pub clasp: Option<ClaspRun>,
@@ -294,6 +297,7 @@ impl GraspingHand {
             grasp: self.held.map(|h| h.grasp),
             held: self.held_part_pose(),
             events: Vec::new(),
+            pushes: Vec::new(),
             clasp: None,
             segment_checks: 0,
             flex: flex_report,
@@ -366,6 +370,10 @@ impl GraspingHand {
                 &mut self.contacts,
             );
             self.stats += collider.stats;
+            let pushed = (analysed.iter())
+                .filter(|a| a.grasp == GraspClass::Push && Some(a.part) != held.map(|h| h.0))
+                .map(|a| a.part);
+            frame.pushes = pushes(&self.visible.root, &target.root, &touches, pushed);
             frame.touching = touches;
             self.update_hold(&analysed, &mut frame.events);
             frame.grasp = self.held.map(|h| h.grasp).or_else(|| {

@@ -9,6 +9,7 @@
 //!   over the collision test.
 //! * [`collider`]: the hand's segments against the parts near it (DOP-trees), and contacts.
 //! * [`analysis`]: the grasp class from what touches a part, and how.
+//! * [`push`]: how far a hand's motion into a part it pushes would carry the part.
 //! * [`hand`]: one hand's grasping loop state: clasp, contacts, analysis, grasp and release with
 //!   hysteresis, cart motion, the hand-over events.
 //! * [`retarget`]: tracked OpenXR or WebXR hand joints onto the model: root and flex values,
@@ -96,6 +97,7 @@ pub mod collider;
 pub(crate) mod flex;
 pub mod hand;
 pub mod model;
+pub mod push;
 pub mod retarget;
 pub(crate) mod segment_mesh;
 
@@ -109,3 +111,4 @@ pub use model::{
     FLEX_COUNT, Finger, FlexVector, HandConfigError, HandModel, JointLevel, ROOT_VARIABLE,
     SegmentId, VARIABLE_COUNT, VariableSet,
 };
+pub use push::Push;

@@ -158,6 +158,7 @@ fn place(scene: &Scene, first: &[HandTarget]) -> Result<Placed, ReplayError> {
         hands,
         &scene.parts,
         scene.params.sliding.clone(),
+        scene.params.unheld(),
         1.0 / scene.rates.sliding_hz,
     );
     Ok(Placed {

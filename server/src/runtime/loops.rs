@@ -431,6 +431,7 @@ impl SlidingLoop {
                 self.stage = Some(SlideStage::new(
                     &scene.parts,
                     scene.params.sliding.clone(),
+                    scene.params.unheld(),
                     self.period.as_secs_f64(),
                     scene.hands.len(),
                 ));
@@ -468,11 +469,14 @@ impl SlidingLoop {
             .filter_map(|hand| hand.frame.as_ref())
             .collect();
         let mut held = stage.apply(&frames).into_iter();
+        let mut hand_index = 0..;
         let hands: Vec<ProposedHand> = (frame.hands.into_iter())
             .map(|hand| {
                 let target = hand.target;
                 match hand.frame {
                     Some(hand_frame) => ProposedHand {
+                        pushing: (hand_index.next())
+                            .map_or_else(Vec::new, |index| stage.pushed_by(index).to_vec()),
                         root: hand_frame.pose.root,
                         flex: hand_frame.pose.flex.map(|v| v as f32),
                         touching: hand_frame.touching.to_vec(),
@@ -491,6 +495,7 @@ impl SlidingLoop {
                         tracked: target.tracked,
                         joints: target.joints,
                         held: None,
+                        pushing: Vec::new(),
                         events: Vec::new(),
                         handed_over: Vec::new(),
                     },
@@ -498,7 +503,8 @@ impl SlidingLoop {
             })
             .collect();
         let part_poses = stage.part_poses().to_vec();
-        self.remember(frame.stamps, &hands);
+        let unheld_moving = stage.has_motion_left();
+        self.remember(frame.stamps, &hands, unheld_moving);
         let candidate = CandidateFrame {
             stamps: frame.stamps,
             epoch: self.epoch,
@@ -509,11 +515,13 @@ impl SlidingLoop {
     }
 
     /// Keeps the latest hands to go on sliding from: their tracked roots and held parts, their
-    /// events taken (they are sent once).
-    fn remember(&mut self, stamps: Stamps, hands: &[ProposedHand]) {
-        let more = hands
-            .iter()
-            .any(|hand| hand.held.as_ref().is_some_and(HeldPart::has_sliding_left));
+    /// events taken (they are sent once); `unheld_moving` when a part no hand holds moves on
+    /// without input (settling).
+    fn remember(&mut self, stamps: Stamps, hands: &[ProposedHand], unheld_moving: bool) {
+        let more = unheld_moving
+            || hands
+                .iter()
+                .any(|hand| hand.held.as_ref().is_some_and(HeldPart::has_sliding_left));
         let hands = hands
             .iter()
             .map(|hand| ProposedHand {
@@ -544,7 +552,8 @@ impl SlidingLoop {
             .collect();
         let stamps = *stamps;
         let part_poses = stage.part_poses().to_vec();
-        self.remember(stamps, &hands);
+        let unheld_moving = stage.has_motion_left();
+        self.remember(stamps, &hands, unheld_moving);
         self.outbox.send(Work::Frame(CandidateFrame {
             stamps,
             epoch: self.epoch,

@@ -7,6 +7,7 @@ use serde::Deserialize;
 use super::loader::AssemblyFile;
 use super::params::AlgorithmParams;
 use super::params::Rates;
+use super::unheld::ReleaseMode;
 use crate::geometry::shapes::ShapeSpec;
 
 /// The config as written, before validation.
@@ -51,6 +52,8 @@ pub(super) struct PartFile {
     pub(super) movable: bool,
     #[serde(default = "default_group")]
     pub(super) group: String,
+    pub(super) push: Option<bool>,
+    pub(super) release: Option<ReleaseMode>,
 }
 
 pub(super) fn default_group() -> String {

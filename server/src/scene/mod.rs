@@ -59,6 +59,7 @@ mod params;
 mod part;
 mod part_tree;
 mod summary;
+mod unheld;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -74,6 +75,7 @@ pub use loader::LoadOptions;
 pub use params::{AlgorithmParams, DOP_ORIENTATION_COUNTS, Rates, TrackingParams};
 pub use part::{Part, log_prepared};
 pub use part_tree::PartTree;
+pub use unheld::{PushParams, ReleaseMode, ReleaseParams, UnheldParams};
 
 /// How far from 1 a rotation quaternion's norm may be (relative), as a config writes it with a
 /// limited number of digits.

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::clearance::ClearanceParams;
+use super::unheld::{PushParams, ReleaseParams, UnheldParams};
 use crate::collision::orientation::DEFAULT_K;
 use crate::grasping::{ClaspParams, GraspParams};
 use crate::sliding::SlideParams;
@@ -35,6 +36,10 @@ pub struct AlgorithmParams {
     pub tracking: TrackingParams,
     /// The clearance watch, the `[params.clearance]` table (off by default).
     pub clearance: ClearanceParams,
+    /// Pushing of movable parts no hand holds, the `[params.push]` table (on by default).
+    pub push: PushParams,
+    /// What released parts do, the `[params.release]` table (they settle by default).
+    pub release: ReleaseParams,
 }
 
 impl Default for AlgorithmParams {
@@ -45,6 +50,8 @@ impl Default for AlgorithmParams {
             clasp: ClaspParams::default(),
             tracking: TrackingParams::default(),
             clearance: ClearanceParams::default(),
+            push: PushParams::default(),
+            release: ReleaseParams::default(),
         }
     }
 }
@@ -186,6 +193,14 @@ fn within(key: &str, value: f64, (min, max): (f64, f64), unit: &str) -> Result<(
 }
 
 impl AlgorithmParams {
+    /// What the simulation does with movable parts no hand holds: the push and release tables.
+    pub fn unheld(&self) -> UnheldParams {
+        UnheldParams {
+            push: self.push,
+            release: self.release,
+        }
+    }
+
     /// The grasping hand's tuning for this scene: its clasp parameters, and segment trees with
     /// its parts' orientations.
     pub fn grasp(&self) -> GraspParams {
@@ -219,6 +234,7 @@ impl AlgorithmParams {
             key: format!("params.clearance.{}", e.key),
             reason: e.reason,
         })?;
+        self.release.validate()?;
         self.tracking.validate()
     }
 }

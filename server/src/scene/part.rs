@@ -5,6 +5,7 @@ use std::sync::Arc;
 use nalgebra::Isometry3;
 
 use super::part_tree::PartTree;
+use super::unheld::{PushParams, ReleaseMode, ReleaseParams};
 use crate::collision::DopTree;
 use crate::collision::dop_tree::Provenance;
 use crate::geometry::{ConvexHull, EdgeAdjacency, TriMesh};
@@ -30,6 +31,10 @@ pub struct Part {
     pub movable: bool,
     /// The part's group in the collision interest matrix.
     pub group: String,
+    /// The part's own `push` key: whether hands push it, over the scene's `[params.push]`.
+    pub push: Option<bool>,
+    /// The part's own `release` key: what it does when released, over `[params.release]`.
+    pub release: Option<ReleaseMode>,
     /// The DOP-tree, convex hull and edge adjacency of [`Part::mesh`], built on first use
     /// ([`Part::tree`], [`Part::hull`], [`Part::adjacency`]).
     pub tree: PartTree,
@@ -53,6 +58,17 @@ impl Part {
     /// the first caller, then shared like [`Part::tree`].
     pub fn adjacency(&self) -> &Arc<EdgeAdjacency> {
         (self.tree.adjacency).get_or_init(|| Arc::new(EdgeAdjacency::new(&self.mesh)))
+    }
+
+    /// Whether a hand touching the part without holding it moves it: a movable part, unless
+    /// its own key or the scene's `push` table says not.
+    pub fn pushable(&self, scene: &PushParams) -> bool {
+        scene.pushes(self.movable, self.push)
+    }
+
+    /// What the part does when released: its own key, else the scene's; a static part stays.
+    pub fn release_mode(&self, scene: &ReleaseParams) -> ReleaseMode {
+        scene.mode_of(self.movable, self.release)
     }
 
     /// The part as the grasping stage tests it: its shared mesh and tree, not copies.

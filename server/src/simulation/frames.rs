@@ -123,6 +123,8 @@ pub struct ProposedHand {
     pub joints: InputStamp,
     /// The part it holds, if any.
     pub held: Option<HeldPart>,
+    /// The parts it pushes (touches without holding, moving them by its motion into them).
+    pub pushing: Vec<PartId>,
     /// Its grasps and releases since the previous frame.
     pub events: Vec<GraspEvent>,
     /// The parts it handed over to the other hand since the previous frame.
@@ -211,7 +213,7 @@ pub struct Event {
 pub struct VerifiedPart {
     /// Its pose: free.
     pub pose: Isometry3<f64>,
-    /// [`vas_protocol::PART_GRASPED`], `PART_TOUCHING`, `PART_SLIDING` bits.
+    /// [`vas_protocol::PART_GRASPED`], `PART_TOUCHING`, `PART_SLIDING`, `PART_PUSHED` bits.
     pub flags: u32,
 }
 
@@ -248,7 +250,7 @@ pub struct VerifiedFrame {
     pub hands: Vec<VerifiedHand>,
     /// Every part, by id.
     pub parts: Vec<VerifiedPart>,
-    /// Grasps, releases, hand-overs, contact begins and ends of this frame.
+    /// Grasps, releases, hand-overs, contact and push begins and ends of this frame.
     pub events: Vec<Event>,
 }
 

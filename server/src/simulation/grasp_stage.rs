@@ -173,6 +173,8 @@ mod tests {
             pose,
             movable: false,
             group: "default".into(),
+            push: None,
+            release: None,
             tree: PartTree::new(DEFAULT_K, None),
         }
     }

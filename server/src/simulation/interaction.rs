@@ -37,7 +37,7 @@ use super::frames::{HandTarget, HeldPart};
 use super::grasp_stage::{GraspStage, SteppedHand};
 use super::slide_stage::SlideStage;
 use crate::grasping::{GraspingHand, HandStep, PartId};
-use crate::scene::Part;
+use crate::scene::{Part, UnheldParams};
 use crate::sliding::{SlideMachine, SlideParams};
 
 /// One hand's outcome of one frame.
@@ -50,6 +50,8 @@ pub struct InteractionFrame {
     pub held: Option<HeldPart>,
     /// The parts the hand handed over to the other hand this frame.
     pub handed_over: Vec<PartId>,
+    /// The parts the hand pushes this frame.
+    pub pushed: Vec<PartId>,
 }
 
 /// The scene's grasping hands among its parts, with sliding for the parts they hold: the two
@@ -63,17 +65,18 @@ pub struct Interaction {
 impl Interaction {
     /// The `hands` among `parts` (a part's id is its index), which start at their configured
     /// poses; `slide_params` (validated) drive the sliding of grasped parts, `period` seconds
-    /// apart.
+    /// apart, and `unheld` the pushing and settling of parts no hand holds.
     pub fn new(
         hands: Vec<GraspingHand>,
         parts: &[Part],
         slide_params: SlideParams,
+        unheld: UnheldParams,
         period: f64,
     ) -> Interaction {
         let count = hands.len();
         Interaction {
             grasp: GraspStage::new(hands, parts),
-            slide: SlideStage::new(parts, slide_params, period, count),
+            slide: SlideStage::new(parts, slide_params, unheld, period, count),
         }
     }
 
@@ -108,13 +111,17 @@ impl Interaction {
         stepped
             .into_iter()
             .zip(held)
+            .enumerate()
             .map(
                 |(
-                    SteppedHand {
-                        mut frame,
-                        handed_over,
-                    },
-                    held,
+                    hand,
+                    (
+                        SteppedHand {
+                            mut frame,
+                            handed_over,
+                        },
+                        held,
+                    ),
                 )| {
                     if let Some(held) = &held {
                         frame.pose.root = held.hand_root;
@@ -123,6 +130,7 @@ impl Interaction {
                         hand: frame,
                         held,
                         handed_over,
+                        pushed: self.slide.pushed_by(hand).to_vec(),
                     }
                 },
             )

@@ -5,8 +5,9 @@
 //! hands against the parts, `slide_stage` slides the parts they hold, and [`verify`] checks the
 //! candidate frame scene-wide so that nothing leaves at a colliding pose; [`clearance`] then
 //! watches the verified poses for part pairs closer than the scene's threshold, beside the
-//! loops. [`frames`] are what the stages hand each other, [`restart`] the changes between
-//! frames. [`interaction`] runs the first two stages in sequence, as the loops do in lockstep.
+//! loops; the sliding stage also pushes and settles parts no hand holds (`unheld`). [`frames`]
+//! are what the stages hand each other, [`restart`] the changes between frames. [`interaction`]
+//! runs the first two stages in sequence, as the loops do in lockstep.
 //!
 //! No threads and no ports here: those are the runtime's.
 
@@ -18,4 +19,5 @@ pub mod hand_bodies;
 pub mod interaction;
 pub mod restart;
 pub(crate) mod slide_stage;
+mod unheld;
 pub mod verify;

@@ -1,23 +1,28 @@
 //! The sliding half of a frame: a grasped part slides from its visible pose towards where its
-//! hand holds it, on a collision copy of the part against the other parts.
+//! hand holds it, on a collision copy of the part against the other parts; parts no hand holds
+//! are pushed and settle ([`super::unheld`]).
 
 use std::sync::Arc;
 
 use nalgebra::Isometry3;
 
 use super::frames::{ContactAt, HeldPart};
+use super::unheld::Unheld;
 use crate::collision::DopTree;
 use crate::grasping::{GraspEvent, HandStep, PartId};
-use crate::scene::Part;
+use crate::scene::{Part, ReleaseMode, UnheldParams};
 use crate::sliding::force::ForceModel;
 use crate::sliding::world::{Obstacle as SlideObstacle, PairwiseWorld, SlideBody};
 use crate::sliding::{RestReason, SlideMachine, SlideParams, SlidingMetaphor};
 
 /// A part as the sliding stage needs it.
-struct SlidePart {
-    name: String,
-    movable: bool,
-    body: Arc<SlideBody<DopTree>>,
+pub(super) struct SlidePart {
+    pub(super) name: String,
+    pub(super) movable: bool,
+    /// Its own `push` and `release` keys.
+    pub(super) push: Option<bool>,
+    pub(super) release: Option<ReleaseMode>,
+    pub(super) body: Arc<SlideBody<DopTree>>,
 }
 
 /// A held part's sliding simulation: its machine and its collision copy against the other parts,
@@ -43,18 +48,30 @@ pub struct SlideStage {
     period: f64,
     /// Per hand, the part it holds.
     held: Vec<Option<HeldSlide>>,
+    /// The movable parts no hand holds: pushed, settling.
+    unheld: Unheld,
 }
 
 impl SlideStage {
     /// The `parts` at their configured poses, for `hands` hands; `params` (validated) drive the
-    /// sliding of grasped parts, whose frames are `period` seconds apart.
-    pub fn new(parts: &[Part], params: SlideParams, period: f64, hands: usize) -> SlideStage {
+    /// sliding of grasped parts, whose frames are `period` seconds apart, and `unheld` what the
+    /// parts no hand holds do.
+    pub fn new(
+        parts: &[Part],
+        params: SlideParams,
+        unheld: UnheldParams,
+        period: f64,
+        hands: usize,
+    ) -> SlideStage {
         SlideStage {
+            unheld: Unheld::new(unheld, &params, period, hands),
             parts: parts
                 .iter()
                 .map(|part| SlidePart {
                     name: part.name.clone(),
                     movable: part.movable,
+                    push: part.push,
+                    release: part.release,
                     body: Arc::new(SlideBody::with_parts(
                         part.mesh.clone(),
                         Arc::clone(part.adjacency()),
@@ -72,6 +89,17 @@ impl SlideStage {
     /// The visible pose of every part, by id.
     pub fn part_poses(&self) -> &[Isometry3<f64>] {
         &self.poses
+    }
+
+    /// The parts `hand` pushed in the latest frame.
+    pub fn pushed_by(&self, hand: usize) -> &[PartId] {
+        self.unheld.pushed_by(hand)
+    }
+
+    /// Whether a part no hand holds still moves without new input (settling, or a push that ran
+    /// out of cycles): the sliding loop goes on then.
+    pub fn has_motion_left(&self) -> bool {
+        self.unheld.has_motion_left()
     }
 
     /// The sliding machine of the part `hand` holds, if it holds a movable part.
@@ -95,6 +123,7 @@ impl SlideStage {
             return;
         };
         *slot = pose;
+        self.unheld.forget(part);
         for hand in 0..self.held.len() {
             if let Some(held) = self.held[hand].take_if(|held| held.part == part) {
                 self.start_sliding(hand, part);
@@ -107,7 +136,8 @@ impl SlideStage {
     }
 
     /// Takes the hands' frames (in the hands' order): hands grasped parts over to sliding and
-    /// back, and slides each held part one frame towards where its hand holds it.
+    /// back, slides each held part one frame towards where its hand holds it, then moves the
+    /// parts the hands push and those settling.
     pub fn apply(&mut self, frames: &[&HandStep]) -> Vec<Option<HeldPart>> {
         // Releases first: in a hand-over the part leaves one hand before the other takes it.
         for (hand, frame) in frames.iter().enumerate() {
@@ -115,19 +145,23 @@ impl SlideStage {
                 if let GraspEvent::Release { part, .. } = *event
                     && let Some(slot) = self.held.get_mut(hand)
                 {
-                    // The part stays at its last visible pose, which the machine found free.
-                    slot.take_if(|held| held.part == part);
+                    // The part stays at its last visible pose, which the machine found free,
+                    // or settles from there.
+                    if slot.take_if(|held| held.part == part).is_some() {
+                        self.unheld.released(part, &self.parts);
+                    }
                 }
             }
         }
         for (hand, frame) in frames.iter().enumerate() {
             for event in &frame.events {
                 if let GraspEvent::Grasp { part, .. } = *event {
+                    self.unheld.forget(part);
                     self.start_sliding(hand, part);
                 }
             }
         }
-        frames
+        let held_parts: Vec<Option<HeldPart>> = frames
             .iter()
             .enumerate()
             .map(|(hand, frame)| {
@@ -145,13 +179,21 @@ impl SlideStage {
                     }
                 }
             })
-            .collect()
+            .collect();
+        let held: Vec<PartId> = (self.held.iter().flatten()).map(|h| h.part).collect();
+        let pushes: Vec<&[crate::grasping::Push]> =
+            frames.iter().map(|frame| frame.pushes.as_slice()).collect();
+        (self.unheld).frame(&self.parts, &mut self.poses, &held, &pushes);
+        held_parts
     }
 
     /// One more sliding frame towards the latest ghost for each hand whose last one ran out of
     /// cycles before reaching it; `None` for a hand that holds nothing or whose part came to
-    /// rest (reached, blocked or stalled: only a new ghost can move it then).
+    /// rest (reached, blocked or stalled: only a new ghost can move it then). The parts no hand
+    /// holds move on too (pushes that ran out of cycles, settling parts).
     pub fn keep_sliding(&mut self) -> Vec<Option<HeldPart>> {
+        let held: Vec<PartId> = (self.held.iter().flatten()).map(|h| h.part).collect();
+        (self.unheld).keep_moving(&self.parts, &mut self.poses, &held);
         (0..self.held.len())
             .map(|hand| {
                 let slide = self.held[hand].as_ref()?;

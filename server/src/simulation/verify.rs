@@ -12,13 +12,17 @@
 //! A hand and the part it holds are not checked against each other: the grasp is that contact,
 //! and the clasp already keeps fingers out of the part. The hands are not checked against each
 //! other either (they are the user's own). Contacts between parts and between the hands and parts
-//! are turned into begin and end events here, where the frame is final.
+//! are turned into begin and end events here, where the frame is final, and so are the pushes:
+//! a hand pushes a part from the frame it first touches it in a push to the frame it no longer
+//! does (a hand put back keeps its last verified pushes, as its contacts).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
 use nalgebra::Isometry3;
-use vas_protocol::{EventKind, HAND_PART_ID, PART_GRASPED, PART_SLIDING, PART_TOUCHING};
+use vas_protocol::{
+    EventKind, HAND_PART_ID, PART_GRASPED, PART_PUSHED, PART_SLIDING, PART_TOUCHING,
+};
 
 use super::frames::{
     CandidateFrame, ContactAt, Event, ProposedHand, VerifiedFrame, VerifiedHand, VerifiedPart,
@@ -81,6 +85,8 @@ pub struct Verifier {
     /// The contacts of the last frame, by (part, other, hand), each with where it was; the hand
     /// is the one touching (`other` is [`HAND_PART_ID`]) or holding `part`.
     contacts: BTreeMap<(PartId, u32, usize), ContactAt>,
+    /// The parts pushed in the last frame, by (part, hand).
+    pushed: BTreeSet<(PartId, usize)>,
     /// The pairs colliding after the last pipeline frame.
     colliding: BTreeSet<(ObjectId, ObjectId)>,
     refused_moves: u64,
@@ -175,6 +181,7 @@ impl Verifier {
                 })
                 .collect(),
             contacts: BTreeMap::new(),
+            pushed: BTreeSet::new(),
             colliding,
             refused_moves: 0,
         }
@@ -349,8 +356,11 @@ impl Verifier {
         let mut events = grasp_events(&candidate);
         let contacts = self.contacts_of(&candidate, accepted);
         self.contact_events(&contacts, &mut events);
-        self.flag_parts(&candidate, &contacts);
+        let pushed = self.pushed_of(&candidate, accepted);
+        self.push_events(&pushed, &mut events);
+        self.flag_parts(&candidate, &contacts, &pushed);
         self.contacts = contacts;
+        self.pushed = pushed;
         let hands = self.verified_hands(candidate.hands);
         VerifiedFrame {
             stamps: candidate.stamps,
@@ -423,11 +433,46 @@ impl Verifier {
         }
     }
 
-    /// Sets every part's grasped, touching and sliding flags.
+    /// The frame's pushes, by (part, hand): each accepted hand's, a refused hand's last verified
+    /// ones.
+    fn pushed_of(
+        &self,
+        candidate: &CandidateFrame,
+        accepted: &[bool],
+    ) -> BTreeSet<(PartId, usize)> {
+        let mut pushed = BTreeSet::new();
+        for (hand, proposed) in candidate.hands.iter().enumerate() {
+            if accepted[hand] || self.hands[hand].objects.is_none() {
+                pushed.extend(proposed.pushing.iter().map(|&part| (part, hand)));
+            } else {
+                pushed.extend(self.pushed.iter().filter(|&&(_, of)| of == hand));
+            }
+        }
+        pushed
+    }
+
+    /// Appends the pushes that ended since the last frame, then those that began.
+    fn push_events(&self, pushed: &BTreeSet<(PartId, usize)>, events: &mut Vec<Event>) {
+        let event = |kind, &(part, hand): &(PartId, usize)| Event {
+            kind,
+            hand,
+            grasp: wire_grasp(None),
+            part,
+            other: HAND_PART_ID,
+            at: None,
+        };
+        let ended = self.pushed.difference(pushed);
+        events.extend(ended.map(|push| event(EventKind::PushEnd, push)));
+        let began = pushed.difference(&self.pushed);
+        events.extend(began.map(|push| event(EventKind::PushBegin, push)));
+    }
+
+    /// Sets every part's grasped, touching, sliding and pushed flags.
     fn flag_parts(
         &mut self,
         candidate: &CandidateFrame,
         contacts: &BTreeMap<(PartId, u32, usize), ContactAt>,
+        pushed: &BTreeSet<(PartId, usize)>,
     ) {
         let held: Vec<Option<PartId>> = (candidate.hands.iter())
             .map(|hand| hand.held.as_ref().map(|held| held.part))
@@ -446,7 +491,12 @@ impl Verifier {
             } else {
                 0
             } | if touching { PART_TOUCHING } else { 0 }
-                | if sliding { PART_SLIDING } else { 0 };
+                | if sliding { PART_SLIDING } else { 0 }
+                | if pushed.iter().any(|&(part, _)| part == id) {
+                    PART_PUSHED
+                } else {
+                    0
+                };
         }
     }
 

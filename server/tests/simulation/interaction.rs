@@ -14,7 +14,7 @@ use vas_server::geometry::{TriMesh, shapes};
 use vas_server::grasping::{
     FLEX_COUNT, GraspClass, GraspEvent, GraspParams, GraspingHand, HandPose, PartId,
 };
-use vas_server::scene::{Part, PartTree};
+use vas_server::scene::{Part, PartTree, UnheldParams};
 use vas_server::simulation::frames::HandTarget;
 use vas_server::simulation::interaction::{Interaction, InteractionFrame};
 use vas_server::sliding::motion::pose_distance;
@@ -45,6 +45,8 @@ fn part(name: &str, mesh: TriMesh, pose: Isometry3<f64>, movable: bool) -> Part 
         pose,
         movable,
         group: "default".into(),
+        push: None,
+        release: None,
         tree: PartTree::new(DEFAULT_K, None),
     }
 }
@@ -104,7 +106,13 @@ impl Run {
             metaphor: SlidingMetaphor::SpiralSpring,
             ..SlideParams::default()
         };
-        let interaction = Interaction::new(vec![hand], &parts, params, 1.0 / RATE);
+        let interaction = Interaction::new(
+            vec![hand],
+            &parts,
+            params,
+            UnheldParams::held_only(),
+            1.0 / RATE,
+        );
         Run {
             parts,
             interaction,
@@ -369,7 +377,13 @@ fn the_left_hand_takes_the_handle_over_from_the_right_and_inserts_it() {
             GraspingHand::new(model, GraspParams::default(), parked).expect("segments build")
         })
         .into();
-    let mut interaction = Interaction::new(hands, &parts, SlideParams::default(), 1.0 / RATE);
+    let mut interaction = Interaction::new(
+        hands,
+        &parts,
+        SlideParams::default(),
+        UnheldParams::held_only(),
+        1.0 / RATE,
+    );
     let mut events = Vec::new();
     for (frame, (right, left)) in right.iter().zip(&left).enumerate() {
         let stepped = interaction.step(&[

@@ -34,7 +34,7 @@ pub enum RecordedScenario {
     PipeThroughSheet,
     /// Thumb and index tips pinch a small pin, lift it and open.
     PrecisionPinch,
-    /// The flat hand, fingers straight, pushes against the side of a block and withdraws;
+    /// The flat hand, fingers straight, pushes the side of a block 2 cm along and withdraws;
     /// nothing is grasped.
     Push,
     /// A power grasp on a handle, then the cart drives and turns while the hand stays still in
@@ -75,7 +75,7 @@ const PALM_FACE: f64 = 0.0125;
 const PALM_MIDDLE: f64 = 0.055;
 /// The pushing palm starts this far from the block (metres).
 const PUSH_GAP: f64 = 0.02;
-/// The push aims this far into the block (metres): the hand must stop at its face.
+/// The push aims this far into the block (metres): the block is pushed as far.
 const PUSH_DEPTH: f64 = 0.02;
 /// How far the cart drives while the hand holds the handle (metres, in the world).
 const CART_DRIVE: [f64; 3] = [0.3, 0.2, 0.0];

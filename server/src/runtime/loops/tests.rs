@@ -65,6 +65,7 @@ fn the_loops_in_lockstep_give_the_offline_interaction_frame_by_frame() {
             restart.hands,
             &scene.parts,
             scene.params.sliding.clone(),
+            scene.params.unheld(),
             period(scene.rates.sliding_hz).as_secs_f64(),
         )
     };

@@ -177,6 +177,8 @@ impl Loader<'_> {
                 pose,
                 movable: movable.contains(part.name.as_str()),
                 group: assembly.group.clone(),
+                push: None,
+                release: None,
                 tree,
             });
         }

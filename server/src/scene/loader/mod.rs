@@ -311,6 +311,8 @@ impl Loader<'_> {
             pose,
             movable: part.movable,
             group: part.group,
+            push: part.push,
+            release: part.release,
             tree,
         })
     }

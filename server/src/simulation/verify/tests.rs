@@ -48,6 +48,7 @@ fn candidate(poses: Vec<Isometry3<f64>>) -> CandidateFrame {
             tracked: true,
             joints: Default::default(),
             held: None,
+            pushing: Vec::new(),
             events: Vec::new(),
             handed_over: Vec::new(),
         }],
