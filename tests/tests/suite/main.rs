@@ -3,6 +3,7 @@
 //! iceoryx2 prefix.
 
 mod bench_tools;
+mod c_library;
 mod clearance;
 mod client_roles;
 mod end_to_end;
