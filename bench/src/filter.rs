@@ -15,7 +15,9 @@
 //! * Moving: the hand still for a second, then moving at `--speed` m/s along x for
 //!   [`MOVE_S`] s. The lag is the filtered palm's distance behind the noise-free palm along the
 //!   motion, over the speed: its mean over the second half of the motion (the steady lag) and
-//!   its largest over the whole (the start, while the speed estimate rises).
+//!   its largest over the whole (the start, while the speed estimate rises). Then likewise the
+//!   hand turning about the vertical through its wrist at `--turn` rad/s: the filtered palm's
+//!   angle from the noise-free palm's over the turn rate, mean over the second half of the turn.
 
 use std::path::{Path, PathBuf};
 
@@ -26,7 +28,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use vas_protocol::HandSide;
 use vas_server::grasping::model::{FLEX_COUNT, HandModel};
-use vas_server::grasping::retarget::{Capture, HandJoints, Retargeter};
+use vas_server::grasping::retarget::{Capture, HandJoints, Joint, Retargeter};
 use vas_server::scene::TrackingParams;
 use vas_server::simulation::filter::{Sample, StreamFilter};
 
@@ -50,6 +52,8 @@ pub struct FilterConfig {
     pub noise_deg: f64,
     /// Speed of the moving hand (m/s).
     pub speed: f64,
+    /// Angular speed of the turning hand (rad/s).
+    pub turn_rate: f64,
     /// Seed of the noise.
     pub seed: u64,
     /// The filter's parameters.
@@ -72,6 +76,8 @@ pub struct FilterRow {
     pub lag_ms: f64,
     /// Its largest lag over the whole motion (ms).
     pub max_lag_ms: f64,
+    /// The filtered palm's mean lag over the second half of the turn (ms).
+    pub turn_lag_ms: f64,
     /// The filtered palm's distance along the motion, by time (s, mm), for the figure.
     #[serde(skip)]
     pub track: Vec<(f64, f64)>,
@@ -182,7 +188,7 @@ fn rms(values: impl Iterator<Item = f64>) -> f64 {
     (sum / count as f64).sqrt()
 }
 
-/// The filtered and unfiltered retargeted samples of `joints` moved to `place(t)` at every
+/// The filtered and unfiltered retargeted samples of `joints` moved by `place(t)` at every
 /// sample time `t` from 0 to `duration` s, with noise.
 struct Run<'a> {
     retargeter: &'a Retargeter,
@@ -196,17 +202,14 @@ impl Run<'_> {
         &mut self,
         joints: &HandJoints,
         duration: f64,
-        place: impl Fn(f64) -> Vector3<f64>,
+        place: impl Fn(f64) -> Isometry3<f64>,
     ) -> Result<Vec<(f64, Fit, Fit, Fit)>> {
         let mut filter = StreamFilter::<FLEX_COUNT>::new(&self.config.tracking);
         let ticks = (duration * self.config.rate_hz).round() as usize;
         (0..=ticks)
             .map(|tick| {
                 let t = tick as f64 / self.config.rate_hz;
-                let moved = joints.transformed(&Isometry3::from_parts(
-                    Translation3::from(place(t)),
-                    UnitQuaternion::identity(),
-                ));
+                let moved = joints.transformed(&place(t));
                 let fit = |joints: &HandJoints| {
                     let fit = self
                         .retargeter
@@ -235,7 +238,7 @@ pub fn measure(model: &HandModel, capture: &Path, config: &FilterConfig) -> Resu
         config,
         noise: Noise::new(config),
     };
-    let rest = run.samples(&joints, REST_S, |_| Vector3::zeros())?;
+    let rest = run.samples(&joints, REST_S, |_| Isometry3::identity())?;
     let settled: Vec<_> = rest.iter().filter(|(t, ..)| *t >= 1.0).collect();
     let palms = |pick: fn(&(f64, Fit, Fit, Fit)) -> &Fit| -> Vec<Isometry3<f64>> {
         settled.iter().map(|s| palm(model, pick(s))).collect()
@@ -253,7 +256,7 @@ pub fn measure(model: &HandModel, capture: &Path, config: &FilterConfig) -> Resu
 
     let speed = config.speed;
     let moving = run.samples(&joints, 1.0 + MOVE_S, |t| {
-        Vector3::x() * speed * (t - 1.0).max(0.0)
+        Isometry3::translation(speed * (t - 1.0).max(0.0), 0.0, 0.0)
     })?;
     let lags: Vec<(f64, f64)> = (moving.iter())
         .filter(|(t, ..)| *t > 1.0)
@@ -262,9 +265,27 @@ pub fn measure(model: &HandModel, capture: &Path, config: &FilterConfig) -> Resu
             (*t, behind / speed * 1e3)
         })
         .collect();
-    let steady: Vec<f64> = (lags.iter())
-        .filter(|(t, _)| *t >= 1.0 + MOVE_S / 2.0)
-        .map(|(_, lag)| *lag)
+    let steady = |lags: &[(f64, f64)]| -> f64 {
+        let late: Vec<f64> = (lags.iter())
+            .filter(|(t, _)| *t >= 1.0 + MOVE_S / 2.0)
+            .map(|(_, lag)| *lag)
+            .collect();
+        late.iter().sum::<f64>() / late.len() as f64
+    };
+    let wrist = Translation3::from(joints.get(Joint::Wrist).position.coords);
+    let rate = config.turn_rate;
+    let turning = run.samples(&joints, 1.0 + MOVE_S, |t| {
+        let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), rate * (t - 1.0).max(0.0));
+        wrist * turn * wrist.inverse()
+    })?;
+    let turn_lags: Vec<(f64, f64)> = (turning.iter())
+        .filter(|(t, ..)| *t > 1.0)
+        .map(|(t, truth, _, filtered)| {
+            let behind = palm(model, truth)
+                .rotation
+                .angle_to(&palm(model, filtered).rotation);
+            (*t, behind / rate * 1e3)
+        })
         .collect();
     Ok(FilterRow {
         capture: (capture.file_name())
@@ -281,8 +302,9 @@ pub fn measure(model: &HandModel, capture: &Path, config: &FilterConfig) -> Resu
             flex_spread(&fits(|s| &s.2)).to_degrees(),
             flex_spread(&fits(|s| &s.3)).to_degrees(),
         ),
-        lag_ms: steady.iter().sum::<f64>() / steady.len() as f64,
+        lag_ms: steady(&lags),
         max_lag_ms: lags.iter().map(|(_, lag)| *lag).fold(0.0, f64::max),
+        turn_lag_ms: steady(&turn_lags),
         track: (moving.iter())
             .map(|(t, _, _, filtered)| (*t, palm(model, filtered).translation.x * 1e3))
             .collect(),
@@ -308,6 +330,7 @@ fn filter_table(rows: &[FilterRow]) -> Table {
         "filtered_flex_deg",
         "lag_ms",
         "max_lag_ms",
+        "turn_lag_ms",
     ]);
     for row in rows {
         let (by_distance, by_angle) = row.reduction();
@@ -324,6 +347,7 @@ fn filter_table(rows: &[FilterRow]) -> Table {
                     row.flex_jitter_deg.1,
                     row.lag_ms,
                     row.max_lag_ms,
+                    row.turn_lag_ms,
                 ]
                 .map(format_number),
             ),
@@ -357,6 +381,9 @@ pub struct FilterArgs {
     /// Speed of the moving hand (m/s).
     #[arg(long, default_value_t = 1.0, value_parser = positive_number)]
     pub speed: f64,
+    /// Angular speed of the turning hand (rad/s).
+    #[arg(long, default_value_t = 2.0, value_parser = positive_number)]
+    pub turn: f64,
     /// Seed of the noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -395,6 +422,7 @@ pub fn run(args: &FilterArgs) -> Result<()> {
         noise_mm: args.noise_mm,
         noise_deg: args.noise_deg,
         speed: args.speed,
+        turn_rate: args.turn,
         seed: args.seed,
         tracking: TrackingParams {
             min_cutoff: args.min_cutoff.unwrap_or(defaults.min_cutoff),
@@ -409,13 +437,14 @@ pub fn run(args: &FilterArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let tracking = &config.tracking;
     println!(
-        "filter: {} Hz, noise {} mm and {} deg RMS a joint, seed {}, moving at {} m/s; \
-         min_cutoff {} Hz, beta {}, beta_angular {}, d_cutoff {} Hz",
+        "filter: {} Hz, noise {} mm and {} deg RMS a joint, seed {}, moving at {} m/s, turning \
+         at {} rad/s; min_cutoff {} Hz, beta {}, beta_angular {}, d_cutoff {} Hz",
         config.rate_hz,
         config.noise_mm,
         config.noise_deg,
         config.seed,
         config.speed,
+        config.turn_rate,
         tracking.min_cutoff,
         tracking.beta,
         tracking.beta_angular,
@@ -479,6 +508,7 @@ mod tests {
             noise_mm: 1.5,
             noise_deg: 1.0,
             speed: 1.0,
+            turn_rate: 2.0,
             seed: 1,
             tracking: TrackingParams::default(),
         };
@@ -493,6 +523,7 @@ mod tests {
             assert!(row.flex_jitter_deg.1 < row.flex_jitter_deg.0, "{row:?}");
             // Behind, but by less than the bar.
             assert!(row.lag_ms > 0.0 && row.lag_ms <= LAG_BAR_MS, "{row:?}");
+            assert!(row.turn_lag_ms > 0.0, "{row:?}");
         }
     }
 }

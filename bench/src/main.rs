@@ -12,8 +12,8 @@ mod c_library;
 mod distance;
 mod e2e;
 mod echo;
-mod grasp;
 mod filter;
+mod grasp;
 mod oracle;
 mod orbit;
 mod process;
@@ -182,8 +182,6 @@ DOP-tree's mean bounding-volume tests and triangle distances per query). Then th
 missed."
     )]
     Distance(distance::DistanceArgs),
-    /// Answers every input sample at once with a hand frame (the raw path of `e2e`).
-    #[command(hide = true)]
     /// B13: the One Euro filter of hand tracking on the real captures, with noise added.
     #[command(
         after_long_help = "Columns: capture; jitter_mm, filtered_mm (the palm's RMS distance from its mean position with
@@ -191,9 +189,12 @@ the hand held still, unfiltered and filtered); reduction_x (their ratio); jitter
 filtered_deg, reduction_deg_x (the same for its rotation); flex_deg, filtered_flex_deg (the flex
 values' RMS deviation from their means); lag_ms (how far the filtered palm trails the noise-free
 one at --speed, in time, over the second half of the motion); max_lag_ms (the most over the
-motion). Then the bars, met or missed."
+motion); turn_lag_ms (the same as lag_ms for its rotation, the hand turning at --turn rad/s).
+Then the bars, met or missed."
     )]
     Filter(filter::FilterArgs),
+    /// Answers every input sample at once with a hand frame (the raw path of `e2e`).
+    #[command(hide = true)]
     Echo(args::ServerArgs),
 }
 
@@ -219,9 +220,9 @@ fn main() -> ExitCode {
         Benchmark::Soak(args) => soak::run(&args),
         Benchmark::Browser(args) => browser::run(&args),
         Benchmark::Distance(args) => distance::run_cli(&args),
+        Benchmark::Filter(args) => filter::run(&args),
         Benchmark::Echo(args) => echo::run(args.prefix.as_deref()),
     };
-        Benchmark::Filter(args) => filter::run(&args),
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
