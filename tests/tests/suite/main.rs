@@ -16,3 +16,4 @@ mod paced_replay;
 mod replays;
 mod report;
 mod retarget;
+mod unity_sample;
