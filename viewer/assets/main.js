@@ -5,13 +5,19 @@
 // Frames arrive faster or slower than the display draws; only the newest is drawn (a frame
 // that arrived while another was waiting replaces it, here or in the link's worker). The latency shown is from the input
 // sample a hand frame answers (its tracker timestamp, wall clock) to the moment the frame was
-// drawn. Everything tests look at is on `window.vasViewer`.
+// drawn, for live input only (see `LIVE_INPUT_MS`). Everything tests look at is on
+// `window.vasViewer`.
 
 import { Connection } from './connection.js';
 import { Panel } from './panel.js';
-import { View, stateOf } from './view.js';
+import { COLOURS, PALETTE, View, clearanceColour, stateOf } from './view.js';
 import { setupXr } from './xr.js';
 
+// A hand frame published more than this after its tracker sample's stamp answers input that is
+// not live: a lockstep replay stamps its samples in the past (`vas-client replay`), so that the
+// time since the stamp says nothing of the latency. The server answers live input within a few
+// of its frames, far below this.
+const LIVE_INPUT_MS = 1000;
 // Latencies kept for the median shown and for tests.
 const LATENCY_WINDOW = 200;
 // Events kept for tests (the panel shows fewer).
@@ -25,6 +31,12 @@ const state = {
   server: false,
   scene: null,
   sceneNames: [],
+  // The name the server offers its current scene under (null if not offered), and the sliding
+  // metaphor the viewer set since the scene started (null: the scene's own).
+  currentScene: null,
+  metaphor: null,
+  // The sides (`right`, `left`) whose hands have answered input since the scene started.
+  handsSeen: [],
   waiting: null, // the newest frame not drawn yet: { text, arrivedMs }
   newest: null, // the newest frame received
   received: { frames: 0, events: 0, scenes: 0 },
@@ -51,14 +63,19 @@ const connection = new Connection({
   status(message) {
     state.server = message.server;
     state.sceneNames = message.scene_names;
+    state.currentScene = message.scene;
+    state.metaphor = message.metaphor;
     panel.showStatus(state.open, state.server);
-    panel.showSceneNames(message.scene_names);
+    panel.showSceneNames(message.scene_names, message.scene);
+    panel.showMetaphor(message.metaphor);
   },
   scene(scene, meshes) {
     state.scene = scene;
     state.waiting = null;
     state.newest = null;
     state.received.scenes += 1;
+    state.handsSeen = [];
+    panel.showHands(state.handsSeen);
     view.setScene(scene, meshes);
     panel.showScene(scene.name);
   },
@@ -77,7 +94,7 @@ const connection = new Connection({
     keep(state.events, event.text, EVENT_WINDOW);
     panel.addEvent(event.text);
     if (event.point && (event.kind === 'contact_begin' || event.kind === 'contact_end')) {
-      view.addMarker(event.point, event.kind === 'contact_begin', performance.now());
+      view.addMarker(event.point, event.kind === 'contact_begin', performance.now(), event.part);
     }
   },
   reply(reply) {
@@ -90,7 +107,13 @@ const connection = new Connection({
   },
 });
 const panel = new Panel((command) => connection.send(command));
+// A colour number (0xrrggbb) as CSS writes it.
+const cssHex = (colour) => `#${colour.toString(16).padStart(6, '0')}`;
 const xr = setupXr(view, panel, connection);
+panel.showLegend(
+  PALETTE.map(({ colour, words }) => ({ css: cssHex(colour), words })),
+  [0, 0.5, 1].map((closeness) => clearanceColour(closeness).getStyle()),
+);
 
 // Wall clock in milliseconds since the Unix epoch, as the frames' timestamps count it.
 const wallClockMs = () => performance.timeOrigin + performance.now();
@@ -127,17 +150,28 @@ function parsed(received) {
   return received.frame;
 }
 
-// Records that `frame` is on the screen, and the latency of a hand frame drawn for the first time.
+// Records that `frame` is on the screen, the hands that answered input, and the latency of a
+// hand frame drawn for the first time that answers live input.
 function noteDrawn(frame) {
   state.drawn.frames += 1;
   state.drawn.lastParts = frame.parts?.frame ?? state.drawn.lastParts;
   for (const hand of frame.hands) {
+    noteHandSeen(hand);
     if (hand.frame <= state.drawn.lastHand) continue;
     state.drawn.lastHand = hand.frame;
-    if (hand.tracker_ns > 0) {
+    const live = (hand.published_ns - hand.tracker_ns) / 1e6 <= LIVE_INPUT_MS;
+    if (hand.tracker_ns > 0 && live) {
       keep(state.latencies, wallClockMs() - hand.tracker_ns / 1e6, LATENCY_WINDOW);
     }
   }
+}
+
+// Adds the side of `hand` (a frame's hand) to the hands seen once it answers input.
+function noteHandSeen(hand) {
+  const side = state.scene?.hands.find((scene) => scene.hand === hand.hand)?.side;
+  if (!hand.answered || !side || state.handsSeen.includes(side)) return;
+  state.handsSeen = [...state.handsSeen, side];
+  panel.showHands(state.handsSeen);
 }
 
 // Appends `value` to `values`, keeping at least the newest `window` of them (trimmed in batches,
@@ -161,6 +195,23 @@ window.vasViewer = {
   get server() { return state.server; },
   get scene() { return state.scene && { version: state.scene.version, name: state.scene.name }; },
   get sceneNames() { return state.sceneNames; },
+  get currentScene() { return state.currentScene; },
+  get metaphor() { return state.metaphor; },
+  get handsSeen() { return [...state.handsSeen]; },
+  // What the panel shows: its scene and metaphor menus' selections, its hands line, its legend's
+  // swatches (CSS backgrounds, as computed) and its latency figure.
+  panel() {
+    const element = (id) => document.getElementById(id);
+    return {
+      scene: element('scenes').value,
+      metaphor: element('metaphor').value,
+      hands: element('hands').textContent,
+      legend: [...element('legend').querySelectorAll('.swatch')].map(
+        (swatch) => getComputedStyle(swatch).backgroundColor,
+      ),
+      perf: element('perf').textContent,
+    };
+  },
   get received() {
     const newest = state.newest && parsed(state.newest);
     const hands = newest?.hands ?? [];
@@ -186,7 +237,16 @@ window.vasViewer = {
   },
   resetTiming() { state.timing = { transport: [], draw: [], superseded: 0, late: 0 }; },
   get fps() { return state.fps; },
-  get markers() { return view.markers.map((marker) => marker.position.toArray()); },
+  // Every contact marker: the part it is kept on (null: none), where it is drawn in the vas world,
+  // where it is in its part's frame, and its colour.
+  get markers() {
+    return view.markers.map((marker) => ({
+      part: marker.userData.part,
+      position: view.markerPosition(marker).toArray(),
+      local: marker.position.toArray(),
+      colour: hex(marker.material.color),
+    }));
+  },
   // Every part as drawn: pose in the vas world, state and colour.
   parts() {
     return view.parts.map((mesh) => ({
@@ -219,4 +279,6 @@ window.vasViewer = {
     return { left, top, width, height };
   },
   stateOf,
+  // Each part state's colour (and the hand's and the markers'), by name, as `#rrggbb`.
+  colours: Object.fromEntries(Object.entries(COLOURS).map(([key, colour]) => [key, cssHex(colour)])),
 };

@@ -49,13 +49,46 @@ export class Panel {
     this.element('scene-name').textContent = name ? `scene: ${name}` : '';
   }
 
-  // Fills the scene list, keeping the selection when it is still offered.
-  showSceneNames(names) {
+  // Fills the scene list and selects `current`, the name the server offers the scene it serves
+  // under (null when it serves one it does not offer: then the selection is kept, if offered).
+  showSceneNames(names, current) {
     const select = this.element('scenes');
-    const selected = select.value;
+    const selected = current ?? select.value;
     select.replaceChildren(...names.map((name) => new Option(name, name)));
     if (names.includes(selected)) select.value = selected;
     this.element('load').disabled = names.length === 0;
+  }
+
+  // Selects the sliding metaphor the server uses; null when the viewer has not set one since the
+  // scene started, so the scene's own is in force.
+  showMetaphor(metaphor) {
+    this.element('metaphor').value = metaphor ?? '';
+  }
+
+  // The sides whose hands have answered input so far (`right`, `left`).
+  showHands(sides) {
+    const hands = this.element('hands');
+    hands.textContent = sides.length === 0 ? 'no hand seen yet' : `hands seen: ${sides.join(', ')}`;
+    hands.className = sides.length === 0 ? 'warning' : '';
+  }
+
+  // The legend: a swatch per `palette` entry ({ css, words }: a CSS colour and what it means)
+  // and one for the clearance pairs' colours, `clearance` (CSS colours from touching to the
+  // threshold).
+  showLegend(palette, clearance) {
+    // A swatch and its words, kept on one line.
+    const entry = (background, words) => {
+      const swatch = document.createElement('span');
+      swatch.className = 'swatch';
+      swatch.style.background = background;
+      const item = document.createElement('span');
+      item.append(swatch, words);
+      return item;
+    };
+    this.element('legend').replaceChildren(
+      ...palette.map(({ css, words }) => entry(css, words)),
+      entry(`linear-gradient(to right, ${clearance.join(', ')})`, 'clearance, touching to threshold'),
+    );
   }
 
   showPerf(fps, latencyMs) {

@@ -13,28 +13,42 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 const PART_GRASPED = 1;
 const PART_TOUCHING = 2;
 const PART_SLIDING = 4;
+const PART_PUSHED = 8;
 
-// One colour per state; the panel's legend (style.css) shows the same.
-export const COLOURS = {
-  resting: 0x8c9aab,
-  touching: 0xf2b233,
-  sliding: 0xb066f0,
-  grasped: 0x2fd15a,
-};
-const HAND_COLOUR = 0xd8a27e;
-const HAND_TOUCHING_COLOUR = 0xff7a45;
-const CONTACT_BEGIN_COLOUR = 0xff3b30;
-const CONTACT_END_COLOUR = 0x35a7ff;
+// Every colour the page draws with, and its words in the panel's legend (panel.js builds the
+// legend from this list, so that the two cannot differ). Part states first, in `stateOf`'s order.
+export const PALETTE = [
+  { key: 'sliding', colour: 0xb066f0, words: 'held, sliding' },
+  { key: 'grasped', colour: 0x2fd15a, words: 'grasped' },
+  { key: 'pushed', colour: 0x3fc6d9, words: 'pushed' },
+  { key: 'touching', colour: 0xf2b233, words: 'touching' },
+  { key: 'resting', colour: 0x8c9aab, words: 'resting' },
+  { key: 'hand', colour: 0xd8a27e, words: 'hand' },
+  { key: 'handTouching', colour: 0xff7a45, words: 'hand segment touching' },
+  { key: 'contactBegin', colour: 0xff3b30, words: 'contact begins' },
+  { key: 'contactEnd', colour: 0x35a7ff, words: 'contact ends' },
+];
+// The palette's colours by key.
+export const COLOURS = Object.fromEntries(PALETTE.map(({ key, colour }) => [key, colour]));
 // How long a contact marker stays, in milliseconds.
 const MARKER_MS = 1500;
 // A clearance label's height in the world (metres) and its canvas's size in pixels.
 const LABEL_HEIGHT = 0.012;
 const LABEL_PIXELS = [160, 48];
 
-// A part's state from its flags; grasped shows over sliding over touching.
+// A clearance pair's colour at `closeness` (its distance over the threshold, 0 to 1): red when
+// touching through yellow to green at the threshold.
+export function clearanceColour(closeness) {
+  return new THREE.Color().setHSL(closeness / 3, 0.9, 0.5);
+}
+
+// A part's state from its flags. The server flags sliding only on a held part, so sliding shows
+// over grasped (a colour of its own: held and sliding); a pushed part also touches the hand, so
+// pushed shows over touching.
 export function stateOf(flags) {
-  if (flags & PART_GRASPED) return 'grasped';
   if (flags & PART_SLIDING) return 'sliding';
+  if (flags & PART_GRASPED) return 'grasped';
+  if (flags & PART_PUSHED) return 'pushed';
   if (flags & PART_TOUCHING) return 'touching';
   return 'resting';
 }
@@ -87,7 +101,8 @@ export class View {
 
   // Replaces the drawn scene by `scene` (the viewer's scene message) and its `meshes`.
   setScene(scene, meshes) {
-    for (const part of this.parts) this.dispose(part);
+    for (const mesh of [...this.markers, ...this.parts]) this.dispose(mesh);
+    this.markers = [];
     for (const hand of this.hands.values()) hand.forEach((segment) => this.dispose(segment));
     const geometries = meshes.map(geometryOf);
     this.parts = scene.parts.map((part) => {
@@ -99,7 +114,7 @@ export class View {
     this.hands = new Map(
       scene.hands.map((hand) => [
         hand.hand,
-        hand.segments.map((mesh) => this.addMesh(geometries[mesh], HAND_COLOUR)),
+        hand.segments.map((mesh) => this.addMesh(geometries[mesh], COLOURS.hand)),
       ]),
     );
     // A new scene is framed once its parts have poses; the same scene again keeps the camera.
@@ -124,7 +139,7 @@ export class View {
   }
 
   dispose(mesh) {
-    this.world.remove(mesh);
+    mesh.removeFromParent();
     mesh.geometry.dispose();
     mesh.material.dispose();
   }
@@ -148,7 +163,7 @@ export class View {
         if (!mesh) return;
         place(mesh, pose.position, pose.rotation);
         const touching = (hand.touching >> index) & 1;
-        mesh.material.color.setHex(touching ? HAND_TOUCHING_COLOUR : HAND_COLOUR);
+        mesh.material.color.setHex(touching ? COLOURS.handTouching : COLOURS.hand);
       });
     }
     this.drawClearance(frame.clearance);
@@ -175,7 +190,7 @@ export class View {
       positions.needsUpdate = true;
       gap.line.geometry.computeBoundingSphere();
       const closeness = Math.min(Math.max(pair.distance / clearance.threshold, 0), 1);
-      const colour = new THREE.Color().setHSL(closeness / 3, 0.9, 0.5);
+      const colour = clearanceColour(closeness);
       const opacity = pair.stale ? 0.35 : 1;
       gap.line.material.color.copy(colour);
       gap.line.material.opacity = opacity;
@@ -227,17 +242,28 @@ export class View {
     this.controls.update();
   }
 
-  // Marks a contact event at `point` (vas world) for a short while.
-  addMarker(point, begin, now) {
+  // Marks a contact event at `point` (vas world) on part `partId` for a short while. The marker
+  // is kept in the part's frame, so that it moves with the part; a point on no drawn part (the
+  // hand's id, or a part not placed yet) stays where it is in the world.
+  addMarker(point, begin, now, partId) {
     const geometry = new THREE.SphereGeometry(0.004, 12, 8);
-    const colour = begin ? CONTACT_BEGIN_COLOUR : CONTACT_END_COLOUR;
+    const colour = begin ? COLOURS.contactBegin : COLOURS.contactEnd;
     const material = new THREE.MeshBasicMaterial({ color: colour, transparent: true, depthTest: false });
     const marker = new THREE.Mesh(geometry, material);
-    marker.position.set(...point);
+    const part = this.parts[partId];
+    const holder = part?.visible ? part : this.world;
+    holder.updateMatrixWorld();
+    marker.position.copy(holder.worldToLocal(this.world.localToWorld(new THREE.Vector3(...point))));
     marker.renderOrder = 1;
-    marker.userData.until = now + MARKER_MS;
-    this.world.add(marker);
+    Object.assign(marker.userData, { until: now + MARKER_MS, part: holder === part ? partId : null });
+    holder.add(marker);
     this.markers.push(marker);
+  }
+
+  // Where `marker` is drawn, in the vas world.
+  markerPosition(marker) {
+    this.world.updateMatrixWorld();
+    return this.world.worldToLocal(marker.getWorldPosition(new THREE.Vector3()));
   }
 
   // Draws one frame; `now` is the animation clock in milliseconds.

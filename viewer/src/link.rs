@@ -16,12 +16,13 @@ use std::time::{Duration, Instant};
 
 use vas_client::{
     ClearanceFrame, Client, ClientError, Frame, HandFrame, PartsFrame, Roles, SceneGeometry,
-    SceneInfo, SceneWords, Wake,
+    SceneInfo, SceneWords, SlidingMetaphor, Wake,
 };
 
 use crate::commands::Command;
 use crate::hand_joints::Sequence;
 use crate::hub::{Hub, Inbox};
+use crate::messages::ServerStatus;
 use crate::stats::Stats;
 use crate::{events, messages, scene};
 
@@ -54,14 +55,16 @@ pub fn run(prefix: Option<&str>, hub: &Hub, inbox: Inbox, stop: &AtomicBool) {
         last_hands: None,
         input_refused: None,
     };
-    hub.status.send_replace(Some(messages::status(false, &[])));
+    hub.status
+        .send_replace(Some(messages::status(&ServerStatus::default())));
     while !stop.load(Ordering::Relaxed) {
         match link.session(prefix) {
             Ok(()) => {}
             Err(error) => tracing::warn!(%error, "lost the vas server"),
         }
         hub.stats.server.store(false, Ordering::Relaxed);
-        hub.status.send_replace(Some(messages::status(false, &[])));
+        hub.status
+            .send_replace(Some(messages::status(&ServerStatus::default())));
     }
 }
 
@@ -99,14 +102,26 @@ impl Link<'_> {
             "server found"
         );
         self.hub.stats.server.store(true, Ordering::Relaxed);
-        self.hub
-            .status
-            .send_replace(Some(messages::status(true, &scene_names)));
+        let mut status = ServerStatus::default();
+        // The metaphor the pages set last, and the scene generation it was set on.
+        let mut metaphor_set = None;
 
         let mut latest = Latest::default();
         let mut last_heard = Instant::now();
         while !self.stop.load(Ordering::Relaxed) {
-            self.serve_commands(|command| carry_out(&client, command));
+            self.serve_commands(|command| carry_out(&client, command, &mut metaphor_set));
+            let now = ServerStatus {
+                server: true,
+                scene: offered_name(&scene, &scene_names),
+                scene_names: scene_names.clone(),
+                metaphor: (metaphor_set)
+                    .filter(|(_, generation)| Some(*generation) == latest.generation)
+                    .map(|(metaphor, _)| metaphor),
+            };
+            if now != status {
+                self.hub.status.send_replace(Some(messages::status(&now)));
+                status = now;
+            }
             self.publish_hand_joints(&mut client)?;
             let hands_recent = (self.last_hands).is_some_and(|at| at.elapsed() < HANDS_RECENT);
             match client.wait(if hands_recent { HAND_WAIT } else { WAIT })? {
@@ -288,21 +303,65 @@ struct Latest {
     clearance: Option<Box<ClearanceFrame>>,
 }
 
-/// Carries out a page's command on the server; the answer in words either way.
-fn carry_out(client: &Client, command: &Command) -> Result<String, String> {
-    let done = match command {
-        Command::Reset {} => client
-            .reset(CONTROL_TIMEOUT)
-            .map(|_| "scene reset".to_owned()),
-        Command::SetMetaphor { metaphor } => client
-            .set_metaphor(*metaphor, CONTROL_TIMEOUT)
-            .map(|_| format!("sliding metaphor: {metaphor}")),
-        Command::LoadScene { name } => client
-            .load_named_scene(name, LOAD_TIMEOUT)
-            .map(|_| format!("loaded {name}")),
-    };
+/// The name the server offers `scene` under among `names`: the one its file is named after. The
+/// server names the scenes it offers by their files' stems, and a scene by its own `name`.
+fn offered_name(scene: &SceneInfo, names: &[String]) -> Option<String> {
+    let stem = std::path::Path::new(&scene.source).file_stem()?.to_str()?;
+    names.iter().find(|name| *name == stem).cloned()
+}
+
+/// Carries out a page's command on the server; the answer in words either way. A metaphor set
+/// is left in `metaphor_set` with the generation of the scene it was set on: a reset or a load
+/// brings the scene's own metaphor back.
+fn carry_out(
+    client: &Client,
+    command: &Command,
+    metaphor_set: &mut Option<(SlidingMetaphor, u64)>,
+) -> Result<String, String> {
+    let done =
+        match command {
+            Command::Reset {} => client
+                .reset(CONTROL_TIMEOUT)
+                .map(|_| "scene reset".to_owned()),
+            Command::SetMetaphor { metaphor } => client
+                .set_metaphor(*metaphor, CONTROL_TIMEOUT)
+                .map(|response| {
+                    *metaphor_set = Some((*metaphor, response.generation));
+                    format!("sliding metaphor: {metaphor}")
+                }),
+            Command::LoadScene { name } => client
+                .load_named_scene(name, LOAD_TIMEOUT)
+                .map(|_| format!("loaded {name}")),
+        };
     done.map_err(|error| match error {
         ClientError::Refused { message, .. } => message,
         other => other.to_string(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vas_client::InputStats;
+
+    #[test]
+    fn the_served_scene_is_offered_under_its_files_stem() {
+        let scene = |source: &str| SceneInfo {
+            name: "peg insert".into(),
+            source: source.into(),
+            parts: Vec::new(),
+            stats: InputStats::default(),
+            up: [0.0, 0.0, 1.0],
+            metres_per_unit: 1.0,
+            hands: Vec::new(),
+            scenes_offered: 2,
+            generation: 1,
+        };
+        let names = ["peg_in_hole".to_owned(), "peg_insert".to_owned()];
+        assert_eq!(
+            offered_name(&scene("configs/peg_insert.toml"), &names).as_deref(),
+            Some("peg_insert")
+        );
+        assert_eq!(offered_name(&scene("elsewhere/gear.toml"), &names), None);
+    }
 }

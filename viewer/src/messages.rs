@@ -8,11 +8,30 @@ use axum::extract::ws::Message;
 use serde::Serialize;
 use serde_json::json;
 use vas_client::words::grasp_name;
-use vas_client::{ClearanceFrame, ClearancePair, HandFrame, PartState, PartsFrame, WirePose};
+use vas_client::{
+    ClearanceFrame, ClearancePair, HandFrame, PartState, PartsFrame, SlidingMetaphor, WirePose,
+};
 
-/// `{"type": "status"}`: whether a server answers, and the scenes it offers.
-pub fn status(server: bool, scene_names: &[String]) -> Message {
-    text(&json!({ "type": "status", "server": server, "scene_names": scene_names }))
+/// What a page is told of the server in a `status` message.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ServerStatus {
+    /// Whether a server answers.
+    pub server: bool,
+    /// The scenes it offers by name.
+    pub scene_names: Vec<String>,
+    /// The name among `scene_names` of the scene it serves; `None` when it serves one it does
+    /// not offer.
+    pub scene: Option<String>,
+    /// The sliding metaphor the viewer set on the scene it serves; `None` when none was set
+    /// since the scene started, so the scene's own is in force (the server does not say which).
+    pub metaphor: Option<SlidingMetaphor>,
+}
+
+/// `{"type": "status"}`: the server as [`ServerStatus`] describes it.
+pub fn status(status: &ServerStatus) -> Message {
+    let mut value = json!(status);
+    value["type"] = json!("status");
+    text(&value)
 }
 
 /// `{"type": "reply"}`: the answer to a page's command.
@@ -59,6 +78,8 @@ struct HandView<'a> {
     tracker_ns: u64,
     published_ns: u64,
     tracked: bool,
+    /// The frame answers an input sample (tracker, glove or hand joints): the hand has been seen.
+    answered: bool,
     root: &'a WirePose,
     /// Each segment's verified world pose, in the order of the scene's segment meshes.
     segments: &'a [WirePose],
@@ -168,6 +189,9 @@ fn hand_view(hand: &HandFrame) -> HandView<'_> {
         tracker_ns: hand.tracker.timestamp_ns,
         published_ns: hand.timestamp_ns,
         tracked: hand.tracked != 0,
+        answered: [hand.tracker, hand.glove, hand.joints]
+            .iter()
+            .any(|stamp| stamp.seq > 0),
         root: &hand.root,
         segments: hand.segment_poses(),
         grasp: grasp_name(hand.grasp_type),
@@ -228,6 +252,7 @@ mod tests {
             value["hands"][0]["published_ns"],
             1_700_000_000_000_000_100_u64
         );
+        assert_eq!(value["hands"][0]["answered"], false, "no sample answered");
         assert_eq!(
             value["parts"]["published_ns"],
             1_700_000_000_000_000_200_u64
@@ -237,6 +262,43 @@ mod tests {
         assert_eq!(
             (&pairs[0]["distance"], &pairs[0]["stale"]),
             (&serde_json::json!(0.0008), &serde_json::json!(true))
+        );
+    }
+
+    #[test]
+    fn a_hand_frame_that_answers_a_sample_says_so() {
+        let hand = HandFrame {
+            glove: vas_client::InputStamp {
+                seq: 3,
+                timestamp_ns: 1,
+            },
+            ..HandFrame::default()
+        };
+        let Message::Text(text) = frame(1, None, [&hand], None) else {
+            panic!("a frame is a text message");
+        };
+        let value: serde_json::Value = serde_json::from_str(text.as_str()).expect("JSON");
+        assert_eq!(value["hands"][0]["answered"], true);
+    }
+
+    #[test]
+    fn a_status_names_the_served_scene_and_the_metaphor_set() {
+        let status = ServerStatus {
+            server: true,
+            scene_names: vec!["a".into(), "b".into()],
+            scene: Some("b".into()),
+            metaphor: Some(SlidingMetaphor::SpiralSpring),
+        };
+        let Message::Text(text) = super::status(&status) else {
+            panic!("a status is a text message");
+        };
+        let value: serde_json::Value = serde_json::from_str(text.as_str()).expect("JSON");
+        assert_eq!(
+            value,
+            serde_json::json!({
+                "type": "status", "server": true, "scene_names": ["a", "b"], "scene": "b",
+                "metaphor": "spiral-spring",
+            })
         );
     }
 }

@@ -6,6 +6,7 @@
 mod harness;
 mod hosts;
 mod limits;
+mod page;
 mod pages;
 mod remote;
 mod replay;

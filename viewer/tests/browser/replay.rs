@@ -1,13 +1,17 @@
 //! A recorded scenario replayed through the real server while headless Chromium shows the page:
 //! the page draws every part at the pose last published, the held peg in the grasped colour
-//! where its published pose projects through the page's camera.
+//! where its published pose projects through the page's camera, contact markers on the part
+//! they touched, every colour in its legend, the events as `vas-client replay` words them (with
+//! the hand), and latency only for input stamped as it is sent (a paced replay's), not for a
+//! lockstep replay's back-dated stamps.
 
+use std::io::{BufRead, BufReader};
 use std::process::Stdio;
 
 use serde::Deserialize;
 use vas_client::recording::Recording;
 use vas_client::{Client, PART_GRASPED, PartsFrame};
-use vas_testkit::{PATIENCE, Server, configs_dir, fixtures_dir};
+use vas_testkit::{PATIENCE, Server, Spawned, configs_dir, fixtures_dir};
 
 use crate::harness::{Browser, Screenshot, Viewer};
 
@@ -53,7 +57,7 @@ async fn the_page_draws_the_published_poses_and_the_held_peg_where_it_is() {
 
     // The recording in two halves: the peg is held after the first.
     let (_halves, files) = recording_halves();
-    replay(&server, &files[0]);
+    let mut replayed = replay(&server, &files[0]);
     let published = newest_parts(&mut client);
     let peg = published
         .parts
@@ -74,29 +78,125 @@ async fn the_page_draws_the_published_poses_and_the_held_peg_where_it_is() {
         std::fs::write(&file, &shot.png).expect("write the screenshot");
     }
 
-    replay(&server, &files[1]);
+    check_legend(&browser).await;
+    // A lockstep replay's stamps lie in the past: no latency is taken from them.
+    browser.wait_for("window.vasViewer.fps > 0").await;
+    let latencies: Vec<f64> = browser.eval("window.vasViewer.latencies").await;
+    assert!(
+        latencies.is_empty(),
+        "latencies of back-dated input: {latencies:?}"
+    );
+    let perf: String = browser.eval("window.vasViewer.panel().perf").await;
+    assert!(perf.ends_with("latency –"), "{perf}");
+
+    // The second half at the recording's pace, as a person watches it: the peg touches the
+    // block while the hand still moves it.
+    let second = spawn_replay(&server, &files[1], &["--pace"]);
+    check_markers_follow_their_part(&browser).await;
+    replayed.extend(finish_replay(second));
     let published = newest_parts(&mut client);
     drawn_as_published(&browser, &published).await;
+    check_legend(&browser).await;
     // The peg does not move once released, so a frame from before the release has the same
     // poses: the page's state settles on the release.
     browser.wait_for(ALL_RELEASED).await;
     let events: Vec<String> = browser.eval("window.vasViewer.events").await;
     let grasp = events
         .iter()
-        .position(|text| text.starts_with("grasp peg (power)"))
-        .unwrap_or_else(|| panic!("a grasp in words: {events:?}"));
+        .position(|text| text.starts_with("right hand: grasp peg ("))
+        .unwrap_or_else(|| panic!("a grasp by the right hand in words: {events:?}"));
     assert!(
         events[grasp..]
             .iter()
-            .any(|text| text.starts_with("release peg")),
+            .any(|text| text.starts_with("right hand: release peg at sample")),
         "a release after the grasp: {events:?}"
     );
+    // The page's words are the replay's, sample numbers and all, with the hand named.
+    let unnamed: Vec<&str> = events
+        .iter()
+        .map(|text| text.strip_prefix("right hand: ").unwrap_or(text))
+        .collect();
+    assert_eq!(unnamed, replayed, "the page's events and the replay's");
+    // A paced replay's samples are stamped as they are sent, as live input is.
     let latencies: Vec<f64> = browser.eval("window.vasViewer.latencies").await;
     assert!(
         !latencies.is_empty() && latencies.iter().all(|ms| ms.is_finite() && *ms >= 0.0),
-        "input-to-drawn latencies measured: {latencies:?}"
+        "input-to-drawn latencies of paced input: {latencies:?}"
     );
     browser.close().await;
+}
+
+/// Checks that every colour the page draws parts, hand segments and markers in is in its
+/// legend.
+async fn check_legend(browser: &Browser) {
+    let drawn: Vec<String> = browser
+        .eval(
+            "[...window.vasViewer.parts(), ...window.vasViewer.hands().flatMap((hand) => \
+             hand.segments), ...window.vasViewer.markers].map((drawn) => drawn.colour)",
+        )
+        .await;
+    let legend: Vec<String> = browser.eval("window.vasViewer.panel().legend").await;
+    for colour in drawn {
+        let rgb = u32::from_str_radix(colour.trim_start_matches('#'), 16).expect("#rrggbb");
+        let css = format!("rgb({}, {}, {})", rgb >> 16, (rgb >> 8) & 0xff, rgb & 0xff);
+        assert!(
+            legend.contains(&css),
+            "{colour} is not in the legend {legend:?}"
+        );
+    }
+}
+
+/// A contact marker as the page reports it on `window.vasViewer.markers`.
+#[derive(Debug, Deserialize)]
+struct Marker {
+    part: Option<usize>,
+    position: [f64; 3],
+    local: [f64; 3],
+}
+
+/// Waits (while a replay moves the held peg) until a contact marker kept on a part is drawn
+/// away from where it was put, and checks at every look that each marker on a part is drawn at
+/// its point in the part's frame, wherever the part is.
+async fn check_markers_follow_their_part(browser: &Browser) {
+    let deadline = std::time::Instant::now() + PATIENCE;
+    // Where each marker was first seen, by its point in its part's frame.
+    let mut first_seen: Vec<([f64; 3], [f64; 3])> = Vec::new();
+    loop {
+        let (markers, parts): (Vec<Marker>, Vec<DrawnPart>) = browser
+            .eval("[window.vasViewer.markers, window.vasViewer.parts()]")
+            .await;
+        for marker in &markers {
+            let Some(part) = marker.part.map(|id| &parts[id]) else {
+                continue;
+            };
+            let expected = std::array::from_fn::<f64, 3, _>(|i| {
+                part.position[i] + rotate(part.quaternion, marker.local)[i]
+            });
+            let off = (0..3).map(|i| (marker.position[i] - expected[i]).abs());
+            assert!(
+                off.fold(0.0, f64::max) < 1e-6,
+                "a marker on {} drawn at {:?}, not at its point {expected:?}",
+                part.name,
+                marker.position
+            );
+            match first_seen.iter().find(|(local, _)| *local == marker.local) {
+                Some((_, at)) if distance(*at, marker.position) > 1e-3 => return,
+                Some(_) => {}
+                None => first_seen.push((marker.local, marker.position)),
+            }
+        }
+        if std::time::Instant::now() >= deadline {
+            let events: Vec<String> = browser.eval("window.vasViewer.events").await;
+            panic!(
+                "no marker on a part moved with it: {first_seen:?}; markers {markers:?}; {events:?}"
+            );
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+    }
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
 }
 
 /// `peg_insert.jsonl` cut in two recordings (in a temporary folder, returned with them): after
@@ -125,12 +225,44 @@ pub fn recording_halves() -> (tempfile::TempDir, [std::path::PathBuf; 2]) {
     (folder, files)
 }
 
-/// Replays `file` in lockstep with the `vas-client` tool and waits for it to finish.
-pub fn replay(server: &Server, file: &std::path::Path) {
+/// Replays `file` in lockstep with the `vas-client` tool, waits for it to finish, and returns
+/// the events it printed, in words.
+pub fn replay(server: &Server, file: &std::path::Path) -> Vec<String> {
+    finish_replay(spawn_replay(server, file, &[]))
+}
+
+/// A `vas-client replay` under way, and the thread that reads the events it prints (read as
+/// they come: a full pipe would stop the replay).
+struct RunningReplay {
+    tool: Spawned,
+    events: std::thread::JoinHandle<Vec<String>>,
+}
+
+/// Starts replaying `file` in lockstep with the `vas-client` tool, with `options` of its own.
+fn spawn_replay(server: &Server, file: &std::path::Path, options: &[&str]) -> RunningReplay {
     let file = file.to_str().expect("UTF-8");
-    let mut tool = server.client_tool(&["replay", "--lockstep", file], Stdio::null());
+    let args = [&["replay", "--lockstep", file], options].concat();
+    let mut tool = server.client_tool(&args, Stdio::piped());
+    let stdout = tool.take_stdout().expect("stdout is piped");
+    let events = std::thread::spawn(move || {
+        BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+            .filter_map(|line| {
+                let frame: serde_json::Value = serde_json::from_str(&line).expect("a JSON line");
+                Some(frame.get("event")?["text"].as_str()?.to_owned())
+            })
+            .collect()
+    });
+    RunningReplay { tool, events }
+}
+
+/// Waits for `replay` to finish, and returns the events it printed, in words.
+fn finish_replay(replay: RunningReplay) -> Vec<String> {
+    let RunningReplay { mut tool, events } = replay;
     let status = tool.wait_exit(PATIENCE * 4).expect("the replay finishes");
     assert!(status.success(), "the replay failed:\n{}", tool.log());
+    events.join().expect("the replay's output is read")
 }
 
 /// The newest parts frame the server published, read as any renderer reads it.
