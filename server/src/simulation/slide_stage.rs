@@ -25,6 +25,23 @@ pub(super) struct SlidePart {
     pub(super) body: Arc<SlideBody<DopTree>>,
 }
 
+impl SlidePart {
+    /// `part` as the sliding stage needs it, sharing its mesh, adjacency and tree.
+    pub(super) fn of(part: &Part) -> SlidePart {
+        SlidePart {
+            name: part.name.clone(),
+            movable: part.movable,
+            push: part.push,
+            release: part.release,
+            body: Arc::new(SlideBody::with_parts(
+                part.mesh.clone(),
+                Arc::clone(part.adjacency()),
+                part.tree().clone(),
+            )),
+        }
+    }
+}
+
 /// A held part's sliding simulation: its machine and its collision copy against the other parts,
 /// as they were when it was grasped.
 struct HeldSlide {
@@ -65,20 +82,7 @@ impl SlideStage {
     ) -> SlideStage {
         SlideStage {
             unheld: Unheld::new(unheld, &params, period, hands),
-            parts: parts
-                .iter()
-                .map(|part| SlidePart {
-                    name: part.name.clone(),
-                    movable: part.movable,
-                    push: part.push,
-                    release: part.release,
-                    body: Arc::new(SlideBody::with_parts(
-                        part.mesh.clone(),
-                        Arc::clone(part.adjacency()),
-                        part.tree().clone(),
-                    )),
-                })
-                .collect(),
+            parts: parts.iter().map(SlidePart::of).collect(),
             poses: parts.iter().map(|part| part.pose).collect(),
             params,
             period,

@@ -240,3 +240,6 @@ impl Unheld {
         self.unfinished.last().map(|m| &m.machine)
     }
 }
+
+#[cfg(test)]
+mod tests;
