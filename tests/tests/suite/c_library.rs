@@ -1,7 +1,8 @@
-//! The C library from C: `client-c/examples/renderer.c`, compiled with the system's `cc` against
-//! the committed header alone, runs under valgrind beside the Rust renderer example while a
-//! server replays the two-hand fixture in lockstep. Both print every frame they draw; on every
-//! frame both drew, their lines must be the same, and valgrind must find no error.
+//! The C library from C and C++: `client-c/examples/renderer.c`, compiled with the system's `cc`
+//! against the committed header alone, and `renderer.cpp`, compiled with `c++` against it and
+//! its C++ wrapper, each run under valgrind beside the Rust renderer example while a server
+//! replays the two-hand fixture in lockstep. All print every frame they draw; on every frame
+//! both drew, their lines must be the same, and valgrind must find no error.
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
@@ -88,31 +89,42 @@ fn drawings(lines: &[String]) -> BTreeMap<(String, u64), Vec<String>> {
     drawn
 }
 
-/// Compiles the renderer against the header and the shared library, with every warning an
-/// error. The library is the one the test run built: the suite's first use of [`binary`] builds
-/// every member of the workspace, `vas-client-c` among them, and cargo puts its `cdylib` beside
-/// the binaries, so no second cargo invocation (and no second build lock) is needed.
-fn compile_renderer(out: &Path) -> PathBuf {
+/// Compiles the example `source` (`renderer.c` as C11 with `cc`, `renderer.cpp` as C++17 with
+/// `c++`) against the headers and the shared library, with every warning an error. The library
+/// is the one the test run built: the suite's first use of [`binary`] builds every member of the
+/// workspace, `vas-client-c` among them, so no second cargo invocation (and no second build
+/// lock) is needed. Built as a dependency of the crate's tests, its `cdylib` lies in the `deps`
+/// folder beside the binaries (cargo copies it beside them only when it builds the library
+/// alone, so a copy there may be stale).
+fn compile_renderer(out: &Path, source: &str) -> PathBuf {
     let target = binary("vas-server");
-    let target = target.parent().expect("the binaries' directory");
+    let target = target
+        .parent()
+        .expect("the binaries' directory")
+        .join("deps");
+    let target = target.as_path();
     let library = target.join("libvas_client.so");
     assert!(library.exists(), "{} is not built", library.display());
     let client_c = Path::new(env!("CARGO_MANIFEST_DIR")).join("../client-c");
-    let program = out.join("renderer");
-    let compiled = Command::new("cc")
-        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-g", "-I"])
+    let program = out.join(source.replace('.', "_"));
+    let (compiler, standard) = match source.ends_with(".cpp") {
+        true => ("c++", "-std=c++17"),
+        false => ("cc", "-std=c11"),
+    };
+    let compiled = Command::new(compiler)
+        .args([standard, "-Wall", "-Wextra", "-Werror", "-g", "-I"])
         .arg(client_c.join("include"))
-        .arg(client_c.join("examples/renderer.c"))
+        .arg(client_c.join("examples").join(source))
         .arg("-L")
         .arg(target)
         .arg(format!("-Wl,-rpath,{}", target.display()))
         .args(["-lvas_client", "-o"])
         .arg(&program)
         .output()
-        .expect("cc runs");
+        .unwrap_or_else(|error| panic!("{compiler} does not run: {error}"));
     assert!(
         compiled.status.success(),
-        "renderer.c does not compile:\n{}",
+        "{source} does not compile:\n{}",
         String::from_utf8_lossy(&compiled.stderr)
     );
     program
@@ -120,17 +132,17 @@ fn compile_renderer(out: &Path) -> PathBuf {
 
 /// A renderer at work: its process and what it printed.
 struct Renderer {
-    name: &'static str,
+    name: String,
     process: Spawned,
     printed: Printed,
 }
 
 impl Renderer {
-    fn start(name: &'static str, program: &Path, args: &[&str]) -> Self {
+    fn start(name: &str, program: &Path, args: &[&str]) -> Self {
         let mut process = Spawned::start(program, args, Stdio::piped());
         let printed = Printed::gather(&mut process);
         Self {
-            name,
+            name: name.to_owned(),
             process,
             printed,
         }
@@ -166,16 +178,27 @@ fn compare(
 
 #[test]
 fn the_c_renderer_prints_what_the_rust_renderer_prints_and_valgrind_finds_no_error() {
+    draws_like_the_rust_renderer("renderer.c", "C");
+}
+
+#[test]
+fn the_cpp_renderer_prints_what_the_rust_renderer_prints_and_valgrind_finds_no_error() {
+    draws_like_the_rust_renderer("renderer.cpp", "C++");
+}
+
+/// Runs the example `source` in `language` beside the Rust renderer, as the module says.
+fn draws_like_the_rust_renderer(source: &str, language: &str) {
     let scratch = tempfile::tempdir().expect("a scratch folder");
-    let renderer_c = compile_renderer(scratch.path());
+    let renderer_c = compile_renderer(scratch.path(), source);
     let renderer_c = renderer_c.to_str().expect("a UTF-8 path");
     let scene = configs_dir().join("two_hand_handover.toml");
     let scene = scene.to_str().expect("a UTF-8 path");
-    let mut server = Server::start_with("c_library", &["--lockstep", "--scene", scene]);
+    let test = format!("c_library_{}", source.replace('.', "_"));
+    let mut server = Server::start_with(&test, &["--lockstep", "--scene", scene]);
     let mut watcher = server.connect();
     let prefix = server.prefix().to_owned();
 
-    // The C renderer twice: at full speed, drawing about as many frames as the Rust one, and
+    // The renderer twice: at full speed, drawing about as many frames as the Rust one, and
     // under valgrind, where every error it finds (memory errors, and leaks the program loses for
     // good) makes it exit with 99.
     let valgrind = [
@@ -188,9 +211,10 @@ fn the_c_renderer_prints_what_the_rust_renderer_prints_and_valgrind_finds_no_err
         "--prefix",
         &prefix,
     ];
+    let under_valgrind = format!("{language} under valgrind");
     let renderers = [
-        Renderer::start("C", Path::new(renderer_c), &["--prefix", &prefix]),
-        Renderer::start("C under valgrind", Path::new("valgrind"), &valgrind),
+        Renderer::start(language, Path::new(renderer_c), &["--prefix", &prefix]),
+        Renderer::start(&under_valgrind, Path::new("valgrind"), &valgrind),
         Renderer::start("Rust", &example("renderer"), &["--prefix", &prefix]),
     ];
     let processes: Vec<&Spawned> = renderers.iter().map(|r| &r.process).collect();
@@ -232,8 +256,8 @@ fn the_c_renderer_prints_what_the_rust_renderer_prints_and_valgrind_finds_no_err
     );
     let (valgrind_parts, valgrind_hands) = compare(&valgrind, &rust);
     eprintln!(
-        "the C and Rust renderers drew {parts_frames} parts frames and {hand_frames} hand frames \
-         alike, the C renderer under valgrind {valgrind_parts} and {valgrind_hands}, of \
-         {last_hands} hand frames; valgrind found no error"
+        "the {language} and Rust renderers drew {parts_frames} parts frames and {hand_frames} hand \
+         frames alike, the {language} renderer under valgrind {valgrind_parts} and \
+         {valgrind_hands}, of {last_hands} hand frames; valgrind found no error"
     );
 }
