@@ -939,10 +939,11 @@ VasStatus vas_client_connect(const char *prefix,
 /**
  * Closes the connection and frees the handle and everything it handed out (frames, geometry,
  * events, scene info). Null is allowed and does nothing. The handle must not be used again.
+ * On another thread than the one that connected, nothing is freed (the ports cannot be closed
+ * there) and the thread's last error says so.
  *
  * # Safety
- * `client` is null or a handle from [`vas_client_connect`] not freed yet, freed on the thread
- * that connected it.
+ * `client` is null or a handle from [`vas_client_connect`] not freed yet.
  */
 void vas_client_free(VasClient *client);
 

@@ -189,15 +189,18 @@ pub unsafe extern "C" fn vas_client_connect(
 
 /// Closes the connection and frees the handle and everything it handed out (frames, geometry,
 /// events, scene info). Null is allowed and does nothing. The handle must not be used again.
+/// On another thread than the one that connected, nothing is freed (the ports cannot be closed
+/// there) and the thread's last error says so.
 ///
 /// # Safety
-/// `client` is null or a handle from [`vas_client_connect`] not freed yet, freed on the thread
-/// that connected it.
+/// `client` is null or a handle from [`vas_client_connect`] not freed yet.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn vas_client_free(client: *mut VasClient) {
     guard(|| {
         if !client.is_null() {
             // SAFETY: a live handle from `vas_client_connect`, as the caller guarantees.
+            unsafe { client_mut(client) }?;
+            // SAFETY: as above, and on the thread that owns it.
             drop(unsafe { Box::from_raw(client) });
         }
         Ok(VasStatus::Ok)

@@ -197,6 +197,14 @@ fn misuse_is_a_status_with_words() {
     let (status, words) = elsewhere.join().expect("the thread ends");
     assert_eq!(status, VasStatus::WrongThread);
     assert!(words.contains("another thread"), "{words}");
+    // Nor is it freed there.
+    let freed_elsewhere = std::thread::spawn(move || {
+        // SAFETY: a live handle, which the library refuses to free off its thread.
+        unsafe { vas_client_free(address as *mut VasClient) };
+        last_error()
+    });
+    let words = freed_elsewhere.join().expect("the thread ends");
+    assert!(words.contains("another thread"), "{words}");
     // SAFETY: a live handle on its thread.
     assert_eq!(
         unsafe { vas_client_take_roles(control.0, VAS_ROLE_RENDER) },
