@@ -189,8 +189,8 @@ fn the_cpp_renderer_prints_what_the_rust_renderer_prints_and_valgrind_finds_no_e
 /// Runs the example `source` in `language` beside the Rust renderer, as the module says.
 fn draws_like_the_rust_renderer(source: &str, language: &str) {
     let scratch = tempfile::tempdir().expect("a scratch folder");
-    let renderer_c = compile_renderer(scratch.path(), source);
-    let renderer_c = renderer_c.to_str().expect("a UTF-8 path");
+    let program = compile_renderer(scratch.path(), source);
+    let program = program.to_str().expect("a UTF-8 path");
     let scene = configs_dir().join("two_hand_handover.toml");
     let scene = scene.to_str().expect("a UTF-8 path");
     let test = format!("c_library_{}", source.replace('.', "_"));
@@ -207,13 +207,13 @@ fn draws_like_the_rust_renderer(source: &str, language: &str) {
         "--errors-for-leak-kinds=definite",
         "--show-leak-kinds=definite",
         "--quiet",
-        renderer_c,
+        program,
         "--prefix",
         &prefix,
     ];
     let under_valgrind = format!("{language} under valgrind");
     let renderers = [
-        Renderer::start(language, Path::new(renderer_c), &["--prefix", &prefix]),
+        Renderer::start(language, Path::new(program), &["--prefix", &prefix]),
         Renderer::start(&under_valgrind, Path::new("valgrind"), &valgrind),
         Renderer::start("Rust", &example("renderer"), &["--prefix", &prefix]),
     ];
