@@ -46,6 +46,8 @@ struct Replay {
     events: Vec<[u32; 5]>,
     /// The last parts frame's poses.
     final_poses: Vec<Isometry3<f64>>,
+    /// Whether a parts frame flagged a part pushed (how many did depends on the publishing rate).
+    pushed_seen: bool,
     /// Penetrations parry found in the published frames.
     penetrations: Vec<String>,
 }
@@ -65,6 +67,7 @@ fn replay(
         answers: Vec::new(),
         events: Vec::new(),
         final_poses: Vec::new(),
+        pushed_seen: false,
         penetrations: Vec::new(),
     };
     let mut seen = Seen {
@@ -171,6 +174,7 @@ impl Seen {
         for frame in frames {
             match frame {
                 Frame::Parts(parts) => {
+                    out.pushed_seen |= parts.parts.iter().any(|part| part.is_pushed());
                     self.poses = parts
                         .parts
                         .iter()
@@ -256,7 +260,14 @@ fn check(scenario: &Scenario) -> Replay {
             .position(|p| p.name == part)
             .expect("the expected part is in the scene") as u32
     };
-    let hand_events = [EventKind::Grasp, EventKind::Release, EventKind::HandOver].map(|k| k as u32);
+    let hand_events = [
+        EventKind::Grasp,
+        EventKind::Release,
+        EventKind::HandOver,
+        EventKind::PushBegin,
+        EventKind::PushEnd,
+    ]
+    .map(|k| k as u32);
     let grasps_and_releases: Vec<[u32; 4]> = first
         .events
         .iter()
@@ -277,8 +288,10 @@ fn check(scenario: &Scenario) -> Replay {
         .collect();
     assert_eq!(
         grasps_and_releases, expected,
-        "{name}: grasps, releases and hand-overs"
+        "{name}: grasps, releases, hand-overs and pushes"
     );
+    let pushes = (scenario.events.iter()).any(|event| event.kind == EventKind::PushBegin);
+    assert_eq!(first.pushed_seen, pushes, "{name}: a part flagged pushed");
     let target = &scenario.final_pose;
     let pose = first.final_poses[part_id(target.part) as usize];
     let (position_error, angle_error) = target.errors(&pose);
