@@ -235,11 +235,12 @@ fn draws_like_the_rust_renderer(source: &str, language: &str) {
     watcher.poll().expect("poll");
     let hands = watcher.latest_hands();
     assert_eq!(hands.len(), 2, "the scene has two hands");
-    let last_hands = format!("hand frame={} ", hands[0].frame);
+    let last_hands = hands[0].frame;
+    let drawn_last = format!("hand frame={last_hands} ");
     wait_until(
         "a renderer did not draw the hands' last frame",
         &processes,
-        || renderers.iter().all(|r| r.printed.has(&last_hands)),
+        || renderers.iter().all(|r| r.printed.has(&drawn_last)),
     );
 
     let [c, valgrind, rust] = renderers.map(Renderer::stop);
