@@ -16,6 +16,8 @@
 //! tracking = { lost_after = 0.1, grace = 0.5 }   # seconds of sample time, for hand joints
 //! clearance = { threshold = 0.005, parts = "held" }  # report pairs closer than 5 mm; off
 //!                                    # without a threshold; "held" (default) or "movable"
+//! push = { enabled = true }            # a touching hand pushes movable parts (unheld.rs)
+//! release = { mode = "settle", floor = 0.0 }  # released parts settle down ("stay": they float)
 //!
 //! [rates]                              # optional, hertz
 //! publish_hz = 60
@@ -37,6 +39,8 @@
 //! mesh = "meshes/low_poly_bunny.obj"   # OBJ, STL, PLY, glTF or GLB, relative to this file
 //! scale = 0.05                         # optional uniform scale of a mesh file
 //! movable = true
+//! push = false                         # optional: over [params.push]
+//! release = "stay"                     # optional: over [params.release]
 //!
 //! [[assemblies]]                       # every mesh node of a glTF file as a part (assembly.rs)
 //! file = "cad/gearbox.glb"             # .gltf or .glb, relative to this file
