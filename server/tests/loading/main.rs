@@ -6,4 +6,5 @@ mod counts;
 mod formats;
 mod mesh_files;
 mod overlaps;
+mod scene_refusals;
 mod scenes;
