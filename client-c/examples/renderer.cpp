@@ -9,17 +9,18 @@
  *       -lvas_client -o renderer
  *   LD_LIBRARY_PATH=target/release ./renderer --prefix demo --frames 20
  */
+#include <algorithm>
 #include <charconv>
 #include <chrono>
-#include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <iostream>
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "vas_client.hpp"
