@@ -50,15 +50,22 @@ pub(crate) fn wait_until_ready(
             .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, remaining)
             .map_err(|error| ClientError::ipc("wait on the WaitSet", error))?;
         drop(guards);
-        for listener in listeners {
-            listener
-                .try_wait(|_| {})
-                .map_err(|error| ClientError::ipc("drain a listener", error))?;
-        }
+        empty_listeners(listeners)?;
         if outcome == WaitSetRunResult::TerminationRequest {
             return Ok(Wake::Terminated);
         }
     }
+}
+
+/// Takes every notification the `listeners` hold, without blocking: afterwards their file
+/// descriptors are not readable until a notifier wakes them again.
+pub(crate) fn empty_listeners(listeners: &[&Listener<ipc::Service>]) -> Result<(), ClientError> {
+    for listener in listeners {
+        listener
+            .try_wait(|_| {})
+            .map_err(|error| ClientError::ipc("drain a listener", error))?;
+    }
+    Ok(())
 }
 
 /// The instant `timeout` from now; a timeout too long to represent (such as `Duration::MAX`,

@@ -31,7 +31,7 @@ pub use roles::Roles;
 
 use crate::ClientError;
 use crate::recording::InputSample;
-use crate::wait::{Wake, wait_until_ready};
+use crate::wait::{Wake, empty_listeners, wait_until_ready};
 use latest::Latest;
 use ports::{Inputs, Outputs};
 
@@ -149,45 +149,42 @@ impl Client {
     /// Frames stay queued for [`Client::poll`] or [`Client::receive`]. Needs the render role.
     pub fn wait(&mut self, timeout: Duration) -> Result<Wake, ClientError> {
         let outputs = self.outputs("wait for frames")?;
-        let (parts, hand, events, force) = (
-            &outputs.parts,
-            &outputs.hand,
-            &outputs.events,
-            &outputs.force,
-        );
-        let (geometry, clearance) = (&outputs.geometry, &outputs.clearance);
-        wait_until_ready(
-            &self.waitset,
-            &[
-                &outputs.geometry_listener,
-                &outputs.parts_listener,
-                &outputs.hand_listener,
-                &outputs.events_listener,
-                &outputs.force_listener,
-                &outputs.clearance_listener,
-            ],
-            timeout,
-            || {
-                let has = |result: Result<bool, _>| {
-                    result.map_err(|error| ClientError::ipc("check a subscriber", error))
-                };
-                Ok(has(geometry.has_samples())?
-                    || has(parts.has_samples())?
-                    || has(hand.has_samples())?
-                    || has(events.has_samples())?
-                    || has(force.has_samples())?
-                    || has(clearance.has_samples())?)
-            },
-        )
+        wait_until_ready(&self.waitset, &outputs.listeners(), timeout, || {
+            outputs.has_samples()
+        })
+    }
+
+    /// The file descriptors of the render role's wake-up listeners, one per output service: each
+    /// becomes readable when the server publishes on its service, so that an engine's own event
+    /// loop (poll, epoll, select, a run loop) can wait on them instead of [`Client::wait`].
+    ///
+    /// When one is readable, call [`Client::poll`] or [`Client::receive`]: they empty the
+    /// listeners before they take the samples, so afterwards the descriptors stay quiet until
+    /// the server publishes again (a notification that comes between the two makes one
+    /// readable with nothing new to receive: a spurious wake, never a lost one). Frames queued
+    /// before the first wait (a connecting client's history) do not make them readable: poll
+    /// once after connecting. The descriptors belong to the client: never read, write or close
+    /// them, and forget them when it is dropped. Needs the render role.
+    #[cfg(unix)]
+    pub fn wake_descriptors(&self) -> Result<Vec<std::os::fd::RawFd>, ClientError> {
+        let outputs = self.outputs("hand out its wake-up descriptors")?;
+        Ok((outputs.listeners().iter())
+            // SAFETY: the number is only handed out; the listener keeps owning the descriptor.
+            .map(|listener| unsafe { listener.file_descriptor().native_handle() })
+            .collect())
     }
 
     /// Receives every queued frame, keeps the newest of each kind for [`Client::geometry`],
     /// [`Client::latest_parts`] and [`Client::latest_hands`], and returns them all in arrival
     /// order per kind: geometry, parts frames, events, force frames, clearance frames, then hand frames (the
     /// server publishes a frame's hand last, so the parts and events of a hand frame's own frame
-    /// come with it or before it, and a new scene's geometry before its frames).
+    /// come with it or before it, and a new scene's geometry before its frames). It first empties
+    /// the wake-up listeners, so that their descriptors are readable again only for what the
+    /// server publishes after it.
     pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
         let outputs = self.outputs("receive frames")?;
+        // Emptied first, so that a notification of a sample published meanwhile stays.
+        empty_listeners(&outputs.listeners())?;
         let mut frames = Vec::new();
         while let Some(sample) = outputs
             .geometry
@@ -271,7 +268,8 @@ impl Client {
         }
     }
 
-    /// Receives every queued frame, keeping only the newest of each kind.
+    /// Receives every queued frame, keeping only the newest of each kind; like
+    /// [`Client::receive`], it quiets the [`Client::wake_descriptors`].
     pub fn poll(&mut self) -> Result<Received, ClientError> {
         let mut received = Received::default();
         for frame in self.receive()? {

@@ -72,6 +72,31 @@ impl Outputs {
             geometry_listener: listener(services::GEOMETRY)?,
         })
     }
+
+    /// The wake-up listener of every output service.
+    pub(super) fn listeners(&self) -> [&Listener<ipc::Service>; 6] {
+        [
+            &self.geometry_listener,
+            &self.parts_listener,
+            &self.hand_listener,
+            &self.events_listener,
+            &self.force_listener,
+            &self.clearance_listener,
+        ]
+    }
+
+    /// Whether any output service holds a sample not received yet.
+    pub(super) fn has_samples(&self) -> Result<bool, ClientError> {
+        let has = |result: Result<bool, _>| {
+            result.map_err(|error| ClientError::ipc("check a subscriber", error))
+        };
+        Ok(has(self.geometry.has_samples())?
+            || has(self.parts.has_samples())?
+            || has(self.hand.has_samples())?
+            || has(self.events.has_samples())?
+            || has(self.force.has_samples())?
+            || has(self.clearance.has_samples())?)
+    }
 }
 
 /// The ports of the input role: each input stream's sending end.
