@@ -229,3 +229,51 @@ fn every_recorded_scenario_has_one_expected_outcome() {
         .collect();
     assert_eq!(listed, motions);
 }
+
+/// The demo's peg, released in the block's hole in a scene where released parts settle, goes on
+/// down until it rests on what is below it, within the recording's last half second, and nothing
+/// enters anything on the way (parry judges every frame).
+#[test]
+fn a_released_part_settles_onto_what_is_below_it() {
+    use vas_server::scene::ReleaseMode;
+    let demo = &EXPECTED[5];
+    let mut scene = Scene::load(&demo.scene_path()).expect("loads");
+    scene.params.release.mode = ReleaseMode::Settle;
+    let recording = Recording::load(&demo.fixture_path()).expect("loads");
+    let run = offline::replay(&scene, &recording).expect("replays");
+    assert!(
+        run.penetrations.is_empty(),
+        "{:?}",
+        run.penetrations.first()
+    );
+    let release = (run.events.iter())
+        .find(|event| event.kind == vas_protocol::EventKind::Release)
+        .expect("released");
+    let after =
+        recording.samples.last().expect("samples").time - recording.samples[release.frame].time;
+    assert!(after <= 0.5, "{after} s of recording after the release");
+    let peg = scene
+        .parts
+        .iter()
+        .position(|p| p.name == "peg")
+        .expect("a peg");
+    let held_there = demo.final_pose.pose();
+    let pose = run.final_poses[peg];
+    assert!(
+        pose.translation.z < held_there.translation.z - 0.001,
+        "the peg stayed at {pose:?}"
+    );
+    // Resting: within a millimetre of a part it is of interest to, by parry.
+    let mesh =
+        |i: usize| vas_server::collision::parry_mesh::millimetre_trimesh(&scene.parts[i].mesh);
+    let at = |i: usize| vas_server::collision::parry_mesh::millimetre_pose(&run.final_poses[i]);
+    let nearest = (0..scene.parts.len())
+        .filter(|&other| other != peg && scene.pair_of_interest(peg, other))
+        .map(|other| parry3d::query::distance(&at(peg), &mesh(peg), &at(other), &mesh(other)))
+        .map(|distance| distance.expect("meshes are supported"))
+        .fold(f32::INFINITY, f32::min);
+    assert!(
+        nearest <= 1.0,
+        "the peg rests {nearest} mm from the nearest part"
+    );
+}
