@@ -46,10 +46,12 @@
  * independent.
  *
  * Waiting in an engine's loop. vas_client_wait sleeps on an iceoryx2 WaitSet over one listener
- * per output service. iceoryx2 0.10 gives each listener a file descriptor, but this library
- * offers none yet: the listeners live inside the Rust client, six of them, and are drained by
- * its wait; a descriptor handed out without that draining would stay readable. An engine calls
- * vas_client_wait with a time-out of 0 (or vas_client_poll) once per rendered frame instead.
+ * per output service. An engine with its own loop waits on those listeners' file descriptors
+ * instead: vas_client_wake_descriptors gives them (one per output service); register them all
+ * with poll, epoll or select (or an Unreal FRunnable's or a Unity thread's wait) and call
+ * vas_client_poll when one is readable, which quiets them until the server publishes again.
+ * Poll once after connecting, for the frames already queued. On Windows there are none
+ * (VAS_STATUS_UNSUPPORTED): call vas_client_wait with a time-out of 0 once per rendered frame.
  *
  * Coordinates. vas is right-handed, z up, in metres; rotations are unit quaternions
  * (x, y, z, w). Unity is left-handed, y up, in metres: a vas point (x, y, z) is Unity's
@@ -235,6 +237,10 @@ typedef enum {
    * The library panicked: a bug. The client that was called should be freed.
    */
   VAS_STATUS_PANIC = -10,
+  /**
+   * This system lacks what the call needs (file descriptors, on Windows).
+   */
+  VAS_STATUS_UNSUPPORTED = -11,
 } VasStatus;
 
 /**
@@ -963,10 +969,8 @@ VasStatus vas_client_take_roles(VasClient *client, uint32_t roles);
  * before the call counts: nothing is missed between a poll and the next wait. Needs the render
  * role.
  *
- * An engine with its own loop calls it with a time-out of 0 once per frame, or polls straight
- * away: iceoryx2 0.10 gives each listener a file descriptor, but a vas client has one per
- * output service, held inside the Rust client and drained by this wait, so no single
- * descriptor can be handed out yet.
+ * An engine with its own loop calls it with a time-out of 0 once per frame, or waits on
+ * `vas_client_wake_descriptors` in that loop instead.
  *
  * # Safety
  * `client` is a live handle from [`vas_client_connect`]; `wake` points to a writable
@@ -980,7 +984,8 @@ VasStatus vas_client_wait(VasClient *client, uint64_t timeout_ms, VasWake *wake)
  * `vas_client_take_events`. `*received` (when not null) counts what came.
  * Needs the render role.
  *
- * A poll ends the validity of the parts and hand pointers handed out before it.
+ * A poll ends the validity of the parts and hand pointers handed out before it, and quiets the
+ * `vas_client_wake_descriptors` until the server publishes again.
  *
  * # Safety
  * `client` is a live handle from [`vas_client_connect`]; `received` is null or points to a
@@ -1096,6 +1101,29 @@ VasStatus vas_point_to_unreal(const double (*from)[3], double (*to)[3]);
  * `from` points to 3 readable doubles, `to` to 3 writable ones.
  */
 VasStatus vas_point_from_unreal(const double (*from)[3], double (*to)[3]);
+
+/**
+ * Writes the file descriptors of the client's wake-up listeners, one per output service, to
+ * `fds` (room for `capacity`) and their number to `*count`. Each becomes readable when the
+ * server publishes on its service: register them all with poll, epoll or select (or an engine's
+ * run loop: an Unreal `FRunnable`, a Unity thread) and call `vas_client_poll` when one is.
+ * The poll empties them, so they stay quiet until the server publishes again; one that wakes
+ * with nothing new to poll is harmless. Poll once after connecting: the frames a new client
+ * finds queued do not make them readable. Needs the render role.
+ *
+ * A null `fds` with a `capacity` of 0 asks for their number only. With a `capacity` smaller
+ * than their number, `*count` gets the number, `fds` is left alone and the status is
+ * `VAS_STATUS_INVALID_ARGUMENT`.
+ *
+ * The descriptors belong to the client: never read, write or close them; they stay valid
+ * until `vas_client_free`. Where the system has no file descriptors (Windows), the status is
+ * `VAS_STATUS_UNSUPPORTED`: use `vas_client_wait` there.
+ *
+ * # Safety
+ * `client` is a live handle from `vas_client_connect`; `fds` is null or points to `capacity`
+ * writable `int`s; `count` points to a writable `size_t`.
+ */
+VasStatus vas_client_wake_descriptors(VasClient *client, int *fds, size_t capacity, size_t *count);
 
 /**
  * The newest parts frame: `*header` gets a copy of its header, `*parts` and `*count` the pose

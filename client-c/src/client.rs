@@ -228,10 +228,8 @@ pub unsafe extern "C" fn vas_client_take_roles(client: *mut VasClient, roles: u3
 /// before the call counts: nothing is missed between a poll and the next wait. Needs the render
 /// role.
 ///
-/// An engine with its own loop calls it with a time-out of 0 once per frame, or polls straight
-/// away: iceoryx2 0.10 gives each listener a file descriptor, but a vas client has one per
-/// output service, held inside the Rust client and drained by this wait, so no single
-/// descriptor can be handed out yet.
+/// An engine with its own loop calls it with a time-out of 0 once per frame, or waits on
+/// `vas_client_wake_descriptors` in that loop instead.
 ///
 /// # Safety
 /// `client` is a live handle from [`vas_client_connect`]; `wake` points to a writable
@@ -261,7 +259,8 @@ pub unsafe extern "C" fn vas_client_wait(
 /// `vas_client_take_events`. `*received` (when not null) counts what came.
 /// Needs the render role.
 ///
-/// A poll ends the validity of the parts and hand pointers handed out before it.
+/// A poll ends the validity of the parts and hand pointers handed out before it, and quiets the
+/// `vas_client_wake_descriptors` until the server publishes again.
 ///
 /// # Safety
 /// `client` is a live handle from [`vas_client_connect`]; `received` is null or points to a

@@ -16,6 +16,7 @@
 mod client;
 mod control;
 mod coordinates;
+mod descriptors;
 mod frames;
 mod geometry;
 mod input;
@@ -37,6 +38,7 @@ pub use coordinates::{
     vas_point_from_unity, vas_point_from_unreal, vas_point_to_unity, vas_point_to_unreal,
     vas_pose_from_unity, vas_pose_from_unreal, vas_pose_to_unity, vas_pose_to_unreal,
 };
+pub use descriptors::vas_client_wake_descriptors;
 pub use frames::{
     vas_client_latest_force, vas_client_latest_hand_of, vas_client_latest_hands,
     vas_client_latest_parts, vas_client_take_events,

@@ -39,6 +39,8 @@ pub enum VasStatus {
     Ipc = -9,
     /// The library panicked: a bug. The client that was called should be freed.
     Panic = -10,
+    /// This system lacks what the call needs (file descriptors, on Windows).
+    Unsupported = -11,
 }
 
 /// An error on its way to C: its status code and its words.

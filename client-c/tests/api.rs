@@ -1,6 +1,7 @@
 //! The C functions against a real `vas-server`, called as C calls them: a tracker sample goes
 //! in, its answer comes back through the frame accessors, and misuse (null pointers, a missing
-//! role, another thread, unknown codes) comes back as status codes with words.
+//! role, another thread, unknown codes) comes back as status codes with words; the wake-up
+//! descriptors wake an engine's poll(2) for a publish and go quiet after a poll.
 
 use std::ffi::{CStr, CString};
 use std::ptr;
@@ -215,4 +216,109 @@ fn misuse_is_a_status_with_words() {
         unsafe { vas_client_wait(control.0, 0, &mut wake) },
         VasStatus::Ok
     );
+}
+
+/// The client's wake-up descriptors, as `vas_client_wake_descriptors` gives them.
+fn wake_descriptors(client: &Handle) -> Result<Vec<i32>, VasStatus> {
+    let mut count = 0;
+    // SAFETY: a live handle; a null `fds` with no room asks for the number.
+    let status = unsafe { vas_client_wake_descriptors(client.0, ptr::null_mut(), 0, &mut count) };
+    if status != VasStatus::Ok {
+        return Err(status);
+    }
+    let mut fds = vec![-1; count];
+    // SAFETY: a live handle and room for `count` descriptors.
+    let status =
+        unsafe { vas_client_wake_descriptors(client.0, fds.as_mut_ptr(), fds.len(), &mut count) };
+    assert_eq!(status, VasStatus::Ok, "{}", last_error());
+    assert_eq!(count, fds.len());
+    Ok(fds)
+}
+
+/// How many of `fds` poll(2) reports readable within `timeout_ms`.
+#[cfg(unix)]
+fn readable(fds: &[i32], timeout_ms: u64) -> usize {
+    let mut polled: Vec<libc::pollfd> = (fds.iter())
+        .map(|&fd| libc::pollfd {
+            fd,
+            events: libc::POLLIN,
+            revents: 0,
+        })
+        .collect();
+    let timeout = libc::c_int::try_from(timeout_ms).expect("a short time-out");
+    // SAFETY: `polled` holds `polled.len()` initialised entries for the call's duration.
+    let ready = unsafe { libc::poll(polled.as_mut_ptr(), polled.len() as libc::nfds_t, timeout) };
+    assert!(ready >= 0, "poll: {}", std::io::Error::last_os_error());
+    assert!(
+        polled
+            .iter()
+            .all(|entry| entry.revents & !libc::POLLIN == 0),
+        "an error on a descriptor: {polled:?}"
+    );
+    ready as usize
+}
+
+/// An engine's loop on the descriptors: quiet while the server has published nothing new,
+/// readable once a sample's answer is published, quiet again right after a poll.
+#[cfg(unix)]
+#[test]
+fn wake_descriptors_are_readable_from_a_publish_until_a_poll() {
+    let mut server = Server::start("c_api_wake");
+    drop(server.connect());
+    let client = Handle::connect(&server, VAS_ROLE_ALL);
+    let fds = wake_descriptors(&client).expect("descriptors");
+    assert_eq!(fds.len(), 6, "one per output service: {fds:?}");
+
+    let mut count = 0;
+    let mut few = [-1; 2];
+    // SAFETY: a live handle and room for two descriptors.
+    let status = unsafe { vas_client_wake_descriptors(client.0, few.as_mut_ptr(), 2, &mut count) };
+    assert_eq!(status, VasStatus::InvalidArgument);
+    assert_eq!(
+        (count, few),
+        (6, [-1; 2]),
+        "the number, and nothing written"
+    );
+
+    // The frames a new client finds queued are taken by a first poll; nothing wakes after it.
+    // SAFETY: a live handle; no counts wanted.
+    assert_eq!(
+        unsafe { vas_client_poll(client.0, ptr::null_mut()) },
+        VasStatus::Ok
+    );
+    assert_eq!(readable(&fds, 0), 0, "nothing published since the poll");
+
+    let sample = tracker(1, [0.05, -0.1, 1.2]);
+    // SAFETY: a live handle and a readable sample.
+    assert_eq!(
+        unsafe { vas_client_send_tracker(client.0, &sample) },
+        VasStatus::Ok
+    );
+    let mut answer = HandFrame::default();
+    // The server publishes the answer's frame service by service, its hand last.
+    while answer.tracker != sample.stamp() {
+        assert!(readable(&fds, PATIENCE_MS) > 0, "the answer wakes them");
+        // SAFETY: a live handle; no counts wanted.
+        assert_eq!(
+            unsafe { vas_client_poll(client.0, ptr::null_mut()) },
+            VasStatus::Ok
+        );
+        // SAFETY: a live handle and a writable frame.
+        unsafe { vas_client_latest_hand_of(client.0, VAS_HAND_RIGHT, &mut answer) };
+    }
+    assert_eq!(readable(&fds, 0), 0, "quiet right after the poll");
+
+    let control = Handle::connect(&server, VAS_ROLE_CONTROL);
+    assert_eq!(wake_descriptors(&control), Err(VasStatus::MissingRole));
+}
+
+/// Without file descriptors the call says so.
+#[cfg(not(unix))]
+#[test]
+fn wake_descriptors_are_unsupported_without_file_descriptors() {
+    let mut server = Server::start("c_api_wake");
+    drop(server.connect());
+    let client = Handle::connect(&server, VAS_ROLE_RENDER);
+    assert_eq!(wake_descriptors(&client), Err(VasStatus::Unsupported));
+    assert!(last_error().contains("Unix only"), "{}", last_error());
 }
