@@ -485,6 +485,11 @@ typedef struct {
    */
   uint32_t scenes_offered;
   /**
+   * The sliding metaphor in use, a `VAS_METAPHOR_*` code: the scene's own, or the one a
+   * client set since the last load or reset.
+   */
+  uint32_t metaphor;
+  /**
    * The server's input counters at the time of the answer.
    */
   VasInputStats stats;

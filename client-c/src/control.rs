@@ -67,6 +67,9 @@ pub struct VasSceneInfo {
     pub metres_per_unit: f64,
     /// How many scenes the server offers to load by name.
     pub scenes_offered: u32,
+    /// The sliding metaphor in use, a `VAS_METAPHOR_*` code: the scene's own, or the one a
+    /// client set since the last load or reset.
+    pub metaphor: u32,
     /// The server's input counters at the time of the answer.
     pub stats: InputStats,
 }
@@ -117,6 +120,7 @@ impl SceneView {
             up: scene.up,
             metres_per_unit: scene.metres_per_unit,
             scenes_offered: scene.scenes_offered,
+            metaphor: scene.metaphor as u32,
             stats: scene.stats,
         };
         Self {

@@ -133,6 +133,7 @@ mod tests {
             hands: Vec::new(),
             scenes_offered: 0,
             generation: 1,
+            metaphor: vas_protocol::SlidingMetaphor::default(),
         })
     }
 

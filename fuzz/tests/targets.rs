@@ -284,6 +284,7 @@ fn control_requests() {
             inputs: Inputs::default(),
             epoch: 1,
             catalogue: SceneCatalogue::of(configs_dir()),
+            metaphor: scene.params.sliding.metaphor,
         };
         for request in values_from_bytes::<ControlRequest>(bytes) {
             let kind = ControlRequestKind::try_from(request.kind);
@@ -480,6 +481,7 @@ fn control_load_requests() {
         inputs: Inputs::default(),
         epoch: 1,
         catalogue: SceneCatalogue::of(folder.clone()),
+        metaphor: demo_scene().params.sliding.metaphor,
     };
     bolero::check!().for_each(|bytes: &[u8]| {
         if let Ok(table) = std::str::from_utf8(bytes)

@@ -302,7 +302,7 @@ pub const MAX_HANDS: usize = 2;
 /// One flat type for every request kind: the fields a kind does not use are zero. Every response
 /// carries the scene summary and the input counters, so any request doubles as a status query.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("vas::control::ControlResponse::v6")]
+#[type_name("vas::control::ControlResponse::v7")]
 #[repr(C)]
 pub struct ControlResponse {
     /// A [`ControlStatus`] code.
@@ -340,4 +340,7 @@ pub struct ControlResponse {
     /// [`GeometryHeader::generation`](crate::GeometryHeader::generation). Answers of different
     /// generations describe different scenes.
     pub generation: u64,
+    /// The [`SlidingMetaphor`] code in use, as the answer leaves: the scene's own after a start,
+    /// load or reset, the one asked for after a `SetMetaphor`.
+    pub metaphor: u32,
 }

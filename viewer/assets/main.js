@@ -32,7 +32,7 @@ const state = {
   scene: null,
   sceneNames: [],
   // The name the server offers its current scene under (null if not offered), and the sliding
-  // metaphor the viewer set since the scene started (null: the scene's own).
+  // metaphor the server uses.
   currentScene: null,
   metaphor: null,
   // The sides (`right`, `left`) whose hands have answered input since the scene started.

@@ -59,10 +59,9 @@ export class Panel {
     this.element('load').disabled = names.length === 0;
   }
 
-  // Selects the sliding metaphor the server uses; null when the viewer has not set one since the
-  // scene started, so the scene's own is in force.
+  // Selects the sliding metaphor the server uses.
   showMetaphor(metaphor) {
-    this.element('metaphor').value = metaphor ?? '';
+    this.element('metaphor').value = metaphor;
   }
 
   // The sides whose hands have answered input so far (`right`, `left`).

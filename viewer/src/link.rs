@@ -14,6 +14,7 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use vas_client::protocol::ControlRequest;
 use vas_client::{
     ClearanceFrame, Client, ClientError, Frame, HandFrame, PartsFrame, Roles, SceneGeometry,
     SceneInfo, SceneWords, SlidingMetaphor, Wake,
@@ -35,6 +36,9 @@ const HAND_WAIT: Duration = Duration::from_millis(1);
 const HANDS_RECENT: Duration = Duration::from_millis(200);
 /// Silence after which the link checks that the server is still there.
 const QUIET: Duration = Duration::from_secs(1);
+/// How often the link asks which sliding metaphor the server uses, so that the pages see one
+/// another client set.
+const METAPHOR_REFRESH: Duration = Duration::from_secs(1);
 /// How long a server has to answer a control request before it is taken as gone.
 const CONTROL_TIMEOUT: Duration = Duration::from_secs(2);
 /// How long a scene may take to load.
@@ -103,20 +107,23 @@ impl Link<'_> {
         );
         self.hub.stats.server.store(true, Ordering::Relaxed);
         let mut status = ServerStatus::default();
-        // The metaphor the pages set last, and the scene generation it was set on.
-        let mut metaphor_set = None;
+        // The sliding metaphor in use, as the server's last answer said.
+        let (mut metaphor, mut metaphor_asked) = (scene.metaphor, Instant::now());
 
         let mut latest = Latest::default();
         let mut last_heard = Instant::now();
         while !self.stop.load(Ordering::Relaxed) {
-            self.serve_commands(|command| carry_out(&client, command, &mut metaphor_set));
+            self.serve_commands(|command| carry_out(&client, command, &mut metaphor));
+            if metaphor_asked.elapsed() >= METAPHOR_REFRESH {
+                let answer = client.control(ControlRequest::scene_info(), CONTROL_TIMEOUT)?;
+                metaphor = SlidingMetaphor::try_from(answer.metaphor)?;
+                metaphor_asked = Instant::now();
+            }
             let now = ServerStatus {
                 server: true,
                 scene: offered_name(&scene, &scene_names),
                 scene_names: scene_names.clone(),
-                metaphor: (metaphor_set)
-                    .filter(|(_, generation)| Some(*generation) == latest.generation)
-                    .map(|(metaphor, _)| metaphor),
+                metaphor,
             };
             if now != status {
                 self.hub.status.send_replace(Some(messages::status(&now)));
@@ -131,6 +138,7 @@ impl Link<'_> {
                     if let Some(geometry) = new_geometry(&frames, latest.generation) {
                         // A load or a reset: the names may have changed with the scene.
                         scene = client.scene_info(CONTROL_TIMEOUT)?;
+                        metaphor = scene.metaphor;
                         latest = Latest {
                             generation: Some(geometry.generation),
                             words: SceneWords::new(&scene),
@@ -310,33 +318,32 @@ fn offered_name(scene: &SceneInfo, names: &[String]) -> Option<String> {
     names.iter().find(|name| *name == stem).cloned()
 }
 
-/// Carries out a page's command on the server; the answer in words either way. A metaphor set
-/// is left in `metaphor_set` with the generation of the scene it was set on: a reset or a load
-/// brings the scene's own metaphor back.
+/// Carries out a page's command on the server; the answer in words either way. `metaphor`
+/// takes the one the answer says is in use (a reset or a load brings the scene's own back).
 fn carry_out(
     client: &Client,
     command: &Command,
-    metaphor_set: &mut Option<(SlidingMetaphor, u64)>,
+    metaphor: &mut SlidingMetaphor,
 ) -> Result<String, String> {
-    let done =
-        match command {
-            Command::Reset {} => client
-                .reset(CONTROL_TIMEOUT)
-                .map(|_| "scene reset".to_owned()),
-            Command::SetMetaphor { metaphor } => client
-                .set_metaphor(*metaphor, CONTROL_TIMEOUT)
-                .map(|response| {
-                    *metaphor_set = Some((*metaphor, response.generation));
-                    format!("sliding metaphor: {metaphor}")
-                }),
-            Command::LoadScene { name } => client
-                .load_named_scene(name, LOAD_TIMEOUT)
-                .map(|_| format!("loaded {name}")),
-        };
-    done.map_err(|error| match error {
+    let (answer, done) = match command {
+        Command::Reset {} => (client.reset(CONTROL_TIMEOUT), "scene reset".to_owned()),
+        Command::SetMetaphor { metaphor } => (
+            client.set_metaphor(*metaphor, CONTROL_TIMEOUT),
+            format!("sliding metaphor: {metaphor}"),
+        ),
+        Command::LoadScene { name } => (
+            client.load_named_scene(name, LOAD_TIMEOUT),
+            format!("loaded {name}"),
+        ),
+    };
+    let answer = answer.map_err(|error| match error {
         ClientError::Refused { message, .. } => message,
         other => other.to_string(),
-    })
+    })?;
+    if let Ok(in_use) = SlidingMetaphor::try_from(answer.metaphor) {
+        *metaphor = in_use;
+    }
+    Ok(done)
 }
 
 #[cfg(test)]
@@ -356,6 +363,7 @@ mod tests {
             hands: Vec::new(),
             scenes_offered: 2,
             generation: 1,
+            metaphor: SlidingMetaphor::default(),
         };
         let names = ["peg_in_hole".to_owned(), "peg_insert".to_owned()];
         assert_eq!(

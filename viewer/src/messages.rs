@@ -22,9 +22,8 @@ pub struct ServerStatus {
     /// The name among `scene_names` of the scene it serves; `None` when it serves one it does
     /// not offer.
     pub scene: Option<String>,
-    /// The sliding metaphor the viewer set on the scene it serves; `None` when none was set
-    /// since the scene started, so the scene's own is in force (the server does not say which).
-    pub metaphor: Option<SlidingMetaphor>,
+    /// The sliding metaphor the server uses: the scene's own, or the one a client set since.
+    pub metaphor: SlidingMetaphor,
 }
 
 /// `{"type": "status"}`: the server as [`ServerStatus`] describes it.
@@ -282,12 +281,12 @@ mod tests {
     }
 
     #[test]
-    fn a_status_names_the_served_scene_and_the_metaphor_set() {
+    fn a_status_names_the_served_scene_and_the_metaphor_in_use() {
         let status = ServerStatus {
             server: true,
             scene_names: vec!["a".into(), "b".into()],
             scene: Some("b".into()),
-            metaphor: Some(SlidingMetaphor::SpiralSpring),
+            metaphor: SlidingMetaphor::SpiralSpring,
         };
         let Message::Text(text) = super::status(&status) else {
             panic!("a status is a text message");

@@ -22,6 +22,7 @@ namespace Vas
         Protocol = -8,
         Ipc = -9,
         Panic = -10,
+        Unsupported = -11,
     }
 
     /// <summary>How a wait ended (VasWake).</summary>
@@ -302,6 +303,7 @@ namespace Vas
         public Vec3 Up;
         public double MetresPerUnit;
         public uint ScenesOffered;
+        public uint Metaphor;
         public InputStats Stats;
     }
 

@@ -38,6 +38,9 @@ pub struct SceneInfo {
     /// The scene's generation: one more after every load or reset, the same number as its
     /// geometry's ([`SceneGeometry::generation`](vas_protocol::SceneGeometry::generation)).
     pub generation: u64,
+    /// The sliding metaphor in use: the scene's own, or the one a client set since the last
+    /// load or reset.
+    pub metaphor: SlidingMetaphor,
 }
 
 /// A hand of the scene.
@@ -264,6 +267,7 @@ fn scene_info_of(
         hands,
         scenes_offered: summary.listed_count,
         generation: summary.generation,
+        metaphor: SlidingMetaphor::try_from(summary.metaphor)?,
     })
 }
 

@@ -23,6 +23,8 @@ pub struct Session {
     pub epoch: u64,
     /// The scenes that may be loaded by name.
     pub catalogue: SceneCatalogue,
+    /// The sliding metaphor in use: the scene's own until a `SetMetaphor`.
+    pub metaphor: SlidingMetaphor,
 }
 
 /// The scenes the server may load by name: the `*.toml` files of one folder, named by their
@@ -89,11 +91,25 @@ impl Session {
                 scene.hands.iter().map(|hand| hand.model.as_ref()),
                 scene.params.tracking,
             ),
+            metaphor: scene.params.sliding.metaphor,
             scene,
             epoch: 1,
             catalogue,
         };
         Ok((session, restart))
+    }
+
+    /// Slides grasped parts with the metaphor of `code` from now on (until a load or reset
+    /// brings the scene's own back).
+    fn set_metaphor(&mut self, code: u32) -> Result<(PartDescription, Option<Change>), Refusal> {
+        let metaphor = SlidingMetaphor::try_from(code)
+            .map_err(|unknown| (ControlStatus::InvalidRequest, unknown.to_string()))?;
+        tracing::info!(%metaphor, "sliding metaphor set on request");
+        self.metaphor = metaphor;
+        Ok((
+            PartDescription::default(),
+            Some(Change::SlidingMetaphor(metaphor)),
+        ))
     }
 
     /// Starts over on `scene`: the targets are forgotten, the counters go on.
@@ -105,6 +121,7 @@ impl Session {
             scene.hands.iter().map(|hand| hand.model.as_ref()),
             scene.params.tracking,
         );
+        self.metaphor = scene.params.sliding.metaphor;
         self.scene = scene;
         Ok(restart.into_change())
     }
@@ -157,7 +174,7 @@ pub fn answer(session: &mut Session, request: &ControlRequest, loading: bool) ->
         Ok(ControlRequestKind::Reset) => session
             .restart(Arc::clone(&session.scene))
             .map(|change| (PartDescription::default(), Some(change))),
-        Ok(ControlRequestKind::SetMetaphor) => set_metaphor(request.argument),
+        Ok(ControlRequestKind::SetMetaphor) => session.set_metaphor(request.argument),
     };
     let (mut response, change) = respond(session, request.kind, outcome);
     response.listed = listed;
@@ -219,6 +236,7 @@ fn respond(
         hands,
         listed: WireText::EMPTY,
         generation: session.epoch,
+        metaphor: session.metaphor as u32,
     };
     match outcome {
         Ok((part, change)) => {
@@ -305,16 +323,6 @@ fn scene_path(request: &ControlRequest, loading: bool) -> Result<PathBuf, Refusa
         )
     })?;
     Ok(PathBuf::from(path))
-}
-
-fn set_metaphor(code: u32) -> Result<(PartDescription, Option<Change>), Refusal> {
-    let metaphor = SlidingMetaphor::try_from(code)
-        .map_err(|unknown| (ControlStatus::InvalidRequest, unknown.to_string()))?;
-    tracing::info!(%metaphor, "sliding metaphor set on request");
-    Ok((
-        PartDescription::default(),
-        Some(Change::SlidingMetaphor(metaphor)),
-    ))
 }
 
 #[cfg(test)]
@@ -493,19 +501,28 @@ mod tests {
     }
 
     #[test]
-    fn reset_restarts_the_same_scene_and_the_metaphor_is_passed_on() {
+    fn reset_restarts_the_same_scene_and_brings_its_own_metaphor_back() {
         let mut session = session();
-        let request = ControlRequest::set_metaphor(SlidingMetaphor::Incremental);
+        let own = session.scene.params.sliding.metaphor;
+        let (response, _) = now(&mut session, &ControlRequest::scene_info());
+        assert_eq!(
+            response.metaphor, own as u32,
+            "answers name the metaphor in use"
+        );
+        let other = SlidingMetaphor::ALL
+            .into_iter()
+            .find(|metaphor| *metaphor != own)
+            .expect("three metaphors");
+        let request = ControlRequest::set_metaphor(other);
         let (response, change) = now(&mut session, &request);
         assert_eq!(status(&response), ControlStatus::Ok);
-        assert!(matches!(
-            change,
-            Some(Change::SlidingMetaphor(SlidingMetaphor::Incremental))
-        ));
+        assert_eq!(response.metaphor, other as u32);
+        assert!(matches!(change, Some(Change::SlidingMetaphor(set)) if set == other));
         let name = session.scene.name.clone();
         let (response, change) = now(&mut session, &ControlRequest::reset());
         assert_eq!(status(&response), ControlStatus::Ok);
         assert_eq!(restart_epoch(change), 2);
         assert_eq!(session.scene.name, name);
+        assert_eq!(response.metaphor, own as u32);
     }
 }

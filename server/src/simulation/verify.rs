@@ -163,8 +163,15 @@ impl Verifier {
         // Settle the pairs that collide as configured, so that they are not blamed on a move.
         let colliding = pairs(&pipeline.run_frame(Detail::Pairs).colliding);
         if !colliding.is_empty() {
+            // Named as `check-scene --prepare` names them; a hand's segments at its flat start
+            // pose are counted apart.
+            let part_of = |object: ObjectId| parts.iter().position(|&part| part == object);
+            let part_pairs: Vec<[usize; 2]> = (colliding.iter())
+                .filter_map(|&(a, b)| Some([part_of(a)?, part_of(b)?]))
+                .collect();
             tracing::warn!(
-                pairs = colliding.len(),
+                pairs = %scene.pair_names(&part_pairs),
+                with_hands = colliding.len() - part_pairs.len(),
                 "parts collide as the scene places them; those pairs are not checked until they part"
             );
         }

@@ -224,6 +224,7 @@ fn assembly_parts_collide_and_describe_themselves_as_any_part() {
         .position(|p| p.name == "carriage_2")
         .unwrap();
     let mut session = Session {
+        metaphor: scene.params.sliding.metaphor,
         scene: Arc::new(scene),
         inputs: Default::default(),
         epoch: 1,

@@ -1,7 +1,10 @@
-//! `check-scene --prepare` names the pairs of parts that collide where the scene places them.
+//! `check-scene --prepare`, and a server's warning, name the pairs of parts that collide where
+//! the scene places them.
 
 use std::path::Path;
 use std::process::Command;
+
+use vas_testkit::{PATIENCE, Server};
 
 /// A scene of a peg, a second peg through it and a third standing clear of both.
 const OVERLAPPING: &str = r#"
@@ -56,4 +59,23 @@ fn check_scene_names_the_pairs_that_collide_as_placed() {
         stdout.contains("no parts collide as the scene places them"),
         "{stdout}"
     );
+}
+
+#[test]
+fn a_server_on_overlapping_parts_warns_naming_the_pairs() {
+    let (mut server, _folder) = Server::start_on_scene("overlap_warning", OVERLAPPING);
+    drop(server.connect());
+    assert!(
+        server
+            .process
+            .wait_for_log("parts collide as the scene places them", PATIENCE),
+        "{}",
+        server.process.log()
+    );
+    let log = server.process.log();
+    let warning = (log.lines())
+        .find(|line| line.contains("parts collide as the scene places them"))
+        .expect("found above");
+    assert!(warning.contains("peg – crossing"), "{warning}");
+    assert!(!warning.contains("apart"), "{warning}");
 }

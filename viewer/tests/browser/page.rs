@@ -73,7 +73,10 @@ async fn the_panel_says_which_hands_were_seen_and_shows_the_servers_scene_and_me
     let shown = panel(&browser).await;
     assert_eq!(shown["hands"], "no hand seen yet", "{shown}");
     assert_eq!(shown["scene"], "peg_insert", "the served scene: {shown}");
-    assert_eq!(shown["metaphor"], "", "the scene's own metaphor: {shown}");
+    assert_eq!(
+        shown["metaphor"], "rubber-band",
+        "the scene's own metaphor: {shown}"
+    );
 
     // A metaphor chosen on one page is what a page opened afterwards shows.
     choose(&browser, "metaphor", "incremental").await;
@@ -118,7 +121,7 @@ async fn the_panel_says_which_hands_were_seen_and_shows_the_servers_scene_and_me
         (&shown["scene"], &shown["metaphor"], &shown["hands"]),
         (
             &Value::from("peg_in_hole"),
-            &Value::from(""),
+            &Value::from("rubber-band"),
             &Value::from("no hand seen yet")
         ),
         "{shown}"
