@@ -2,6 +2,11 @@
 //! ([`vas_server::replay`], one frame per sample as in lockstep, without threads or IPC), checked
 //! frame by frame for penetrations by parry, an oracle independent of the DOP-trees.
 //!
+//! parry judges each frame as the server would publish it ([`Replay::published`], verified by
+//! the collision loop's verifier), not the interaction's proposal: the promise is that nothing
+//! published penetrates, and the verifier is what keeps a proposal that does from being
+//! published (a part a hand holds pushed into the other hand, say, is kept where it was).
+//!
 //! The inputs reach the interaction as the server hands them over (through its own input state,
 //! [`Inputs`]): the tracker's cart, and each hand's root and flex values from its joints once it
 //! has had a tracked hand-joints sample, else (the first hand) from the tracker and the glove (a
@@ -253,16 +258,16 @@ pub fn replay(scene: &Scene, recording: &Recording) -> Result<OfflineRun, Offlin
         };
         let frame = replay.frames() - 1;
         let oracle = oracle.get_or_insert_with(|| Oracle::new(scene, replay.hand_bodies()));
-        let poses: Vec<Isometry3<f64>> = replay
-            .interaction()
-            .map_or_else(Vec::new, |i| i.part_poses().collect());
         record_frame(scene, &mut run, frame, &steps);
         record_pushes(scene, &mut run, frame, &steps, &mut pushed);
-        let hands: Vec<VisibleHand> = steps
-            .iter()
-            .map(|step| VisibleHand {
-                root: step.hand.pose.root,
-                flex: step.hand.pose.flex,
+        let Some(published) = replay.published() else {
+            continue;
+        };
+        let poses: Vec<Isometry3<f64>> = published.parts.iter().map(|part| part.pose).collect();
+        let hands: Vec<VisibleHand> = (published.hands.iter().zip(&steps))
+            .map(|(hand, step)| VisibleHand {
+                root: hand.root,
+                flex: hand.flex.map(f64::from),
                 held: step.held.as_ref().map(|held| held.part as usize),
             })
             .collect();

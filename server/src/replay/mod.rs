@@ -7,6 +7,11 @@
 //! each valid sample with each hand's latest target. Each hand starts parked at its first
 //! target with a flat hand; invalid samples are counted and skipped.
 //!
+//! Each frame is then verified as the collision loop verifies it ([`Verifier`]): the frame a
+//! server would publish is [`Replay::published`], and a part whose proposed pose was refused is
+//! put back where the verifier kept it, as the collision loop's refusals put it back in the
+//! sliding loop.
+//!
 //! The caller reads the recording and feeds it sample by sample ([`Replay::tracker`],
 //! [`Replay::glove`], [`Replay::hand_joints`]): the library names no recording format, which is
 //! the client's. Testkit's offline replay and `vas-server report` both drive this one.
@@ -18,9 +23,12 @@ use vas_protocol::{FLEX_COUNT, GloveSample, HandJointsSample, TrackerSample};
 use crate::grasping::{GraspingHand, HandPose};
 use crate::runtime::inputs::Inputs;
 use crate::scene::Scene;
-use crate::simulation::frames::HandTarget;
+use crate::simulation::frames::{
+    CandidateFrame, HandTarget, ProposedHand, VerifiedFrame, wire_grasp,
+};
 use crate::simulation::hand_bodies::HandBodies;
 use crate::simulation::interaction::{Interaction, InteractionFrame};
+use crate::simulation::verify::Verifier;
 
 /// Why a recording cannot be replayed in a scene.
 #[derive(Debug, thiserror::Error)]
@@ -48,6 +56,9 @@ pub enum Outcome {
 struct Placed {
     interaction: Interaction,
     bodies: Vec<HandBodies>,
+    verifier: Verifier,
+    /// The last frame as verified.
+    published: Option<VerifiedFrame>,
 }
 
 /// A scene replayed sample by sample.
@@ -108,6 +119,11 @@ impl<'s> Replay<'s> {
         self.placed.as_ref().map(|placed| &placed.interaction)
     }
 
+    /// The last frame as the collision loop verified it: what a server would publish.
+    pub fn published(&self) -> Option<&VerifiedFrame> {
+        self.placed.as_ref()?.published.as_ref()
+    }
+
     /// The hands' kinematics and segment meshes, in the scene's order (empty before a sample
     /// placed a hand).
     pub fn hand_bodies(&self) -> &[HandBodies] {
@@ -128,7 +144,38 @@ impl<'s> Replay<'s> {
             None => self.placed.insert(place(self.scene, &frame.hands)?),
         };
         self.frames += 1;
-        Ok(Outcome::Stepped(placed.interaction.step(&frame.hands)))
+        let steps = placed.interaction.step(&frame.hands);
+        let candidate = CandidateFrame {
+            stamps: frame.stamps,
+            epoch: 0,
+            hands: (steps.iter().zip(&frame.hands))
+                .map(|(step, target)| proposed(step, target))
+                .collect(),
+            part_poses: placed.interaction.part_poses().collect(),
+        };
+        let (published, refused) = placed.verifier.verify(candidate);
+        for (part, pose) in refused {
+            placed.interaction.restore(part, pose);
+        }
+        placed.published = Some(published);
+        Ok(Outcome::Stepped(steps))
+    }
+}
+
+/// A hand's interaction frame as the sliding loop proposes it to the collision loop (the
+/// visible root already the held part's hand root).
+fn proposed(step: &InteractionFrame, target: &HandTarget) -> ProposedHand {
+    ProposedHand {
+        root: step.hand.pose.root,
+        flex: step.hand.pose.flex.map(|v| v as f32),
+        touching: step.hand.touching.to_vec(),
+        grasp: wire_grasp(step.hand.grasp),
+        tracked: target.tracked,
+        joints: target.joints,
+        held: step.held.clone(),
+        pushing: step.pushed.clone(),
+        events: step.hand.events.clone(),
+        handed_over: step.handed_over.clone(),
     }
 }
 
@@ -153,7 +200,8 @@ fn place(scene: &Scene, first: &[HandTarget]) -> Result<Placed, ReplayError> {
     let bodies = (scene.hands.iter())
         .zip(&hands)
         .map(|(scene_hand, hand)| HandBodies::of(Arc::clone(&scene_hand.model), hand))
-        .collect();
+        .collect::<Vec<_>>();
+    let verifier = Verifier::new(scene, &bodies);
     let interaction = Interaction::new(
         hands,
         &scene.parts,
@@ -164,5 +212,7 @@ fn place(scene: &Scene, first: &[HandTarget]) -> Result<Placed, ReplayError> {
     Ok(Placed {
         interaction,
         bodies,
+        verifier,
+        published: None,
     })
 }

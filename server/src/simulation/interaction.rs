@@ -95,6 +95,12 @@ impl Interaction {
         self.slide.part_poses().get(part as usize).copied()
     }
 
+    /// Puts `part` back at `pose`, where the collision loop kept it when it refused the pose
+    /// this interaction proposed (a held part restarts sliding from there).
+    pub fn restore(&mut self, part: PartId, pose: Isometry3<f64>) {
+        self.slide.restore(part, pose);
+    }
+
     /// The sliding machine of the part `hand` holds, if it holds a movable part.
     pub fn slide_machine(&self, hand: usize) -> Option<&SlideMachine> {
         self.slide.slide_machine(hand)

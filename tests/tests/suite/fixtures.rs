@@ -203,18 +203,42 @@ fn the_oracle_reports_parts_and_hands_that_overlap() {
         run.penetrations.first()
     );
 
-    // The block where the hand appears: the hand is parked inside it until the tracker leads
-    // it out.
+    // The block where the hand appears: parry finds the hand parked inside it, and the replay
+    // publishes no frame with it there (the verifier keeps the hand out until the tracker
+    // leads it out).
     let push = &EXPECTED[3];
     let mut scene = Scene::load(&push.scene_path()).expect("loads");
     let recording = Recording::load(&push.fixture_path()).expect("loads");
     let (targets, _) = offline::hand_targets(&scene, recording.samples.iter().map(|s| s.input));
     scene.parts[0].pose.translation.vector = targets[0][0].input.tracker.translation.vector;
-    let run = offline::replay(&scene, &recording).expect("replays");
+    let parked = vas_server::grasping::HandPose {
+        root: targets[0][0].input.cart * targets[0][0].input.tracker,
+        flex: [0.0; vas_protocol::FLEX_COUNT],
+    };
+    let model = std::sync::Arc::clone(&scene.hands[0].model);
+    let hand = vas_server::grasping::GraspingHand::new(
+        std::sync::Arc::clone(&model),
+        scene.params.grasp(),
+        parked,
+    )
+    .expect("the hand builds");
+    let bodies = vas_server::simulation::hand_bodies::HandBodies::of(model, &hand);
+    let poses: Vec<_> = scene.parts.iter().map(|part| part.pose).collect();
+    let visible = offline::VisibleHand {
+        root: parked.root,
+        flex: parked.flex,
+        held: None,
+    };
+    let found = offline::Oracle::new(&scene, &[bodies]).penetrations(&scene, &poses, &[visible], 0);
     assert!(
-        run.penetrations
+        found
             .first()
             .is_some_and(|p| p.starts_with("frame 0: hand segment")),
+        "{found:?}"
+    );
+    let run = offline::replay(&scene, &recording).expect("replays");
+    assert!(
+        run.penetrations.is_empty(),
         "{:?}",
         run.penetrations.first()
     );

@@ -9,6 +9,7 @@ mod client_roles;
 mod end_to_end;
 mod examples;
 mod faults;
+mod filtered_handover;
 mod fixtures;
 mod geometry_delivery;
 mod hand_joints;
