@@ -137,6 +137,14 @@ const fn release(part: &'static str) -> ExpectedEvent {
     by(0, EventKind::Release, part, GraspType::None)
 }
 
+const fn push_begin(part: &'static str) -> ExpectedEvent {
+    by(0, EventKind::PushBegin, part, GraspType::None)
+}
+
+const fn push_end(part: &'static str) -> ExpectedEvent {
+    by(0, EventKind::PushEnd, part, GraspType::None)
+}
+
 const fn by(hand: usize, kind: EventKind, part: &'static str, grasp: GraspType) -> ExpectedEvent {
     ExpectedEvent {
         hand,
@@ -147,7 +155,7 @@ const fn by(hand: usize, kind: EventKind, part: &'static str, grasp: GraspType) 
 }
 
 /// Every recorded scenario and what its replay must give.
-pub const EXPECTED: [Scenario; 10] = [
+pub const EXPECTED: [Scenario; 15] = [
     Scenario {
         motion: Motion::Script(RecordedScenario::PegInsert),
         scene: "peg_insert.toml",
@@ -301,6 +309,78 @@ pub const EXPECTED: [Scenario; 10] = [
             position: [-0.09, 0.075, -0.0625],
             rpy_degrees: [0.0, 90.0, 0.0],
             position_tolerance: 0.003,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Script(RecordedScenario::PushAlongRail),
+        scene: "push_along_rail.toml",
+        events: &[push_begin("slider"), push_end("slider")],
+        // Pushed along the slot until its far face meets the end stop (x = 0.05), there held.
+        final_pose: ExpectedPose {
+            part: "slider",
+            position: [0.03, 0.0, 0.1],
+            rpy_degrees: [0.0, 0.0, 0.0],
+            position_tolerance: 0.001,
+            angle_tolerance: 1e-9,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Script(RecordedScenario::PushIntoWall),
+        scene: "push_into_wall.toml",
+        events: &[push_begin("block"), push_end("block")],
+        // Pushed 1 cm, until its far face meets the wall (x = 0.14), not the 3 cm aimed at.
+        final_pose: ExpectedPose {
+            part: "block",
+            position: [0.11, 0.0, 0.2],
+            rpy_degrees: [0.0, 0.0, 0.0],
+            position_tolerance: 0.001,
+            angle_tolerance: 1e-9,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Script(RecordedScenario::ReleaseOverTable),
+        scene: "release_over_table.toml",
+        events: &[grasp("peg", GraspType::Power), release("peg")],
+        // Standing on the table's top (z = 0), upright, below where it was held.
+        final_pose: ExpectedPose {
+            part: "peg",
+            position: [0.0, 0.0, 0.04],
+            rpy_degrees: [0.0, 0.0, 0.0],
+            position_tolerance: 0.001,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Script(RecordedScenario::ReleaseOverSlope),
+        scene: "release_over_slope.toml",
+        events: &[grasp("peg", GraspType::Power), release("peg")],
+        // Resting on the plane tilted 10 degrees about x (its top face 1 cm from the origin) by
+        // the +y edge of its lower end: that end's middle at z = (0.01 + 0.009 sin 10°) / cos 10°,
+        // and not slid off.
+        final_pose: ExpectedPose {
+            part: "peg",
+            position: [0.0, 0.0, 0.051_741],
+            rpy_degrees: [0.0, 0.0, 0.0],
+            position_tolerance: 0.001,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::Script(RecordedScenario::ReleaseOverNothing),
+        scene: "release_over_nothing.toml",
+        events: &[grasp("peg", GraspType::Power), release("peg")],
+        // Its lowest point on the scene's floor (z = 0.05).
+        final_pose: ExpectedPose {
+            part: "peg",
+            position: [0.0, 0.0, 0.09],
+            rpy_degrees: [0.0, 0.0, 0.0],
+            position_tolerance: 0.001,
             angle_tolerance: 0.05,
         },
         min_held_back: 0.0,

@@ -7,7 +7,11 @@ use std::fmt;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use vas_server::scene::{Part, Scene};
 
-use super::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, open_hand, pose};
+use super::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, open_hand};
+
+mod unheld;
+
+use unheld::{FlatPush, Thumb, release_in_mid_air};
 
 /// A scene lacks a part a recorded scenario moves or aims at.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -43,6 +47,17 @@ pub enum RecordedScenario {
     /// In the demo scene: a power grasp on the peg standing on the table, carried over the
     /// block, lowered into its hole and released there.
     DemoPegIntoBlock,
+    /// The flat hand, thumb up, pushes a slider standing in a slot along the slot, aiming past
+    /// its end stop, and withdraws.
+    PushAlongRail,
+    /// The flat hand pushes a block standing before a wall, aiming past the wall, and withdraws.
+    PushIntoWall,
+    /// A power grasp on a peg above a table, lifted and released in mid-air: it settles.
+    ReleaseOverTable,
+    /// A power grasp on a peg above a tilted plane, lifted and released in mid-air: it settles.
+    ReleaseOverSlope,
+    /// A power grasp on a peg with nothing below, lifted and released in mid-air: it settles.
+    ReleaseOverNothing,
 }
 
 impl fmt::Display for RecordedScenario {
@@ -73,10 +88,15 @@ const DEMO_INSERT_DEPTH: f64 = 0.01;
 const PALM_FACE: f64 = 0.0125;
 /// The palm's middle, this far from the hand root along +y (metres).
 const PALM_MIDDLE: f64 = 0.055;
-/// The pushing palm starts this far from the block (metres).
-const PUSH_GAP: f64 = 0.02;
 /// The push aims this far into the block (metres): the block is pushed as far.
 const PUSH_DEPTH: f64 = 0.02;
+/// The push along the rail aims this far into the slider (metres): 2 cm past the end stop.
+const RAIL_PUSH_DEPTH: f64 = 0.05;
+/// How far above the slider's middle the palm's middle is (metres): the hand, thumb up, clears
+/// the rails and the end stop, and its palm lies within the slider's face.
+const RAIL_PUSH_RAISE: f64 = 0.01;
+/// The push into the wall aims this far into the block (metres): 2 cm past the wall.
+const WALL_PUSH_DEPTH: f64 = 0.03;
 /// How far the cart drives while the hand holds the handle (metres, in the world).
 const CART_DRIVE: [f64; 3] = [0.3, 0.2, 0.0];
 /// How far the cart turns about its vertical axis meanwhile (degrees).
@@ -84,13 +104,18 @@ const CART_TURN_DEGREES: f64 = 40.0;
 
 impl RecordedScenario {
     /// Every recorded scenario, in the order of the fixtures' documentation.
-    pub const ALL: [RecordedScenario; 6] = [
+    pub const ALL: [RecordedScenario; 11] = [
         RecordedScenario::PegInsert,
         RecordedScenario::PipeThroughSheet,
         RecordedScenario::PrecisionPinch,
         RecordedScenario::Push,
         RecordedScenario::NavigateHolding,
         RecordedScenario::DemoPegIntoBlock,
+        RecordedScenario::PushAlongRail,
+        RecordedScenario::PushIntoWall,
+        RecordedScenario::ReleaseOverTable,
+        RecordedScenario::ReleaseOverSlope,
+        RecordedScenario::ReleaseOverNothing,
     ];
 
     /// The scenario's name: its fixture's file stem.
@@ -102,6 +127,11 @@ impl RecordedScenario {
             RecordedScenario::Push => "push",
             RecordedScenario::NavigateHolding => "navigate_holding",
             RecordedScenario::DemoPegIntoBlock => "demo_peg_into_block",
+            RecordedScenario::PushAlongRail => "push_along_rail",
+            RecordedScenario::PushIntoWall => "push_into_wall",
+            RecordedScenario::ReleaseOverTable => "release_over_table",
+            RecordedScenario::ReleaseOverSlope => "release_over_slope",
+            RecordedScenario::ReleaseOverNothing => "release_over_nothing",
         }
     }
 
@@ -133,6 +163,23 @@ impl RecordedScenario {
                 "in the demo scene: power grasp on the peg, carried over the block, lowered 1 cm \
                  into its hole (1 mm of clearance), released there"
             }
+            RecordedScenario::PushAlongRail => {
+                "the flat hand, thumb up, pushes the slider along its slot, aiming 2 cm past the \
+                 end stop, and withdraws; nothing is grasped"
+            }
+            RecordedScenario::PushIntoWall => {
+                "the flat hand pushes the block towards the wall 1 cm behind it, aiming 3 cm \
+                 into it, and withdraws; nothing is grasped"
+            }
+            RecordedScenario::ReleaseOverTable => {
+                "power grasp on the peg above the table, lifted 3 cm, released in mid-air"
+            }
+            RecordedScenario::ReleaseOverSlope => {
+                "power grasp on the peg above the tilted plane, lifted 3 cm, released in mid-air"
+            }
+            RecordedScenario::ReleaseOverNothing => {
+                "power grasp on the peg with nothing below, lifted 3 cm, released in mid-air"
+            }
         }
     }
 
@@ -154,9 +201,29 @@ impl RecordedScenario {
             RecordedScenario::PegInsert => peg_insert(part("peg")?, part("block")?),
             RecordedScenario::PipeThroughSheet => pipe_through_sheet(part("pipe")?, part("sheet")?),
             RecordedScenario::PrecisionPinch => precision_pinch(part("pin")?),
-            RecordedScenario::Push => push(part("block")?),
+            RecordedScenario::Push => FlatPush {
+                thumb: Thumb::Down,
+                raise: 0.0,
+                depth: PUSH_DEPTH,
+            }
+            .keyframes(part("block")?),
             RecordedScenario::NavigateHolding => navigate_holding(part("handle")?),
             RecordedScenario::DemoPegIntoBlock => demo_peg_into_block(part("peg")?, part("block")?),
+            RecordedScenario::PushAlongRail => FlatPush {
+                thumb: Thumb::Up,
+                raise: RAIL_PUSH_RAISE,
+                depth: RAIL_PUSH_DEPTH,
+            }
+            .keyframes(part("slider")?),
+            RecordedScenario::PushIntoWall => FlatPush {
+                thumb: Thumb::Down,
+                raise: 0.0,
+                depth: WALL_PUSH_DEPTH,
+            }
+            .keyframes(part("block")?),
+            RecordedScenario::ReleaseOverTable
+            | RecordedScenario::ReleaseOverSlope
+            | RecordedScenario::ReleaseOverNothing => release_in_mid_air(part("peg")?),
         })
     }
 }
@@ -314,32 +381,6 @@ fn precision_pinch(pin: &Part) -> Vec<Keyframe> {
             ..k
         })
         .collect()
-}
-
-fn push(block: &Part) -> Vec<Keyframe> {
-    // Palm (the hand's -z) towards +x, fingers along +y, thumb down.
-    let palm_towards_x = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -FRAC_PI_2);
-    let (block_near, _) = extent(block, &Vector3::x());
-    let centre = block.pose.translation.vector;
-    let start = pose(
-        [
-            block_near - PUSH_GAP - PALM_FACE,
-            centre.y - PALM_MIDDLE,
-            centre.z,
-        ],
-        palm_towards_x,
-    );
-    let mut keys = vec![Keyframe::new(0.0, start, open_hand())];
-    then(&mut keys, 0.1, |_| {});
-    then(
-        &mut keys,
-        0.4,
-        shift((PUSH_GAP + PUSH_DEPTH) * Vector3::x()),
-    );
-    then(&mut keys, 0.1, |_| {});
-    then(&mut keys, 0.3, |k| k.tracker = start);
-    then(&mut keys, 0.05, |_| {});
-    keys
 }
 
 fn navigate_holding(handle: &Part) -> Vec<Keyframe> {

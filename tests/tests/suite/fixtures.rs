@@ -4,6 +4,8 @@
 
 use std::fs;
 
+use nalgebra::Isometry3;
+
 use vas_client::recording::Recording;
 use vas_server::scene::Scene;
 use vas_testkit::captured::CapturedMotion;
@@ -21,7 +23,26 @@ fn replay(scenario: &Scenario) -> (Scene, OfflineRun) {
     (scene, run)
 }
 
-fn check(scenario: &Scenario) {
+fn scenario(name: &str) -> &'static Scenario {
+    EXPECTED
+        .iter()
+        .find(|scenario| scenario.motion.name() == name)
+        .expect("a recorded scenario")
+}
+
+/// Checks `scenario` and replays it a second time: the same run.
+fn check_twice(scenario: &Scenario) -> (Scene, OfflineRun) {
+    let (scene, run) = check(scenario);
+    assert_eq!(
+        replay(scenario).1,
+        run,
+        "{}: a second replay",
+        scenario.motion
+    );
+    (scene, run)
+}
+
+fn check(scenario: &Scenario) -> (Scene, OfflineRun) {
     let (scene, run) = replay(scenario);
     let name = scenario.motion;
     let expected = &scenario.final_pose;
@@ -88,6 +109,7 @@ fn check(scenario: &Scenario) {
         expected.part,
         expected.pose()
     );
+    (scene, run)
 }
 
 #[test]
@@ -138,6 +160,92 @@ fn two_hand_handover() {
 #[test]
 fn captured_tracking_loss() {
     check(&EXPECTED[8]);
+}
+
+#[test]
+fn push_along_rail() {
+    check_twice(scenario("push_along_rail"));
+}
+
+#[test]
+fn push_into_wall() {
+    check_twice(scenario("push_into_wall"));
+}
+
+#[test]
+fn release_over_table() {
+    let (scene, run) = lands_within_half_a_second(scenario("release_over_table"));
+    let gap = nearest_gap(&scene, &run.final_poses, "peg");
+    assert!(gap <= 1.0, "the peg rests {gap} mm above the table");
+}
+
+#[test]
+fn release_over_slope() {
+    let (scene, run) = lands_within_half_a_second(scenario("release_over_slope"));
+    let gap = nearest_gap(&scene, &run.final_poses, "peg");
+    assert!(gap <= 1.0, "the peg rests {gap} mm above the slope");
+}
+
+#[test]
+fn release_over_nothing() {
+    let (scene, run) = lands_within_half_a_second(scenario("release_over_nothing"));
+    let peg = part_index(&scene, "peg");
+    let lowest = (scene.parts[peg].mesh.vertices().iter())
+        .map(|v| (run.final_poses[peg] * v).z)
+        .fold(f64::INFINITY, f64::min);
+    let floor = scene.params.release.floor;
+    assert!(
+        (lowest - floor).abs() <= 1e-6,
+        "the peg's lowest point is at {lowest}, the floor at {floor}"
+    );
+}
+
+/// Checks a release scenario (twice), and that its part has come to rest within half a second
+/// of simulated time after the release: the recording cut there leaves it where the whole
+/// recording does.
+fn lands_within_half_a_second(scenario: &Scenario) -> (Scene, OfflineRun) {
+    let (scene, run) = check_twice(scenario);
+    let recording = Recording::load(&scenario.fixture_path()).expect("loads");
+    let release = (run.events.iter())
+        .find(|event| event.kind == vas_protocol::EventKind::Release)
+        .expect("released");
+    let released_at = recording.samples[release.frame].time;
+    let mut cut = recording.clone();
+    cut.samples
+        .retain(|sample| sample.time <= released_at + 0.5);
+    assert!(
+        cut.samples.len() < recording.samples.len(),
+        "{}: the recording ends within half a second of the release",
+        scenario.motion
+    );
+    let early = offline::replay(&scene, &cut).expect("replays");
+    let part = part_index(&scene, scenario.final_pose.part);
+    assert_eq!(
+        early.final_poses[part], run.final_poses[part],
+        "{}: still moving half a second after the release",
+        scenario.motion
+    );
+    (scene, run)
+}
+
+fn part_index(scene: &Scene, name: &str) -> usize {
+    (scene.parts.iter())
+        .position(|p| p.name == name)
+        .expect("the part is in the scene")
+}
+
+/// How far (millimetres, by parry) part `name` at `poses` is from the nearest part it is of
+/// interest to.
+fn nearest_gap(scene: &Scene, poses: &[Isometry3<f64>], name: &str) -> f32 {
+    let part = part_index(scene, name);
+    let mesh =
+        |i: usize| vas_server::collision::parry_mesh::millimetre_trimesh(&scene.parts[i].mesh);
+    let at = |i: usize| vas_server::collision::parry_mesh::millimetre_pose(&poses[i]);
+    (0..scene.parts.len())
+        .filter(|&other| other != part && scene.pair_of_interest(part, other))
+        .map(|other| parry3d::query::distance(&at(part), &mesh(part), &at(other), &mesh(other)))
+        .map(|distance| distance.expect("meshes are supported"))
+        .fold(f32::INFINITY, f32::min)
 }
 
 /// The tracking-loss recording keeps the pin through the short loss and lets go of it only the
@@ -251,7 +359,11 @@ fn every_recorded_scenario_has_one_expected_outcome() {
         .chain(CapturedMotion::ALL.into_iter().map(Motion::Captured))
         .chain([Motion::HandOver])
         .collect();
-    assert_eq!(listed, motions);
+    assert_eq!(listed.len(), motions.len());
+    for motion in motions {
+        let times = listed.iter().filter(|&&listed| listed == motion).count();
+        assert_eq!(times, 1, "{motion} is listed {times} times");
+    }
 }
 
 /// The demo's peg, released in the block's hole in a scene where released parts settle, goes on
@@ -276,26 +388,14 @@ fn a_released_part_settles_onto_what_is_below_it() {
     let after =
         recording.samples.last().expect("samples").time - recording.samples[release.frame].time;
     assert!(after <= 0.5, "{after} s of recording after the release");
-    let peg = scene
-        .parts
-        .iter()
-        .position(|p| p.name == "peg")
-        .expect("a peg");
     let held_there = demo.final_pose.pose();
-    let pose = run.final_poses[peg];
+    let pose = run.final_poses[part_index(&scene, "peg")];
     assert!(
         pose.translation.z < held_there.translation.z - 0.001,
         "the peg stayed at {pose:?}"
     );
     // Resting: within a millimetre of a part it is of interest to, by parry.
-    let mesh =
-        |i: usize| vas_server::collision::parry_mesh::millimetre_trimesh(&scene.parts[i].mesh);
-    let at = |i: usize| vas_server::collision::parry_mesh::millimetre_pose(&run.final_poses[i]);
-    let nearest = (0..scene.parts.len())
-        .filter(|&other| other != peg && scene.pair_of_interest(peg, other))
-        .map(|other| parry3d::query::distance(&at(peg), &mesh(peg), &at(other), &mesh(other)))
-        .map(|distance| distance.expect("meshes are supported"))
-        .fold(f32::INFINITY, f32::min);
+    let nearest = nearest_gap(&scene, &run.final_poses, "peg");
     assert!(
         nearest <= 1.0,
         "the peg rests {nearest} mm from the nearest part"

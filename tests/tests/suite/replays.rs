@@ -365,6 +365,31 @@ fn two_hand_handover() {
     check(scenario("two_hand_handover"));
 }
 
+#[test]
+fn push_along_rail() {
+    check(scenario("push_along_rail"));
+}
+
+#[test]
+fn push_into_wall() {
+    check(scenario("push_into_wall"));
+}
+
+#[test]
+fn release_over_table() {
+    check(scenario("release_over_table"));
+}
+
+#[test]
+fn release_over_slope() {
+    check(scenario("release_over_slope"));
+}
+
+#[test]
+fn release_over_nothing() {
+    check(scenario("release_over_nothing"));
+}
+
 /// The hand frames say the hand is untracked exactly while its samples do, and the pin is held
 /// through the short loss and let go in the long one.
 #[test]
