@@ -239,3 +239,107 @@ fn pushes_name_their_part_and_a_rested_hand_moves_nothing() {
     bench.frame(None);
     assert!(bench.unheld.pushed_by(0).is_empty());
 }
+
+/// The table of the tipping tests: its top at z = 0.
+fn table() -> Part {
+    part(
+        "table",
+        shapes::cuboid(Vector3::new(0.4, 0.4, 0.02), 200),
+        at(0.0, 0.0, -0.01),
+        false,
+    )
+}
+
+/// The angle (degrees) between `up` and the nearest of the block's face normals at `pose`.
+fn tilt_degrees(pose: &Isometry3<f64>, up: &Vector3<f64>) -> f64 {
+    let axes = [Vector3::x(), Vector3::y(), Vector3::z()];
+    (axes.iter())
+        .map(|axis| {
+            (pose.rotation * axis)
+                .dot(up)
+                .abs()
+                .min(1.0)
+                .acos()
+                .to_degrees()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_block_released_tilted_lands_on_its_edge_and_tips_flat() {
+    let tilted = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, 0.06),
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 20f64.to_radians()),
+    );
+    let block = part("block", cube(0.04), tilted, true);
+    let mut bench = Bench::new(vec![block, table()], settling());
+    bench.settle();
+    let tilt = tilt_degrees(&bench.poses[0], &Vector3::z());
+    assert!(tilt < 1.0, "rests tilted {tilt} degrees");
+    let gap = bench.gap(0, 1);
+    assert!(
+        (0.0..=0.001).contains(&gap),
+        "rests {gap} m above the table"
+    );
+    // It turned about its lower edge, towards the side its centre of mass overhung.
+    let turned = bench.poses[0]
+        .rotation
+        .angle_to(&tilted.rotation)
+        .to_degrees();
+    assert!((turned - 20.0).abs() < 1.0, "turned {turned} degrees");
+    // The contacts found along the edge are not spread evenly about the centre of mass, so the
+    // axis it turns about leans off the edge a little: a drift of millimetres along it.
+    let sideways = bench.poses[0].translation.x;
+    assert!(
+        sideways.abs() < 0.003,
+        "drifted {sideways} m along its edge"
+    );
+}
+
+#[test]
+fn a_block_resting_flat_stays_still() {
+    let start = at(0.01, -0.02, 0.0201);
+    let block = part("block", cube(0.04), start, true);
+    let mut bench = Bench::new(vec![block, table()], settling());
+    bench.settle();
+    let moved = bench.poses[0].translation.vector - start.translation.vector;
+    assert!(moved.norm() < 2e-4, "moved {moved:?}");
+    assert!(bench.poses[0].rotation.angle() < 1e-9, "turned");
+}
+
+#[test]
+fn a_block_resting_on_a_gentle_slope_neither_slides_nor_tips() {
+    let slope = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 10f64.to_radians());
+    let table = part(
+        "slope",
+        shapes::cuboid(Vector3::new(0.4, 0.4, 0.02), 200),
+        Isometry3::from_parts(Translation3::new(0.0, 0.0, -0.01), slope),
+        false,
+    );
+    // The block sits on the slope, 0.1 mm off its top face (0.01 m above the slab's centre).
+    let centre = Vector3::new(0.0, 0.0, -0.01) + slope * Vector3::z() * 0.0301;
+    let start = Isometry3::from_parts(Translation3::from(centre), slope);
+    let block = part("block", cube(0.04), start, true);
+    let mut bench = Bench::new(vec![block, table], settling());
+    bench.settle();
+    let moved = bench.poses[0].translation.vector - start.translation.vector;
+    assert!(moved.norm() < 2e-4, "moved {moved:?}");
+    let turned = bench.poses[0].rotation.angle_to(&slope).to_degrees();
+    assert!(turned < 1e-6, "turned {turned} degrees");
+}
+
+#[test]
+fn a_block_landing_on_a_gentle_slope_tips_onto_its_face_there() {
+    let slope = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 10f64.to_radians());
+    let table = part(
+        "slope",
+        shapes::cuboid(Vector3::new(0.4, 0.4, 0.02), 200),
+        Isometry3::from_parts(Translation3::new(0.0, 0.0, 0.0), slope),
+        false,
+    );
+    let block = part("block", cube(0.04), at(0.0, 0.0, 0.1), true);
+    let mut bench = Bench::new(vec![block, table], settling());
+    bench.settle();
+    let tilt = tilt_degrees(&bench.poses[0], &(slope * Vector3::z()));
+    assert!(tilt < 1.0, "rests {tilt} degrees off the slope");
+}
