@@ -119,7 +119,10 @@ fn compile_renderer(out: &Path, source: &str) -> PathBuf {
         .arg(target)
         // An RPATH, not a RUNPATH: it comes before the LD_LIBRARY_PATH cargo sets for tests,
         // which names the binaries' directory, where an older copy of the library may lie.
-        .arg(format!("-Wl,--disable-new-dtags,-rpath,{}", target.display()))
+        .arg(format!(
+            "-Wl,--disable-new-dtags,-rpath,{}",
+            target.display()
+        ))
         .args(["-lvas_client", "-o"])
         .arg(&program)
         .output()
