@@ -1,4 +1,4 @@
-//! B13, smoothing hand tracking: the One Euro filter of the server's input on the real WebXR
+//! B14, smoothing hand tracking: the One Euro filter of the server's input on the real WebXR
 //! captures of `tests/fixtures/hands/`, with tracker-like noise added.
 //!
 //! Procedure: each capture as a right hand, retargeted onto the shipped right hand model as the
@@ -94,7 +94,7 @@ impl FilterRow {
     }
 }
 
-/// The JSON document of B13.
+/// The JSON document of B14.
 #[derive(Debug, Clone, Serialize)]
 pub struct FilterReport {
     /// Always "filter".
@@ -316,7 +316,7 @@ pub const JITTER_REDUCTION_BAR: f64 = 5.0;
 /// See [`JITTER_REDUCTION_BAR`].
 pub const LAG_BAR_MS: f64 = 15.0;
 
-/// The table of B13.
+/// The table of B14.
 fn filter_table(rows: &[FilterRow]) -> Table {
     let mut table = Table::new([
         "capture",
@@ -413,7 +413,7 @@ fn positive_number(text: &str) -> Result<f64, String> {
     }
 }
 
-/// `vas-bench filter`: runs B13, prints the table and the bars, writes files.
+/// `vas-bench filter`: runs B14, prints the table and the bars, writes files.
 pub fn run(args: &FilterArgs) -> Result<()> {
     let model = HandModel::load(&args.hand)?;
     let defaults = TrackingParams::default();

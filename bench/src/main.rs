@@ -182,7 +182,7 @@ DOP-tree's mean bounding-volume tests and triangle distances per query). Then th
 missed."
     )]
     Distance(distance::DistanceArgs),
-    /// B13: the One Euro filter of hand tracking on the real captures, with noise added.
+    /// B14: the One Euro filter of hand tracking on the real captures, with noise added.
     #[command(
         after_long_help = "Columns: capture; jitter_mm, filtered_mm (the palm's RMS distance from its mean position with
 the hand held still, unfiltered and filtered); reduction_x (their ratio); jitter_deg,

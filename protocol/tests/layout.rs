@@ -66,11 +66,12 @@ fn control_types_keep_their_layout() {
     assert_layout::<InputStats>(128, 8);
     assert_layout::<PartDescription>(728, 8);
     assert_layout::<HandDescription>(72, 4);
-    assert_layout::<ControlResponse>(1984, 8);
+    assert_layout::<ControlResponse>(1992, 8);
     assert_eq!(offset_of!(ControlResponse, part), 600);
     assert_eq!(offset_of!(ControlResponse, stats), 1328);
     assert_eq!(offset_of!(ControlResponse, hands), 1760);
     assert_eq!(offset_of!(ControlResponse, generation), 1976);
+    assert_eq!(offset_of!(ControlResponse, metaphor), 1984);
 }
 
 #[test]
@@ -118,7 +119,7 @@ fn payload_type_names_are_versioned() {
             "vas::output::ClearanceFrame::v1",
             "vas::scene::GeometryHeader::v1",
             "vas::control::ControlRequest::v1",
-            "vas::control::ControlResponse::v6",
+            "vas::control::ControlResponse::v7",
         ]
     );
 }
