@@ -97,12 +97,12 @@ fn a_sample_goes_in_and_its_answer_comes_out() {
     let hands: &[HandFrame] = unsafe { std::slice::from_raw_parts(hands, hand_count) };
     assert!(hands.contains(&answer), "{hands:?}");
 
+    // The meshes come on their own service: they may arrive after the answer.
     let mut geometry = ptr::null();
-    // SAFETY: a live handle and a writable pointer.
-    assert_eq!(
-        unsafe { vas_client_geometry(client.0, &mut geometry) },
-        VasStatus::Ok
-    );
+    poll_until(&client, || {
+        // SAFETY: a live handle and a writable pointer.
+        unsafe { vas_client_geometry(client.0, &mut geometry) == VasStatus::Ok }
+    });
     // SAFETY: valid until another generation is asked for.
     let geometry = unsafe { &*geometry };
     assert_eq!(geometry.part_count, scene.part_count);

@@ -5,10 +5,9 @@
 //! the other parts at theirs (only those its sweep could reach), with the ghost at the target: the
 //! part moves there exactly as a held part slides, never into anything, and stops at what it
 //! cannot pass. A fresh machine each frame sees the other parts where they are now (a held part
-//! moves between frames); a frame that runs out of cycles goes on between inputs. Whatever the
-//! scene's metaphor (the incremental one would drop what a frame could not achieve), a push or a
-//! fall follows its target by the rubber band, a translation, and a part tipping over follows it
-//! by the spiral spring, the metaphor that turns the part.
+//! moves between frames); a frame that runs out of cycles goes on between inputs. Driven parts
+//! follow their target by the rubber band whatever the scene's metaphor: a push or a fall is a
+//! translation, and the incremental metaphor would drop what a frame could not achieve.
 //!
 //! * **Push.** A hand touching a pushable part in a push gives it a displacement (the hand's
 //!   motion into it along the contact normals, [`crate::grasping::push`]); the part slides there.
@@ -17,27 +16,19 @@
 //! * **Settle.** A part released with `release = "settle"` moves down (against the scene's up),
 //!   by the scene's speed each frame, until it rests on a surface no steeper than the scene's
 //!   slope (friction holds it; along a steeper one, or a wall, it slides on down), its lowest
-//!   point reaches the scene's floor, or it can move no farther. Resting on such surfaces with
-//!   its centre of mass not above the contacts' support polygon (an edge or a corner), it tips
-//!   ([`balance`]): each frame it turns about the support point nearest below its centre of mass,
-//!   its rim moving at the scene's speed, while pressing into its supports along their normals
-//!   (to keep finding them, never sliding along a slope), until it rests balanced on a face.
+//!   point reaches the scene's floor, or it can move no farther.
 
-use std::collections::BTreeMap;
+use std::collections::BTreeSet;
 use std::sync::Arc;
 
-use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, Vector3};
 
 use super::slide_stage::SlidePart;
 use crate::collision::DopTree;
-use crate::geometry::Point;
 use crate::grasping::{PartId, Push};
 use crate::scene::{ReleaseMode, UnheldParams};
-use crate::sliding::motion::pose_distance;
 use crate::sliding::world::{Obstacle, PairwiseWorld};
-use crate::sliding::{Motion, RestReason, SlideMachine, SlideParams, SlideWorld, SlidingMetaphor};
-
-mod balance;
+use crate::sliding::{RestReason, SlideMachine, SlideParams, SlidingMetaphor};
 
 /// A displacement shorter than this (metres) moves nothing: the hand rests on the part.
 const LEAST_MOVE: f64 = 1e-9;
@@ -50,25 +41,15 @@ struct Move {
     rest: RestReason,
 }
 
-/// A released part on its way to rest.
-#[derive(Debug, Clone, Copy)]
-struct Settling {
-    /// Its centre of mass, in its mesh frame.
-    centre_of_mass: Point,
-    /// How it tips, with the mean normal of its supports, when the last frame left it resting
-    /// unbalanced; none while it falls.
-    tip: Option<(balance::Tip, Unit<Vector3<f64>>)>,
-}
-
 /// The parts no hand holds that pushes and releases move.
 pub(super) struct Unheld {
     params: UnheldParams,
-    /// The scene's sliding parameters (the metaphor chosen per move).
+    /// The scene's sliding parameters with the rubber band.
     sliding: SlideParams,
     /// How far a settling part moves in one frame (metres).
     settle_step: f64,
     /// Released parts on their way down.
-    settling: BTreeMap<PartId, Settling>,
+    settling: BTreeSet<PartId>,
     /// Moves whose latest frame ran out of cycles.
     unfinished: Vec<Move>,
     /// Per hand, the parts it pushes this frame.
@@ -86,9 +67,12 @@ impl Unheld {
     ) -> Unheld {
         Unheld {
             params,
-            sliding: sliding.clone(),
+            sliding: SlideParams {
+                metaphor: SlidingMetaphor::RubberBand,
+                ..sliding.clone()
+            },
             settle_step: params.release.speed * period,
-            settling: BTreeMap::new(),
+            settling: BTreeSet::new(),
             unfinished: Vec::new(),
             pushed: vec![Vec::new(); hands],
         }
@@ -112,11 +96,7 @@ impl Unheld {
             return;
         };
         if self.params.release.mode_of(slide.movable, slide.release) == ReleaseMode::Settle {
-            let settling = Settling {
-                centre_of_mass: balance::centre_of_mass(slide.body.mesh()),
-                tip: None,
-            };
-            self.settling.insert(part, settling);
+            self.settling.insert(part);
         }
     }
 
@@ -162,7 +142,7 @@ impl Unheld {
             self.settling.remove(&part);
             if displacement.norm() > LEAST_MOVE && displacement.iter().all(|c| c.is_finite()) {
                 let target = Translation3::from(displacement) * poses[part as usize];
-                self.drive(part, target, SlidingMetaphor::RubberBand, parts, poses);
+                self.drive(part, target, parts, poses);
             }
         }
         self.settle_all(parts, poses, held);
@@ -177,7 +157,7 @@ impl Unheld {
         held: &[PartId],
     ) {
         for slide in &mut self.unfinished {
-            if slide.rest == RestReason::CycleLimit && !self.settling.contains_key(&slide.part) {
+            if slide.rest == RestReason::CycleLimit && !self.settling.contains(&slide.part) {
                 slide.rest = slide.machine.run_frame(&mut slide.world);
                 poses[slide.part as usize] = slide.machine.visible_pose();
             }
@@ -185,128 +165,54 @@ impl Unheld {
         self.settle_all(parts, poses, held);
     }
 
-    /// Moves every settling part no hand holds one step, and forgets those come to rest.
+    /// Moves every settling part no hand holds one step down, and forgets those come to rest.
     fn settle_all(&mut self, parts: &[SlidePart], poses: &mut [Isometry3<f64>], held: &[PartId]) {
-        for (part, settling) in std::mem::take(&mut self.settling) {
-            if held.contains(&part) {
-                continue;
-            }
-            if let Some(next) = self.settle(part, settling, parts, poses) {
-                self.settling.insert(part, next);
+        for part in std::mem::take(&mut self.settling) {
+            if !held.contains(&part) && self.settle(part, parts, poses) {
+                self.settling.insert(part);
             }
         }
     }
 
-    /// Moves settling `part` one step down, or one step over if it tips; what it does next, or
-    /// none once it has come to rest.
-    fn settle(
-        &mut self,
-        part: PartId,
-        settling: Settling,
-        parts: &[SlidePart],
-        poses: &mut [Isometry3<f64>],
-    ) -> Option<Settling> {
+    /// Moves settling `part` one step down; false once it has come to rest.
+    fn settle(&mut self, part: PartId, parts: &[SlidePart], poses: &mut [Isometry3<f64>]) -> bool {
         let release = self.params.release;
         let up = release.up_direction();
         let pose = poses[part as usize];
-        let body = &parts.get(part as usize)?.body;
-        let lowest = (body.mesh().vertices().iter())
+        let lowest = (parts[part as usize].body.mesh().vertices().iter())
             .map(|v| (pose * v).coords.dot(&up))
             .fold(f64::INFINITY, f64::min);
         let above_floor = lowest - release.floor;
         if above_floor.is_nan() || above_floor <= LEAST_MOVE {
-            return None;
+            return false;
         }
         let step = self.settle_step.min(above_floor);
-        let (pivot, radius) = body.pivot_and_radius();
-        let (target, metaphor) = match settling.tip {
-            None => (
-                Translation3::from(-step * up.into_inner()) * pose,
-                SlidingMetaphor::RubberBand,
-            ),
-            Some((tip, press)) => {
-                let turn = UnitQuaternion::from_axis_angle(&tip.axis, self.settle_step / radius);
-                let over = Isometry3::rotation_wrt_point(turn, tip.point);
-                let target = Translation3::from(-step * press.into_inner()) * over * pose;
-                (target, SlidingMetaphor::SpiralSpring)
-            }
+        let target = Translation3::from(-step * up.into_inner()) * pose;
+        let Some(moved) = self.drive(part, target, parts, poses) else {
+            return false;
         };
-        let mut moving = self.prepare(part, &target, metaphor, parts, poses)?;
-        let target = if settling.tip.is_none() {
-            // No farther than the clearance below and the tolerance: landing on a slope, a part
-            // slides along it within the frame by no more than the tolerance.
-            let tolerance = moving.machine.tolerance();
-            let fall =
-                (moving.world.clearance(&pose, step)).map_or(step, |c| step.min(c + tolerance));
-            Translation3::from(-fall * up.into_inner()) * pose
-        } else {
-            target
-        };
-        let moved = self.run(moving, &target, poses);
-        let now = poses[part as usize];
-        if pose_distance(&pose, &now, radius) <= LEAST_MOVE {
-            return None;
-        }
-        // What it rests on: every contact of the part pressed down by the sliding tolerance (the
-        // machine keeps only the few contacts that shape its motion, too few for a polygon).
-        let press = -moved.machine.tolerance() * up.into_inner();
-        let pressed = Translation3::from(press) * now;
-        let approach = Motion {
-            translation: press,
-            rotation: Vector3::zeros(),
-        };
-        let mut touching = Vec::new();
-        let centre = pressed * pivot;
-        (moved.world).contacts(&pressed, &approach, &centre, &mut touching);
-        let least_cosine = release.max_slope_degrees.to_radians().cos();
-        let supports: Vec<_> = (touching.into_iter())
-            .filter(|contact| contact.normal.dot(&up) >= least_cosine)
-            .collect();
-        if supports.is_empty() {
-            return Some(Settling {
-                tip: None,
-                ..settling
-            });
-        }
-        let points: Vec<Point> = supports.iter().map(|contact| contact.point).collect();
-        let tip = balance::tipping(&(now * settling.centre_of_mass), &points, &up)?;
-        let press = Unit::new_normalize(supports.iter().map(|c| c.normal.into_inner()).sum());
-        Some(Settling {
-            tip: Some((tip, press)),
-            ..settling
-        })
+        let supported = moved
+            .contacts()
+            .any(|contact| contact.normal.dot(&up) >= release.max_slope_degrees.to_radians().cos());
+        let progress = (poses[part as usize].translation.vector - pose.translation.vector).norm();
+        !supported && progress > LEAST_MOVE
     }
 
-    /// Slides `part` from its visible pose towards `target` under `metaphor` for one frame; its
-    /// new pose goes to `poses`.
+    /// Slides `part` from its visible pose towards `target` for one frame; its new pose goes to
+    /// `poses`. The machine, which keeps the part's contacts, stays for another frame if this one
+    /// ran out of cycles.
     fn drive(
         &mut self,
         part: PartId,
         target: Isometry3<f64>,
-        metaphor: SlidingMetaphor,
         parts: &[SlidePart],
         poses: &mut [Isometry3<f64>],
-    ) -> Option<&mut Move> {
-        let moving = self.prepare(part, &target, metaphor, parts, poses)?;
-        Some(self.run(moving, &target, poses))
-    }
-
-    /// A move of `part` from its visible pose, with a machine under `metaphor` and the other parts
-    /// that a move to `target` could reach.
-    fn prepare(
-        &self,
-        part: PartId,
-        target: &Isometry3<f64>,
-        metaphor: SlidingMetaphor,
-        parts: &[SlidePart],
-        poses: &[Isometry3<f64>],
-    ) -> Option<Move> {
+    ) -> Option<&SlideMachine> {
         let driven = parts.get(part as usize)?;
         let from = poses[part as usize];
         let (pivot, radius) = driven.body.pivot_and_radius();
         let centre = from * pivot;
-        let to_pivot = Translation3::from(pivot.coords);
-        let reach = radius + pose_distance(&(from * to_pivot), &(target * to_pivot), radius);
+        let reach = radius + (target.translation.vector - from.translation.vector).norm();
         let obstacles = (parts.iter().zip(poses.iter()))
             .enumerate()
             .filter(|&(id, _)| id != part as usize)
@@ -319,34 +225,19 @@ impl Unheld {
                 Obstacle::new(Arc::clone(&other.body), *pose, allowance)
             })
             .collect();
-        let params = SlideParams {
-            metaphor,
-            ..self.sliding.clone()
-        };
-        Some(Move {
+        let mut machine = SlideMachine::new(&from, pivot.coords, radius, self.sliding.clone());
+        let mut world = PairwiseWorld::new(Arc::clone(&driven.body), obstacles);
+        machine.set_ghost(&target);
+        let rest = machine.run_frame(&mut world);
+        poses[part as usize] = machine.visible_pose();
+        self.unfinished.retain(|m| m.part != part);
+        self.unfinished.push(Move {
             part,
-            machine: SlideMachine::new(&from, pivot.coords, radius, params),
-            world: PairwiseWorld::new(Arc::clone(&driven.body), obstacles),
-            rest: RestReason::Grasped,
-        })
-    }
-
-    /// Runs one frame of `moving` towards `target`; the part's new pose goes to `poses`. The
-    /// move, which keeps the part's contacts, stays for another frame if this one ran out of
-    /// cycles.
-    fn run(
-        &mut self,
-        mut moving: Move,
-        target: &Isometry3<f64>,
-        poses: &mut [Isometry3<f64>],
-    ) -> &mut Move {
-        moving.machine.set_ghost(target);
-        moving.rest = moving.machine.run_frame(&mut moving.world);
-        poses[moving.part as usize] = moving.machine.visible_pose();
-        self.unfinished.retain(|m| m.part != moving.part);
-        self.unfinished.push(moving);
-        let last = self.unfinished.len() - 1;
-        &mut self.unfinished[last]
+            machine,
+            world,
+            rest,
+        });
+        self.unfinished.last().map(|m| &m.machine)
     }
 }
 
