@@ -13,6 +13,15 @@ fn sample(position: Vector3<f64>, rotation: UnitQuaternion<f64>, values: [f64; 2
     }
 }
 
+/// A sample at `x` along the x axis, unturned, both values `x`.
+fn at(x: f64) -> Sample<2> {
+    sample(
+        Vector3::new(x, 0.0, 0.0),
+        UnitQuaternion::identity(),
+        [x; 2],
+    )
+}
+
 /// The default filter of two values.
 fn default_filter() -> StreamFilter<2> {
     StreamFilter::new(&TrackingParams::default())
@@ -37,13 +46,6 @@ fn a_constant_signal_passes_unchanged() {
 #[test]
 fn a_step_converges_without_overshoot() {
     let mut filter = default_filter();
-    let at = |x: f64| {
-        sample(
-            Vector3::new(x, 0.0, 0.0),
-            UnitQuaternion::identity(),
-            [x; 2],
-        )
-    };
     filter.apply(0.0, at(0.0)).unwrap();
     let mut previous = 0.0;
     for tick in 1..=200 {
@@ -167,13 +169,6 @@ fn non_finite_input_is_refused_and_leaves_the_filter_as_it_was() {
 #[test]
 fn a_timestamp_not_after_the_last_restarts_from_its_sample() {
     let mut filter = default_filter();
-    let at = |x: f64| {
-        sample(
-            Vector3::new(x, 0.0, 0.0),
-            UnitQuaternion::identity(),
-            [x; 2],
-        )
-    };
     filter.apply(1.0, at(0.0)).unwrap();
     assert_eq!(
         filter.apply(1.01, at(0.01)).unwrap().passage,
@@ -197,13 +192,6 @@ fn a_timestamp_not_after_the_last_restarts_from_its_sample() {
 fn tracking_lost_or_reset_starts_afresh_and_off_passes_through() {
     let tracking = TrackingParams::default();
     let mut filter = default_filter();
-    let at = |x: f64| {
-        sample(
-            Vector3::new(x, 0.0, 0.0),
-            UnitQuaternion::identity(),
-            [x; 2],
-        )
-    };
     filter.apply(0.0, at(0.0)).unwrap();
     let after_gap = filter.apply(tracking.lost_after + 0.01, at(0.3)).unwrap();
     assert_eq!(
