@@ -165,6 +165,9 @@ fn ready(
         },
         cart: WirePose::IDENTITY,
         sensor_id: 0,
+        user: 0,
+        side: 0,
+        reserved: 0,
     };
     let started = ServerProcess::start_ready(
         server,

@@ -35,6 +35,9 @@ pub fn tracker(seq: u64) -> TrackerSample {
         },
         cart: WirePose::IDENTITY,
         sensor_id: 0,
+        user: 0,
+        side: 0,
+        reserved: 0,
     }
 }
 
@@ -45,6 +48,8 @@ pub fn glove(seq: u64) -> GloveSample {
         seq,
         timestamp_ns: wall_clock_ns(),
         flex: [MAX_FLEX * closing; FLEX_COUNT],
+        user: 0,
+        side: 0,
     }
 }
 

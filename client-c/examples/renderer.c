@@ -6,7 +6,7 @@
  * The scene's geometry arrives on connecting and after every load or reset: a line per part's
  * mesh. Each wake-up "draws" the newest state, frames that arrived meanwhile are skipped: a line
  * per part of a new parts frame, and for every hand (right, then left) of a new hand frame a
- * line for the hand and one per segment.
+ * line for the hand and one per segment, naming the hand's user (the scene info names the users).
  *
  *     cc -Wall -Wextra -I client-c/include client-c/examples/renderer.c \
  *        -L target/release -lvas_client -Wl,-rpath,target/release -o renderer
@@ -160,19 +160,22 @@ static void draw_parts(const VasGeometry *geometry, const VasPartsFrameHeader *h
 }
 
 /* Each segment's mesh of the hand goes where the server verified the segment, no kinematics
- * here: a line for the hand, then one per segment. */
-static void draw_hand(const VasHandFrame *hand) {
+ * here: a line for the hand, then one per segment, each naming the hand's user and side. */
+static void draw_hand(const VasSceneInfo *scene, const VasHandFrame *hand) {
+    const char *user = hand->user < scene->user_count ? scene->users[hand->user] : "?";
     const char *side = vas_hand_side_name(hand->hand);
     const char *grasp = vas_grasp_type_name(hand->grasp_type);
     side = side != NULL ? side : "unknown";
     unsigned long long frame = (unsigned long long)hand->frame;
-    printf("hand frame=%llu side=%s grasp=%s position=", frame, side,
-           grasp != NULL ? grasp : "unknown");
+    printf("hand frame=%llu user=", frame);
+    print_quoted(user);
+    printf(" side=%s grasp=%s position=", side, grasp != NULL ? grasp : "unknown");
     print_numbers(hand->root.position, 3, 0);
     putchar('\n');
     for (uint32_t s = 0; s < hand->segment_count && s < VAS_HAND_SEGMENT_COUNT; s++) {
-        printf("segment frame=%llu side=%s name=%s position=", frame, side,
-               vas_hand_segment_name(s));
+        printf("segment frame=%llu user=", frame);
+        print_quoted(user);
+        printf(" side=%s name=%s position=", side, vas_hand_segment_name(s));
         print_numbers(hand->segments[s].position, 3, 0);
         fputs(" rotation=", stdout);
         print_numbers(hand->segments[s].rotation, 4, 0);
@@ -191,6 +194,7 @@ static int render(VasClient *client, long long frames) {
     /* What was drawn last: a renderer redraws when the newest state differs, whichever poll
      * brought it (the meshes may come after the first frames, or before). */
     long long drawn = 0;
+    const VasSceneInfo *scene = NULL; /* The users' names, asked for with each scene's meshes. */
     int have_generation = 0, have_parts = 0, have_hands = 0;
     uint64_t generation = 0, parts_frame = 0, hand_frame = 0;
     while (frames < 0 || drawn < frames) {
@@ -206,7 +210,11 @@ static int render(VasClient *client, long long frames) {
         if (!have_generation || generation != geometry->generation) {
             have_generation = 1;
             generation = geometry->generation;
-            upload_meshes(geometry); /* Once per scene. */
+            upload_meshes(geometry); /* Once per scene, */
+            /* with the names of its users. */
+            if (vas_client_scene_info(client, 5000, &scene) != VAS_STATUS_OK) {
+                return failed("scene info");
+            }
         }
         VasPartsFrameHeader header;
         const VasPartState *parts = NULL;
@@ -235,7 +243,7 @@ static int render(VasClient *client, long long frames) {
         if (new_hands) {
             have_hands = 1;
             hand_frame = hands[0].frame;
-            for (size_t h = 0; h < hand_count; h++) draw_hand(&hands[h]);
+            for (size_t h = 0; h < hand_count; h++) draw_hand(scene, &hands[h]);
         }
         fflush(stdout);
     }

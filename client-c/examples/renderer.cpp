@@ -3,7 +3,7 @@
  * through its C++17 wrapper (vas_client.hpp). It prints what client-rs/examples/renderer.rs
  * prints, in the same words and numbers: the scene's meshes once per scene generation, then for
  * each new state a line per part and, for each hand with a new frame, a line for the hand and
- * one per segment.
+ * one per segment, naming the hand's user (the scene info names the users).
  *
  *   c++ -std=c++17 -Iclient-c/include client-c/examples/renderer.cpp -Ltarget/release \
  *       -lvas_client -o renderer
@@ -180,15 +180,17 @@ void print_meshes(const VasGeometry& geometry) {
     }
 }
 
-/// Prints a hand's line and a line per segment: each segment's mesh goes where the server
-/// verified the segment, with no kinematics here.
-void print_hand(const VasHandFrame& hand, std::string_view side) {
+/// Prints a hand's line and a line per segment, each naming the hand's user and side: each
+/// segment's mesh goes where the server verified the segment, with no kinematics here.
+void print_hand(const VasSceneInfo& scene, const VasHandFrame& hand, std::string_view side) {
+    std::string user = rust_debug(
+        std::string_view(hand.user < scene.user_count ? scene.users[hand.user] : "?"));
     std::string_view grasp = vas::name_of(vas_grasp_type_name(hand.grasp_type)).value_or("unknown");
-    std::cout << "hand frame=" << hand.frame << " side=" << side << " grasp=" << grasp
-              << " position=" << rust_debug(hand.root.position) << '\n';
+    std::cout << "hand frame=" << hand.frame << " user=" << user << " side=" << side
+              << " grasp=" << grasp << " position=" << rust_debug(hand.root.position) << '\n';
     uint32_t index = 0;
     for (const VasWirePose& pose : vas::segment_poses(hand)) {
-        std::cout << "segment frame=" << hand.frame << " side=" << side
+        std::cout << "segment frame=" << hand.frame << " user=" << user << " side=" << side
                   << " name=" << vas::text(vas_hand_segment_name(index++))
                   << " position=" << rust_debug(pose.position)
                   << " rotation=" << rust_debug(pose.rotation) << '\n';
@@ -200,10 +202,11 @@ int run(const Args& args) {
     vas::Client client = vas::Client::connect(args.prefix ? args.prefix->c_str() : nullptr,
                                               VAS_ROLE_RENDER, true);
     // What was drawn last: a renderer redraws when the newest state differs, whichever poll
-    // brought it; each hand has its own.
+    // brought it; each hand (by user and side) has its own.
     uint64_t drawn = 0;
     std::optional<uint64_t> generation, parts_frame;
-    std::map<uint32_t, uint64_t> hand_frames;
+    std::map<std::pair<uint32_t, uint32_t>, uint64_t> hand_frames;
+    const VasSceneInfo* scene = nullptr;  // The users' names, asked for with each scene's meshes.
     while (!args.frames || drawn < *args.frames) {
         VasWake wake = client.wait(std::chrono::seconds(1));
         if (wake == VAS_WAKE_TIMEOUT) {
@@ -220,6 +223,7 @@ int run(const Args& args) {
         if (generation != geometry->generation) {
             generation = geometry->generation;
             print_meshes(*geometry);
+            scene = &client.scene_info(std::chrono::seconds(5));
         }
         std::optional<vas::PartsFrame> parts = client.latest_parts();
         if (parts && parts_frame == parts->header.frame) {
@@ -228,7 +232,7 @@ int run(const Args& args) {
         std::vector<std::pair<std::string_view, const VasHandFrame*>> hands;
         for (const VasHandFrame& hand : client.latest_hands()) {
             auto side = vas::name_of(vas_hand_side_name(hand.hand));
-            auto last = hand_frames.find(hand.hand);
+            auto last = hand_frames.find({hand.user, hand.hand});
             if (side && (last == hand_frames.end() || last->second != hand.frame)) {
                 hands.emplace_back(*side, &hand);
             }
@@ -250,8 +254,8 @@ int run(const Args& args) {
             }
         }
         for (const auto& [side, hand] : hands) {
-            hand_frames[hand->hand] = hand->frame;
-            print_hand(*hand, side);
+            hand_frames[{hand->user, hand->hand}] = hand->frame;
+            print_hand(*scene, *hand, side);
         }
         // Each drawn frame reaches a pipe at once, as the Rust example's lines do.
         std::cout.flush();

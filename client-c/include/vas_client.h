@@ -361,6 +361,10 @@ typedef struct {
    */
   uint32_t side;
   /**
+   * Whose hand: an index into `VasSceneInfo::users`.
+   */
+  uint32_t user;
+  /**
    * The hand model's name, NUL-terminated UTF-8.
    */
   const char *model;
@@ -438,6 +442,15 @@ typedef struct {
    * [`MAX_TIMESTAMP_AHEAD_NS`](crate::MAX_TIMESTAMP_AHEAD_NS) beyond the server's clock.
    */
   uint64_t rejected_ahead;
+  /**
+   * Samples of any stream rejected for naming a user the scene does not have.
+   */
+  uint64_t rejected_no_such_user;
+  /**
+   * Tracker and glove samples rejected for naming a side their user has no hand for (or no
+   * side).
+   */
+  uint64_t rejected_no_such_hand;
 } VasInputStats;
 
 /**
@@ -493,6 +506,15 @@ typedef struct {
    * The server's input counters at the time of the answer.
    */
   VasInputStats stats;
+  /**
+   * `user_count` users' names, NUL-terminated UTF-8, by the index that samples, frames,
+   * events and hands name them with.
+   */
+  const char *const *users;
+  /**
+   * Users: 1 for a scene of one user (named "user" unless the scene names its users).
+   */
+  size_t user_count;
 } VasSceneInfo;
 
 /**
@@ -619,9 +641,10 @@ typedef struct {
    */
   uint32_t segment_count;
   /**
-   * Padding, 0.
+   * The user whose hand it is, an index into the scene's users
+   * ([`ControlResponse::users`](crate::ControlResponse::users)).
    */
-  uint32_t reserved;
+  uint32_t user;
   /**
    * Each segment's verified pose in the world, in [`HandSegment`] order: where a renderer
    * places the segment's mesh from `vas/scene/geometry`.
@@ -665,6 +688,11 @@ typedef struct {
    * The hand whose held part pulls, a [`HandSide`] code.
    */
   uint32_t hand;
+  /**
+   * The user whose hand `hand` is, an index into the scene's users
+   * ([`ControlResponse::users`](crate::ControlResponse::users)).
+   */
+  uint32_t user;
 } VasForceFrame;
 
 /**
@@ -716,6 +744,15 @@ typedef struct {
    * The hand segment of a contact with the hand, a [`HandSegment`] code; 0 otherwise.
    */
   uint32_t segment;
+  /**
+   * The user whose hand `hand` is, an index into the scene's users
+   * ([`ControlResponse::users`](crate::ControlResponse::users)); 0 for clearance events.
+   */
+  uint32_t user;
+  /**
+   * Padding, 0.
+   */
+  uint32_t reserved;
   /**
    * Contacts: where the two touch; clearances: the closest point on `part`. In the world
    * (metres); zero for other events.
@@ -778,6 +815,10 @@ typedef struct {
    */
   uint32_t side;
   /**
+   * Whose hand: an index into `VasSceneInfo::users`.
+   */
+  uint32_t user;
+  /**
    * The hand model's name, NUL-terminated UTF-8.
    */
   const char *model;
@@ -818,7 +859,8 @@ typedef struct {
 } VasGeometry;
 
 /**
- * One 6-DOF tracker report: the hand root and the cart (navigation) pose.
+ * One 6-DOF tracker report of one user's hand: the hand root and that user's cart (navigation)
+ * pose.
  */
 typedef struct {
   /**
@@ -843,10 +885,23 @@ typedef struct {
    * Which tracker sent the sample (the VRPN sensor number).
    */
   uint32_t sensor_id;
+  /**
+   * The user whose hand it tracks: see [`HandJointsSample::user`].
+   */
+  uint32_t user;
+  /**
+   * Which of the user's hands, a [`HandSide`](crate::HandSide) code (0, right, when a
+   * recording made before users names none).
+   */
+  uint32_t side;
+  /**
+   * Padding, 0 (not in recordings).
+   */
+  uint32_t reserved;
 } VasTrackerSample;
 
 /**
- * One glove report: the 22 calibrated joint angles.
+ * One glove report of one user's hand: the 22 calibrated joint angles.
  */
 typedef struct {
   /**
@@ -861,6 +916,15 @@ typedef struct {
    * Joint angles in radians, in CyberGlove order ([`FLEX_JOINT_NAMES`]).
    */
   float flex[VAS_FLEX_COUNT];
+  /**
+   * The user whose hand wears the glove: see [`HandJointsSample::user`].
+   */
+  uint32_t user;
+  /**
+   * Which of the user's hands, a [`HandSide`](crate::HandSide) code (0, right, when a
+   * recording made before users names none).
+   */
+  uint32_t side;
 } VasGloveSample;
 
 /**
@@ -918,6 +982,17 @@ typedef struct {
    * Which hand, a [`HandSide`](crate::HandSide) code.
    */
   uint32_t side;
+  /**
+   * The user whose hand it is: an index into the scene's users, as the control service
+   * lists them ([`ControlResponse::users`](crate::ControlResponse::users)); 0 in a scene
+   * of one user.
+   *
+   * An index rather than the user's name: four bytes in a sample sent at the tracking rate,
+   * compared without text, and a sender learns its index once from the scene info (names
+   * are for people; the control response carries them). A scene's users keep their indices
+   * until another scene is loaded, whose info a sender reads anyway.
+   */
+  uint32_t user;
 } VasHandJointsSample;
 
 
@@ -1162,13 +1237,17 @@ VasStatus vas_client_latest_parts(VasClient *client,
 VasStatus vas_client_latest_hands(VasClient *client, const VasHandFrame **hands, size_t *count);
 
 /**
- * A copy of the newest frame of the hand on `side` (a `VAS_HAND_*` code) into `*hand`;
- * [`VasStatus::Empty`] before the first frame of that hand.
+ * A copy of the newest frame of user `user`'s hand on `side` (a `VAS_HAND_*` code) into
+ * `*hand`; [`VasStatus::Empty`] before the first frame of that hand. `user` is the user's
+ * index in the scene info's `users` (0 in a scene of one user).
  *
  * # Safety
  * `client` is a live handle; `hand` points to a writable `VasHandFrame`.
  */
-VasStatus vas_client_latest_hand_of(VasClient *client, uint32_t side, VasHandFrame *hand);
+VasStatus vas_client_latest_hand_of(VasClient *client,
+                                    uint32_t user,
+                                    uint32_t side,
+                                    VasHandFrame *hand);
 
 /**
  * A copy of the newest force frame (force and torque for a force-feedback device while a part

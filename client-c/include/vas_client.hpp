@@ -194,10 +194,11 @@ public:
         return {hands, count};
     }
 
-    /// A copy of the newest frame of the hand on `side` (VAS_HAND_*), or none before the first.
-    std::optional<VasHandFrame> latest_hand_of(uint32_t side) {
+    /// A copy of the newest frame of user `user`'s hand on `side` (VAS_HAND_*), or none before
+    /// the first.
+    std::optional<VasHandFrame> latest_hand_of(uint32_t user, uint32_t side) {
         VasHandFrame hand{};
-        if (!check(vas_client_latest_hand_of(handle_, side, &hand), "read a hand frame")) {
+        if (!check(vas_client_latest_hand_of(handle_, user, side, &hand), "read a hand frame")) {
             return std::nullopt;
         }
         return hand;

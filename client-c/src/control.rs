@@ -39,6 +39,8 @@ pub struct VasPartInfo {
 pub struct VasHandInfo {
     /// Which hand, a `VAS_HAND_*` code.
     pub side: u32,
+    /// Whose hand: an index into `VasSceneInfo::users`.
+    pub user: u32,
     /// The hand model's name, NUL-terminated UTF-8.
     pub model: *const c_char,
 }
@@ -72,6 +74,11 @@ pub struct VasSceneInfo {
     pub metaphor: u32,
     /// The server's input counters at the time of the answer.
     pub stats: InputStats,
+    /// `user_count` users' names, NUL-terminated UTF-8, by the index that samples, frames,
+    /// events and hands name them with.
+    pub users: *const *const c_char,
+    /// Users: 1 for a scene of one user (named "user" unless the scene names its users).
+    pub user_count: usize,
 }
 
 /// A scene description kept for C: its strings and the C structs pointing into them.
@@ -79,6 +86,7 @@ pub(crate) struct SceneView {
     _strings: Vec<CString>,
     _parts: Vec<VasPartInfo>,
     _hands: Vec<VasHandInfo>,
+    _users: Vec<*const c_char>,
     root: VasSceneInfo,
 }
 
@@ -106,9 +114,11 @@ impl SceneView {
         let hands: Vec<VasHandInfo> = (scene.hands.iter())
             .map(|hand| VasHandInfo {
                 side: hand.side as u32,
+                user: hand.user,
                 model: keep(&hand.model),
             })
             .collect();
+        let users: Vec<*const c_char> = scene.users.iter().map(|user| keep(user)).collect();
         let root = VasSceneInfo {
             name: keep(&scene.name),
             source: keep(&scene.source),
@@ -122,11 +132,14 @@ impl SceneView {
             scenes_offered: scene.scenes_offered,
             metaphor: scene.metaphor as u32,
             stats: scene.stats,
+            users: users.as_ptr(),
+            user_count: users.len(),
         };
         Self {
             _strings: strings,
             _parts: parts,
             _hands: hands,
+            _users: users,
             root,
         }
     }

@@ -75,14 +75,16 @@ pub unsafe extern "C" fn vas_client_latest_hands(
     })
 }
 
-/// A copy of the newest frame of the hand on `side` (a `VAS_HAND_*` code) into `*hand`;
-/// [`VasStatus::Empty`] before the first frame of that hand.
+/// A copy of the newest frame of user `user`'s hand on `side` (a `VAS_HAND_*` code) into
+/// `*hand`; [`VasStatus::Empty`] before the first frame of that hand. `user` is the user's
+/// index in the scene info's `users` (0 in a scene of one user).
 ///
 /// # Safety
 /// `client` is a live handle; `hand` points to a writable `VasHandFrame`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn vas_client_latest_hand_of(
     client: *mut VasClient,
+    user: u32,
     side: u32,
     hand: *mut HandFrame,
 ) -> VasStatus {
@@ -91,7 +93,7 @@ pub unsafe extern "C" fn vas_client_latest_hand_of(
         let (client, hand) = unsafe { (client_mut(client)?, output(hand, "hand")?) };
         let side = HandSide::try_from(side)
             .map_err(|_| Failure::invalid(format!("unknown hand side {side}")))?;
-        match client.client.latest_hand_of(side) {
+        match client.client.latest_hand_of(user, side) {
             Some(latest) => {
                 *hand = *latest;
                 Ok(VasStatus::Ok)

@@ -37,6 +37,8 @@ pub struct VasMesh {
 pub struct VasHandGeometry {
     /// Which hand, a `VAS_HAND_*` code.
     pub side: u32,
+    /// Whose hand: an index into `VasSceneInfo::users`.
+    pub user: u32,
     /// The hand model's name, NUL-terminated UTF-8.
     pub model: *const c_char,
     /// `segment_count` meshes.
@@ -95,6 +97,7 @@ impl GeometryView {
         let hands: Vec<VasHandGeometry> = (geometry.hands.iter().zip(&segments))
             .map(|(hand, meshes)| VasHandGeometry {
                 side: hand.side as u32,
+                user: hand.user,
                 model: name(&hand.model),
                 segments: meshes.as_ptr(),
                 segment_count: meshes.len(),

@@ -84,7 +84,7 @@ fn a_sample_goes_in_and_its_answer_comes_out() {
     let mut answer = HandFrame::default();
     poll_until(&client, || {
         // SAFETY: a live handle and a writable frame.
-        let status = unsafe { vas_client_latest_hand_of(client.0, VAS_HAND_RIGHT, &mut answer) };
+        let status = unsafe { vas_client_latest_hand_of(client.0, 0, VAS_HAND_RIGHT, &mut answer) };
         status == VasStatus::Ok && answer.tracker == sample.stamp()
     });
     assert_eq!(answer.hand, VAS_HAND_RIGHT);
@@ -175,7 +175,7 @@ fn misuse_is_a_status_with_words() {
     let status = unsafe { vas_client_set_metaphor(control.0, 99, PATIENCE_MS) };
     assert_eq!(status, VasStatus::InvalidArgument);
     // SAFETY: a live handle and a side code no hand has.
-    let status = unsafe { vas_client_latest_hand_of(control.0, 7, &mut HandFrame::default()) };
+    let status = unsafe { vas_client_latest_hand_of(control.0, 0, 7, &mut HandFrame::default()) };
     assert_eq!(status, VasStatus::InvalidArgument);
     let name = CString::new("no such scene").expect("no NUL");
     // SAFETY: a live handle and a NUL-terminated name.
@@ -304,7 +304,7 @@ fn wake_descriptors_are_readable_from_a_publish_until_a_poll() {
             VasStatus::Ok
         );
         // SAFETY: a live handle and a writable frame.
-        unsafe { vas_client_latest_hand_of(client.0, VAS_HAND_RIGHT, &mut answer) };
+        unsafe { vas_client_latest_hand_of(client.0, 0, VAS_HAND_RIGHT, &mut answer) };
     }
     assert_eq!(readable(&fds, 0), 0, "quiet right after the poll");
 

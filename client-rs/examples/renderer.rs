@@ -4,7 +4,7 @@
 //! arrives on connecting and after every load or reset. Each wake-up "draws" the newest state,
 //! as a renderer does (frames that arrived meanwhile are skipped): a line per part of a new
 //! parts frame, and for each hand (right, then left) with a new frame, a line for the hand and
-//! one per segment.
+//! one per segment, naming the hand's user (the scene info names the users).
 //!
 //! ```text
 //! cargo run --release -p vas-server -- run --prefix demo
@@ -14,8 +14,10 @@
 use std::time::Duration;
 
 use clap::Parser;
+use vas_client::protocol::ControlRequest;
 use vas_client::{
-    Client, GraspType, HandFrame, HandSegment, HandSide, PartsFrame, Roles, SceneGeometry, Wake,
+    Client, ClientError, GraspType, HandFrame, HandSegment, HandSide, PartsFrame, Roles,
+    SceneGeometry, Wake,
 };
 
 /// Prints the scene's meshes, then its parts and hands as the server moves them.
@@ -38,6 +40,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .prefix(args.prefix.as_deref())
         .roles(Roles::RENDER)
         .connect()?;
+    // The scene's users' names, asked for with each new scene's meshes.
+    let mut users = Vec::new();
     // What was drawn last: a renderer redraws when the newest state differs, whichever poll
     // brought it (the meshes may come after the first frames, or before).
     let (mut drawn, mut generation, mut parts_frame, mut hand_frame) = (0, None, None, None);
@@ -51,7 +55,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue; // Nothing to draw before the meshes.
         };
         if generation.replace(geometry.generation) != Some(geometry.generation) {
-            upload_meshes(geometry); // Once per scene.
+            upload_meshes(geometry); // Once per scene,
+            users = user_names(&client)?; // with the names of its users.
         }
         let parts = (client.latest_parts()).filter(|f| parts_frame != Some(f.header.frame));
         // Every hand, right then left, published each frame under one number: a frame's hands
@@ -70,10 +75,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         if new_hands.is_some() {
             hand_frame = new_hands;
-            hands.iter().for_each(draw_hand);
+            hands.iter().for_each(|hand| draw_hand(&users, hand));
         }
     }
     Ok(())
+}
+
+/// The scene's users' names, by the index that hand frames name their user with.
+fn user_names(client: &Client) -> Result<Vec<String>, ClientError> {
+    let scene = client.control(ControlRequest::scene_info(), Duration::from_secs(5))?;
+    Ok(scene.user_names().map(str::to_owned).collect())
 }
 
 /// Where a real renderer uploads the scene's meshes: a line per part's mesh.
@@ -101,16 +112,18 @@ fn draw_parts(geometry: &SceneGeometry, frame: &PartsFrame) {
 }
 
 /// Each segment's mesh of the hand goes where the server verified the segment, no kinematics
-/// here: a line for the hand, then one per segment.
-fn draw_hand(hand: &HandFrame) {
+/// here: a line for the hand, then one per segment, each naming the hand's user and side.
+fn draw_hand(users: &[String], hand: &HandFrame) {
     let (frame, side) = (hand.frame, hand.side().map_or("unknown", HandSide::name));
+    let user = users.get(hand.user as usize).map_or("?", String::as_str);
     let grasp = hand.grasp().map_or("unknown", GraspType::name);
     let position = hand.root.position;
-    println!("hand frame={frame} side={side} grasp={grasp} position={position:?}");
+    println!("hand frame={frame} user={user:?} side={side} grasp={grasp} position={position:?}");
     for (segment, pose) in HandSegment::ALL.iter().zip(hand.segment_poses()) {
         let (name, position, rotation) = (segment.name(), pose.position, pose.rotation);
         println!(
-            "segment frame={frame} side={side} name={name} position={position:?} rotation={rotation:?}"
+            "segment frame={frame} user={user:?} side={side} name={name} position={position:?} \
+             rotation={rotation:?}"
         );
     }
 }

@@ -61,6 +61,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 },
                 cart: WirePose::IDENTITY,
                 sensor_id: 0,
+                user: 0,
+                side: 0,
+                reserved: 0,
             })
         } else {
             let mut flex = [0.0f32; FLEX_COUNT];
@@ -71,6 +74,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 seq,
                 timestamp_ns: wall_clock_ns(),
                 flex,
+                user: 0,
+                side: 0,
             })
         };
         client.send_input(&input)?;

@@ -90,14 +90,25 @@ impl InputSample {
         }
     }
 
-    /// Whether `frame` answers this sample: it carries the sample's stamp for its stream (and,
-    /// for hand joints, it is the frame of the sample's hand).
+    /// Whether `frame` answers this sample: it is the frame of the sample's hand (its user and
+    /// side) and carries the sample's stamp for its stream.
     pub fn is_answered_by(&self, frame: &HandFrame) -> bool {
-        match self {
-            Self::Tracker(_) => frame.tracker == self.stamp(),
-            Self::Glove(_) => frame.glove == self.stamp(),
-            Self::HandJoints(sample) => frame.joints == self.stamp() && frame.hand == sample.side,
+        let (stamp, user, side) = match self {
+            Self::Tracker(sample) => (frame.tracker, sample.user, sample.side),
+            Self::Glove(sample) => (frame.glove, sample.user, sample.side),
+            Self::HandJoints(sample) => (frame.joints, sample.user, sample.side),
+        };
+        stamp == self.stamp() && frame.user == user && frame.hand == side
+    }
+
+    /// The same sample for the hand of user `user` (an index into the scene's users).
+    pub fn with_user(mut self, user: u32) -> Self {
+        match &mut self {
+            Self::Tracker(sample) => sample.user = user,
+            Self::Glove(sample) => sample.user = user,
+            Self::HandJoints(sample) => sample.user = user,
         }
+        self
     }
 
     /// The same sample with another timestamp (a replay stamps samples when it sends them).

@@ -9,14 +9,38 @@ use crate::SceneInfo;
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct SceneWords {
     parts: Vec<String>,
+    /// The users' names, by index.
+    users: Vec<String>,
 }
 
 impl SceneWords {
-    /// The words of `scene`'s parts.
+    /// The words of `scene`'s parts and users.
     pub fn new(scene: &SceneInfo) -> Self {
         Self {
             parts: scene.parts.iter().map(|part| part.name.clone()).collect(),
+            users: scene.users.clone(),
         }
+    }
+
+    /// User `user`'s name; "user N" for an index the scene does not have (a frame of another
+    /// scene).
+    pub fn user(&self, user: u32) -> String {
+        match self.users.get(user as usize) {
+            Some(name) => name.clone(),
+            None => format!("user {user}"),
+        }
+    }
+
+    /// Whether the sentences name whose hand an event is about: in a scene of several users.
+    pub fn names_users(&self) -> bool {
+        self.users.len() > 1
+    }
+
+    /// Whose hand `event` is about, when the scene has several users: "anna's right hand". A
+    /// scene of one user needs no name, and its sentences stay those it always had.
+    fn users_hand(&self, event: &SimEvent) -> Option<String> {
+        self.names_users()
+            .then(|| format!("{}'s {} hand", self.user(event.user), hand_name(event.hand)))
     }
 
     /// Part `id`'s name; "hand" for [`HAND_PART_ID`], and "part N" for an id the scene does not
@@ -34,6 +58,11 @@ impl SceneWords {
     /// "contact begin peg – block at sample 61", "clearance peg – block 0.8 mm at sample 177",
     /// "clearance restored peg – block 5.6 mm at sample 198". The sample is the input that caused it (the
     /// newest of the frame's tracker, glove and hand-joints samples).
+    ///
+    /// In a scene of several users, a hand's event starts with whose hand it is: "anna's right
+    /// hand grasps peg (power) at sample 44", "... releases peg", "... hands peg over",
+    /// "... begins pushing block", "... stops pushing block", and a contact with a hand names
+    /// it: "contact begin peg – ben's left hand".
     pub fn event(&self, event: &SimEvent) -> String {
         let sample = [event.tracker, event.glove, event.joints]
             .into_iter()
@@ -46,7 +75,33 @@ impl SceneWords {
             })
             .map_or(0, |stamp| stamp.seq);
         let part = self.part(event.part);
-        let what = match EventKind::try_from(event.kind) {
+        let kind = EventKind::try_from(event.kind);
+        let what = match (kind, self.users_hand(event)) {
+            (Ok(EventKind::Grasp), Some(hand)) => {
+                format!("{hand} grasps {part} ({})", grasp_name(event.grasp_type))
+            }
+            (Ok(EventKind::Release), Some(hand)) => format!("{hand} releases {part}"),
+            (Ok(EventKind::HandOver), Some(hand)) => format!("{hand} hands {part} over"),
+            (Ok(EventKind::PushBegin), Some(hand)) => format!("{hand} begins pushing {part}"),
+            (Ok(EventKind::PushEnd), Some(hand)) => format!("{hand} stops pushing {part}"),
+            (Ok(kind @ (EventKind::ContactBegin | EventKind::ContactEnd)), Some(hand))
+                if event.other == HAND_PART_ID =>
+            {
+                format!("{} {part} – {hand}", kind.name().replace('_', " "))
+            }
+            _ => self.single_user_event(event, kind, &part),
+        };
+        format!("{what} at sample {sample}")
+    }
+
+    /// The event's words in a scene of one user (and the events of no hand in any scene).
+    fn single_user_event(
+        &self,
+        event: &SimEvent,
+        kind: Result<EventKind, vas_protocol::UnknownCode>,
+        part: &str,
+    ) -> String {
+        match kind {
             Ok(EventKind::Grasp) => format!("grasp {part} ({})", grasp_name(event.grasp_type)),
             Ok(EventKind::Release) => format!("release {part}"),
             Ok(EventKind::HandOver) => {
@@ -69,8 +124,7 @@ impl SceneWords {
                 format!("{verb} {part} – {other} {}", millimetres(event.distance))
             }
             Err(unknown) => format!("{unknown} about {part}"),
-        };
-        format!("{what} at sample {sample}")
+        }
     }
 }
 
@@ -113,6 +167,10 @@ mod tests {
     use crate::PartInfo;
 
     fn words() -> SceneWords {
+        words_of_users(&["user"])
+    }
+
+    fn words_of_users(users: &[&str]) -> SceneWords {
         let part = |id: u32, name: &str| PartInfo {
             id,
             name: name.to_owned(),
@@ -130,6 +188,7 @@ mod tests {
             stats: InputStats::default(),
             up: [0.0, 0.0, 1.0],
             metres_per_unit: 1.0,
+            users: users.iter().map(|&user| user.to_owned()).collect(),
             hands: Vec::new(),
             scenes_offered: 0,
             generation: 1,
@@ -160,7 +219,56 @@ mod tests {
             normal: [0.0; 3],
             other_point: [0.0; 3],
             distance: 0.0,
+            user: 0,
+            reserved: 0,
         }
+    }
+
+    #[test]
+    fn events_of_several_users_name_whose_hand() {
+        let words = words_of_users(&["anna", "ben"]);
+        let mut grasp = event(EventKind::Grasp, GraspType::Power, 1, HAND_PART_ID);
+        assert_eq!(
+            words.event(&grasp),
+            "anna's right hand grasps peg (power) at sample 44"
+        );
+        grasp.user = 1;
+        grasp.hand = HandSide::Left as u32;
+        assert_eq!(
+            words.event(&grasp),
+            "ben's left hand grasps peg (power) at sample 44"
+        );
+        let sentence = |kind: EventKind, other: u32| {
+            let mut event = event(kind, GraspType::None, 1, other);
+            event.user = 1;
+            words.event(&event)
+        };
+        assert_eq!(
+            sentence(EventKind::Release, HAND_PART_ID),
+            "ben's right hand releases peg at sample 44"
+        );
+        assert_eq!(
+            sentence(EventKind::HandOver, HAND_PART_ID),
+            "ben's right hand hands peg over at sample 44"
+        );
+        assert_eq!(
+            sentence(EventKind::PushBegin, HAND_PART_ID),
+            "ben's right hand begins pushing peg at sample 44"
+        );
+        assert_eq!(
+            sentence(EventKind::ContactBegin, HAND_PART_ID),
+            "contact begin peg – ben's right hand at sample 44"
+        );
+        assert_eq!(
+            sentence(EventKind::ContactEnd, 0),
+            "contact end peg – block at sample 44",
+            "a contact between parts names no hand"
+        );
+        grasp.user = 7;
+        assert_eq!(
+            words.event(&grasp),
+            "user 7's left hand grasps peg (power) at sample 44"
+        );
     }
 
     #[test]

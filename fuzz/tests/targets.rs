@@ -233,8 +233,11 @@ fn right_hand() -> &'static HandModel {
 #[test]
 fn hand_joints_samples() {
     bolero::check!().for_each(|bytes: &[u8]| {
-        let mut inputs = Inputs::for_hands([right_hand()], TrackingParams::default());
-        let samples = values_from_bytes::<HandJointsSample>(bytes);
+        let mut inputs = Inputs::for_hands([(0, right_hand())], TrackingParams::default());
+        let mut samples = values_from_bytes::<HandJointsSample>(bytes);
+        // Half the samples name the scene's one user, half a user it does not have: arbitrary
+        // bytes would almost never name user 0 and so never reach the retargeting.
+        samples.iter_mut().for_each(|sample| sample.user %= 2);
         for sample in &samples {
             if inputs.apply_hand_joints(sample).is_err() {
                 continue;
@@ -248,14 +251,15 @@ fn hand_joints_samples() {
                 assert!((low..=high).contains(value), "{} = {value}", limit.name);
             }
         }
-        // A sample stamped beyond the clock is counted with every stream's such samples; only
-        // hand-joints samples come here.
+        // A sample stamped beyond the clock, or naming a user the scene does not have, is counted
+        // with every stream's such samples; only hand-joints samples come here.
         let stats = inputs.stats();
         assert_eq!(
             stats.joints_accepted
                 + stats.joints_untracked
                 + stats.joints_rejected()
-                + stats.rejected_ahead,
+                + stats.rejected_ahead
+                + stats.rejected_no_such_user,
             samples.len() as u64
         );
     });
@@ -596,7 +600,7 @@ fn websocket_messages() {
         // sample of finite values with the palm unknown and each joint known or not at all.
         if let Judged::HandJoints(joints) = &judged {
             assert!(kind % 2 == 1 && payload.len() == MESSAGE_BYTES);
-            let written = encode(joints.side as u32, &joints.joints);
+            let written = encode(joints.user, joints.side as u32, &joints.joints);
             assert_eq!(HandJoints::parse(&written).as_ref(), Ok(joints.as_ref()));
             let sample = joints.sample(1, 1);
             assert!(sample.is_finite());

@@ -234,6 +234,11 @@ pub struct InputStats {
     /// Samples of any stream rejected for a timestamp more than
     /// [`MAX_TIMESTAMP_AHEAD_NS`](crate::MAX_TIMESTAMP_AHEAD_NS) beyond the server's clock.
     pub rejected_ahead: u64,
+    /// Samples of any stream rejected for naming a user the scene does not have.
+    pub rejected_no_such_user: u64,
+    /// Tracker and glove samples rejected for naming a side their user has no hand for (or no
+    /// side).
+    pub rejected_no_such_hand: u64,
 }
 
 impl InputStats {
@@ -245,6 +250,8 @@ impl InputStats {
             + self.glove_rejected_non_finite
             + self.joints_rejected()
             + self.rejected_ahead
+            + self.rejected_no_such_user
+            + self.rejected_no_such_hand
     }
 
     /// Rejected hand-joints samples.
@@ -290,19 +297,24 @@ pub struct PartDescription {
 pub struct HandDescription {
     /// A [`crate::HandSide`] code.
     pub side: u32,
+    /// Whose hand it is: an index into [`ControlResponse::users`].
+    pub user: u32,
     /// The hand model's name.
     pub model: WireText<MAX_NAME_BYTES>,
 }
 
-/// Most hands a scene has: a left and a right one.
-pub const MAX_HANDS: usize = 2;
+/// Most users a scene has, each with one or two hands.
+pub const MAX_USERS: usize = 4;
+
+/// Most hands a scene has: a left and a right one for each of [`MAX_USERS`] users.
+pub const MAX_HANDS: usize = 2 * MAX_USERS;
 
 /// The answer to a [`ControlRequest`].
 ///
 /// One flat type for every request kind: the fields a kind does not use are zero. Every response
 /// carries the scene summary and the input counters, so any request doubles as a status query.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("vas::control::ControlResponse::v7")]
+#[type_name("vas::control::ControlResponse::v8")]
 #[repr(C)]
 pub struct ControlResponse {
     /// A [`ControlStatus`] code.
@@ -327,7 +339,8 @@ pub struct ControlResponse {
     pub up: [f64; 3],
     /// Metres per unit of every length on the wire: 1 (lengths are in metres).
     pub metres_per_unit: f64,
-    /// Hands the scene has (`hands[..hand_count]`).
+    /// Hands the scene has (`hands[..hand_count]`), every user's, grouped by user in the
+    /// users' order.
     pub hand_count: u32,
     /// How many scenes the server may load by name.
     pub listed_count: u32,
@@ -343,4 +356,36 @@ pub struct ControlResponse {
     /// The [`SlidingMetaphor`] code in use, as the answer leaves: the scene's own after a start,
     /// load or reset, the one asked for after a `SetMetaphor`.
     pub metaphor: u32,
+    /// Users the scene has (`users[..user_count]`): 1 for a scene that declares hands without
+    /// users, and for a scene without hands.
+    pub user_count: u32,
+    /// Each user's name, by the index that samples and frames name the user with. A scene
+    /// refuses names that do not fit, so none is cut.
+    pub users: [WireText<MAX_NAME_BYTES>; MAX_USERS],
+}
+
+impl ControlResponse {
+    /// The names of the scene's users, by index.
+    pub fn user_names(&self) -> impl Iterator<Item = &str> {
+        let count = (self.user_count as usize).min(MAX_USERS);
+        (self.users[..count].iter()).map(|name| name.as_str().unwrap_or_default())
+    }
+
+    /// The name of user `user`, if the scene has it.
+    pub fn user_name(&self, user: u32) -> Option<&str> {
+        self.user_names().nth(user as usize)
+    }
+
+    /// The index of the user called `name`, if the scene has one.
+    pub fn user_index(&self, name: &str) -> Option<u32> {
+        (0u32..)
+            .zip(self.user_names())
+            .find(|(_, user)| *user == name)
+            .map(|(index, _)| index)
+    }
+
+    /// The scene's hands (`hands[..hand_count]`).
+    pub fn scene_hands(&self) -> &[HandDescription] {
+        &self.hands[..(self.hand_count as usize).min(MAX_HANDS)]
+    }
 }

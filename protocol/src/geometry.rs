@@ -10,7 +10,8 @@
 //!
 //! ```text
 //! payload  := mesh{part_count} hand{hand_count}          parts in id order
-//! hand     := side:u32 segment_count:u32 name mesh{segment_count}   segments in HandSegment order
+//! hand     := user:u32 side:u32 segment_count:u32 name mesh{segment_count}
+//!             segments in HandSegment order; hands grouped by user, in the users' order
 //! mesh     := name vertex_count:u32 triangle_count:u32 normals:u32 (0 or 1) 0:u32
 //!             position:[f32;3]{vertex_count} normal:[f32;3]{vertex_count if normals}
 //!             triangle:[u32;3]{triangle_count}
@@ -26,7 +27,7 @@ use crate::HandSide;
 
 /// The user header of a geometry sample.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
-#[type_name("vas::scene::GeometryHeader::v1")]
+#[type_name("vas::scene::GeometryHeader::v2")]
 #[repr(C)]
 pub struct GeometryHeader {
     /// Changes with every scene load and reset; frames of the same scene carry no generation,
@@ -73,6 +74,9 @@ impl MeshData {
 /// One hand's segment meshes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HandGeometry {
+    /// Whose hand: an index into the scene's users
+    /// ([`ControlResponse::users`](crate::ControlResponse::users)).
+    pub user: u32,
     /// Which hand.
     pub side: HandSide,
     /// The hand model's name.
@@ -134,7 +138,7 @@ impl SceneGeometry {
         let parts: usize = self.parts.iter().map(MeshData::encoded_len).sum();
         let hands: usize = (self.hands.iter())
             .map(|hand| {
-                8 + name_len(&hand.model)
+                12 + name_len(&hand.model)
                     + hand
                         .segments
                         .iter()
@@ -157,6 +161,7 @@ impl SceneGeometry {
             out.mesh(part);
         }
         for hand in &self.hands {
+            out.u32(hand.user);
             out.u32(hand.side as u32);
             out.u32(count(hand.segments.len()));
             out.name(&hand.model);
@@ -185,6 +190,15 @@ impl SceneGeometry {
         let hands = (0..header.hand_count)
             .map(|_| {
                 let at = input.at;
+                let user = input.u32("hand user")?;
+                if user as usize >= crate::MAX_USERS {
+                    return Err(GeometryDecodeError::Invalid {
+                        at,
+                        field: "hand user",
+                        value: user.into(),
+                    });
+                }
+                let at = input.at;
                 let side = input.u32("hand side")?;
                 let side = HandSide::try_from(side).map_err(|_| GeometryDecodeError::Invalid {
                     at,
@@ -197,6 +211,7 @@ impl SceneGeometry {
                     .map(|_| input.mesh())
                     .collect::<Result<_, _>>()?;
                 Ok(HandGeometry {
+                    user,
                     side,
                     model,
                     segments,
@@ -417,6 +432,7 @@ mod tests {
             generation: 7,
             parts: vec![mesh("peg", false), mesh("bloc\u{e9}", true)],
             hands: vec![HandGeometry {
+                user: 2,
                 side: HandSide::Left,
                 model: "left hand".into(),
                 segments: vec![mesh("palm", false), mesh("thumb", true)],

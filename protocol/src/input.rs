@@ -36,9 +36,10 @@ pub const MAX_POSITION_M: f64 = 1e6;
 /// the far future would make every later sample look old.
 pub const MAX_TIMESTAMP_AHEAD_NS: u64 = 1_000_000_000;
 
-/// One 6-DOF tracker report: the hand root and the cart (navigation) pose.
+/// One 6-DOF tracker report of one user's hand: the hand root and that user's cart (navigation)
+/// pose.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::input::TrackerSample::v1")]
+#[type_name("vas::input::TrackerSample::v2")]
 #[repr(C)]
 pub struct TrackerSample {
     /// Sender's sequence number, from 1, increasing by one per sample.
@@ -53,11 +54,21 @@ pub struct TrackerSample {
     pub cart: WirePose,
     /// Which tracker sent the sample (the VRPN sensor number).
     pub sensor_id: u32,
+    /// The user whose hand it tracks: see [`HandJointsSample::user`].
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub user: u32,
+    /// Which of the user's hands, a [`HandSide`](crate::HandSide) code (0, right, when a
+    /// recording made before users names none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub side: u32,
+    /// Padding, 0 (not in recordings).
+    #[serde(skip)]
+    pub reserved: u32,
 }
 
-/// One glove report: the 22 calibrated joint angles.
+/// One glove report of one user's hand: the 22 calibrated joint angles.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::input::GloveSample::v1")]
+#[type_name("vas::input::GloveSample::v2")]
 #[repr(C)]
 pub struct GloveSample {
     /// Sender's sequence number, from 1, increasing by one per sample.
@@ -66,6 +77,19 @@ pub struct GloveSample {
     pub timestamp_ns: u64,
     /// Joint angles in radians, in CyberGlove order ([`FLEX_JOINT_NAMES`]).
     pub flex: [f32; FLEX_COUNT],
+    /// The user whose hand wears the glove: see [`HandJointsSample::user`].
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub user: u32,
+    /// Which of the user's hands, a [`HandSide`](crate::HandSide) code (0, right, when a
+    /// recording made before users names none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub side: u32,
+}
+
+/// Whether a user or side code is 0, the first user's right hand: recordings leave it out, so
+/// that a recording of one user's right hand reads as it did before samples named their user.
+fn is_zero(code: &u32) -> bool {
+    *code == 0
 }
 
 /// Number of joints of a [`HandJointsSample`]: OpenXR's hand joints (XR_EXT_hand_tracking).
@@ -122,7 +146,7 @@ impl JointLocation {
 /// uses no palm (the hand's root comes from the wrist and the fingers from their own joints);
 /// a producer that has a palm simply sends it.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::input::HandJointsSample::v1")]
+#[type_name("vas::input::HandJointsSample::v2")]
 #[repr(C)]
 pub struct HandJointsSample {
     /// Sender's sequence number, from 1, increasing by one per sample.
@@ -133,6 +157,16 @@ pub struct HandJointsSample {
     pub joints: [JointLocation; HAND_JOINT_COUNT],
     /// Which hand, a [`HandSide`](crate::HandSide) code.
     pub side: u32,
+    /// The user whose hand it is: an index into the scene's users, as the control service
+    /// lists them ([`ControlResponse::users`](crate::ControlResponse::users)); 0 in a scene
+    /// of one user.
+    ///
+    /// An index rather than the user's name: four bytes in a sample sent at the tracking rate,
+    /// compared without text, and a sender learns its index once from the scene info (names
+    /// are for people; the control response carries them). A scene's users keep their indices
+    /// until another scene is loaded, whose info a sender reads anyway.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub user: u32,
 }
 
 impl HandJointsSample {
@@ -186,6 +220,20 @@ pub enum InputRejection {
     Ahead {
         /// How far ahead, in nanoseconds.
         ahead_ns: u64,
+    },
+    /// The sample names a user the scene does not have.
+    #[error("user {user} is no user of the scene")]
+    NoSuchUser {
+        /// The user index received.
+        user: u32,
+    },
+    /// The sample names a side its user has no hand for (or a code that is no side).
+    #[error("user {user} has no hand of side code {side}")]
+    NoSuchHand {
+        /// The user index received.
+        user: u32,
+        /// The side code received.
+        side: u32,
     },
 }
 

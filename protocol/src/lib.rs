@@ -60,8 +60,8 @@ pub use clearance::{CLEARANCE_STALE, ClearanceFrame, ClearancePair, MAX_CLEARANC
 pub use clock::wall_clock_ns;
 pub use control::{
     ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, HandDescription,
-    InputStats, MAX_HANDS, MAX_NAME_BYTES, MAX_PATH_BYTES, MAX_STATUS_MESSAGE_BYTES, PART_MOVABLE,
-    PartDescription, SlidingMetaphor, UnknownMetaphor,
+    InputStats, MAX_HANDS, MAX_NAME_BYTES, MAX_PATH_BYTES, MAX_STATUS_MESSAGE_BYTES, MAX_USERS,
+    PART_MOVABLE, PartDescription, SlidingMetaphor, UnknownMetaphor,
 };
 pub use geometry::{
     GeometryDecodeError, GeometryHeader, HandGeometry, MAX_MESH_NAME_BYTES, MeshData, SceneGeometry,

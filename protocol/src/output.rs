@@ -129,7 +129,7 @@ pub const HAND_SEGMENT_COUNT: usize = 16;
 /// One hand as the collision loop verified it: root pose, flex vector, each segment's pose,
 /// touching segments and grasp type.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::HandFrame::v3")]
+#[type_name("vas::output::HandFrame::v4")]
 #[repr(C)]
 pub struct HandFrame {
     /// Frame number of the hand stream, from 1.
@@ -160,8 +160,9 @@ pub struct HandFrame {
     /// Segments with a pose in [`HandFrame::segments`]: [`HAND_SEGMENT_COUNT`] with a hand
     /// model, 0 in a scene without one.
     pub segment_count: u32,
-    /// Padding, 0.
-    pub reserved: u32,
+    /// The user whose hand it is, an index into the scene's users
+    /// ([`ControlResponse::users`](crate::ControlResponse::users)).
+    pub user: u32,
     /// Each segment's verified pose in the world, in [`HandSegment`] order: where a renderer
     /// places the segment's mesh from `vas/scene/geometry`.
     pub segments: [WirePose; HAND_SEGMENT_COUNT],
@@ -183,7 +184,7 @@ impl Default for HandFrame {
             hand: HandSide::Right as u32,
             tracked: 0,
             segment_count: 0,
-            reserved: 0,
+            user: 0,
             segments: [WirePose::IDENTITY; HAND_SEGMENT_COUNT],
         }
     }
@@ -348,8 +349,9 @@ wire_code_enum! {
         ContactBegin = 3,
         /// `part` and `other` stopped touching.
         ContactEnd = 4,
-        /// The hand let go of `part` because the other hand grasped it (the other hand's grasp
-        /// event comes in the same frame): a part is held by one hand at a time.
+        /// The hand let go of `part` because another hand grasped it, of the same user or of
+        /// another (that hand's grasp event comes in the same frame): a part is held by one hand
+        /// at a time.
         HandOver = 5,
         /// `part` and `other` came closer than the scene's clearance threshold: `distance`,
         /// `point` on `part` and `other_point` on `other`.
@@ -402,7 +404,7 @@ impl EventKind {
 
 /// A discrete simulation event on `vas/output/events`.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::SimEvent::v4")]
+#[type_name("vas::output::SimEvent::v5")]
 #[repr(C)]
 pub struct SimEvent {
     /// Number of the hand frame during which the event happened.
@@ -428,6 +430,12 @@ pub struct SimEvent {
     pub hand: u32,
     /// The hand segment of a contact with the hand, a [`HandSegment`] code; 0 otherwise.
     pub segment: u32,
+    /// The user whose hand `hand` is, an index into the scene's users
+    /// ([`ControlResponse::users`](crate::ControlResponse::users)); 0 for clearance events.
+    pub user: u32,
+    /// Padding, 0.
+    #[serde(skip)]
+    pub reserved: u32,
     /// Contacts: where the two touch; clearances: the closest point on `part`. In the world
     /// (metres); zero for other events.
     pub point: [f64; 3],
@@ -463,7 +471,7 @@ impl SimEvent {
 
 /// Force and torque a force-feedback device should render, on `vas/output/force`.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, Serialize, Deserialize)]
-#[type_name("vas::output::ForceFrame::v2")]
+#[type_name("vas::output::ForceFrame::v3")]
 #[repr(C)]
 pub struct ForceFrame {
     /// Number of the hand frame the force belongs to.
@@ -482,6 +490,9 @@ pub struct ForceFrame {
     pub torque: [f64; 3],
     /// The hand whose held part pulls, a [`HandSide`] code.
     pub hand: u32,
+    /// The user whose hand `hand` is, an index into the scene's users
+    /// ([`ControlResponse::users`](crate::ControlResponse::users)).
+    pub user: u32,
 }
 
 impl ForceFrame {

@@ -15,6 +15,9 @@ fn tracker(hand: WirePose, cart: WirePose) -> TrackerSample {
         hand,
         cart,
         sensor_id: 2,
+        user: 1,
+        side: HandSide::Left as u32,
+        reserved: 0,
     }
 }
 
@@ -23,6 +26,8 @@ fn glove(flex: [f32; FLEX_COUNT]) -> GloveSample {
         seq: 3,
         timestamp_ns: 2_000,
         flex,
+        user: 1,
+        side: HandSide::Left as u32,
     }
 }
 
@@ -131,6 +136,8 @@ fn typed_accessors_read_each_flag_and_code() {
         other: HAND_PART_ID,
         hand: HandSide::Left as u32,
         segment: 0,
+        user: 0,
+        reserved: 0,
         point: [0.0; 3],
         normal: [0.0; 3],
         other_point: [0.0; 3],
@@ -340,6 +347,59 @@ fn samples_round_trip_through_json() {
         serde_json::from_str(&serde_json::to_string(&glove_sample).expect("serialises"))
             .expect("parses");
     assert_eq!(back, glove_sample);
+}
+
+#[test]
+fn samples_recorded_before_users_drive_the_first_users_right_hand() {
+    let mut json =
+        serde_json::to_value(tracker(WirePose::IDENTITY, WirePose::IDENTITY)).expect("serialises");
+    let fields = json.as_object_mut().expect("an object");
+    assert!(!fields.contains_key("reserved"), "padding is not recorded");
+    fields.remove("user");
+    fields.remove("side");
+    let old: TrackerSample = serde_json::from_value(json).expect("parses");
+    assert_eq!((old.user, old.side), (0, HandSide::Right as u32));
+}
+
+#[test]
+fn users_are_looked_up_by_index_and_by_name() {
+    let mut response = ControlResponse {
+        user_count: 2,
+        ..zeroed_response()
+    };
+    response.users[0] = WireText::new("anna").expect("fits");
+    response.users[1] = WireText::new("ben").expect("fits");
+    response.users[2] = WireText::new("beyond the count").expect("fits");
+    assert_eq!(response.user_names().collect::<Vec<_>>(), ["anna", "ben"]);
+    assert_eq!(response.user_name(1), Some("ben"));
+    assert_eq!(response.user_name(2), None);
+    assert_eq!(response.user_index("ben"), Some(1));
+    assert_eq!(response.user_index("beyond the count"), None);
+}
+
+/// A response of zeros, as a request that fills nothing would leave it.
+fn zeroed_response() -> ControlResponse {
+    ControlResponse {
+        status: 0,
+        kind: 0,
+        part_count: 0,
+        scene_truncated: 0,
+        scene_name: WireText::EMPTY,
+        scene_source: WireText::EMPTY,
+        part: PartDescription::default(),
+        stats: InputStats::default(),
+        message: WireText::EMPTY,
+        up: [0.0; 3],
+        metres_per_unit: 1.0,
+        hand_count: 0,
+        listed_count: 0,
+        hands: [HandDescription::default(); MAX_HANDS],
+        listed: WireText::EMPTY,
+        generation: 0,
+        metaphor: 0,
+        user_count: 0,
+        users: [WireText::EMPTY; MAX_USERS],
+    }
 }
 
 #[test]

@@ -14,17 +14,22 @@ fn assert_layout<T>(size: usize, align: usize) {
 #[test]
 fn input_types_keep_their_layout() {
     assert_layout::<WirePose>(56, 8);
-    assert_layout::<TrackerSample>(136, 8);
-    assert_layout::<GloveSample>(104, 8);
+    assert_layout::<TrackerSample>(144, 8);
+    assert_layout::<GloveSample>(112, 8);
     assert_layout::<JointLocation>(64, 8);
     assert_layout::<HandJointsSample>(1688, 8);
     assert_eq!(offset_of!(TrackerSample, hand), 16);
     assert_eq!(offset_of!(TrackerSample, cart), 72);
     assert_eq!(offset_of!(TrackerSample, sensor_id), 128);
+    assert_eq!(offset_of!(TrackerSample, user), 132);
+    assert_eq!(offset_of!(TrackerSample, side), 136);
     assert_eq!(offset_of!(GloveSample, flex), 16);
+    assert_eq!(offset_of!(GloveSample, user), 104);
+    assert_eq!(offset_of!(GloveSample, side), 108);
     assert_eq!(offset_of!(JointLocation, radius), 56);
     assert_eq!(offset_of!(HandJointsSample, joints), 16);
     assert_eq!(offset_of!(HandJointsSample, side), 1680);
+    assert_eq!(offset_of!(HandJointsSample, user), 1684);
     assert_eq!(HAND_JOINT_COUNT, 26);
 }
 
@@ -34,7 +39,7 @@ fn output_types_keep_their_layout() {
     assert_layout::<PartsFrameHeader>(72, 8);
     assert_layout::<PartState>(64, 8);
     assert_layout::<HandFrame>(1128, 8);
-    assert_layout::<SimEvent>(168, 8);
+    assert_layout::<SimEvent>(176, 8);
     assert_layout::<ClearancePair>(80, 8);
     assert_layout::<ClearanceFrame>(80 + 80 * MAX_CLEARANCE_PAIRS, 8);
     assert_layout::<GeometryHeader>(24, 8);
@@ -44,10 +49,12 @@ fn output_types_keep_their_layout() {
     assert_eq!(offset_of!(HandFrame, root), 64);
     assert_eq!(offset_of!(HandFrame, flex), 120);
     assert_eq!(offset_of!(HandFrame, grasp_type), 212);
+    assert_eq!(offset_of!(HandFrame, user), 228);
     assert_eq!(offset_of!(HandFrame, segments), 232);
-    assert_eq!(offset_of!(SimEvent, point), 88);
-    assert_eq!(offset_of!(SimEvent, other_point), 136);
-    assert_eq!(offset_of!(SimEvent, distance), 160);
+    assert_eq!(offset_of!(SimEvent, user), 88);
+    assert_eq!(offset_of!(SimEvent, point), 96);
+    assert_eq!(offset_of!(SimEvent, other_point), 144);
+    assert_eq!(offset_of!(SimEvent, distance), 168);
     assert_eq!(offset_of!(ClearancePair, distance), 24);
     assert_eq!(offset_of!(ClearancePair, other_point), 56);
     assert_eq!(offset_of!(ClearanceFrame, threshold), 64);
@@ -55,6 +62,7 @@ fn output_types_keep_their_layout() {
     assert_eq!(MAX_CLEARANCE_PAIRS, 32);
     assert_eq!(offset_of!(ForceFrame, torque), 88);
     assert_eq!(offset_of!(ForceFrame, hand), 112);
+    assert_eq!(offset_of!(ForceFrame, user), 116);
 }
 
 #[test]
@@ -63,15 +71,19 @@ fn control_types_keep_their_layout() {
     assert_layout::<WireText<MAX_PATH_BYTES>>(516, 4);
     assert_layout::<WireText<MAX_STATUS_MESSAGE_BYTES>>(260, 4);
     assert_layout::<ControlRequest>(524, 4);
-    assert_layout::<InputStats>(128, 8);
+    assert_layout::<InputStats>(144, 8);
     assert_layout::<PartDescription>(728, 8);
-    assert_layout::<HandDescription>(72, 4);
-    assert_layout::<ControlResponse>(1992, 8);
+    assert_layout::<HandDescription>(76, 4);
+    assert_layout::<ControlResponse>(2744, 8);
+    assert_eq!(offset_of!(HandDescription, user), 4);
     assert_eq!(offset_of!(ControlResponse, part), 600);
     assert_eq!(offset_of!(ControlResponse, stats), 1328);
-    assert_eq!(offset_of!(ControlResponse, hands), 1760);
-    assert_eq!(offset_of!(ControlResponse, generation), 1976);
-    assert_eq!(offset_of!(ControlResponse, metaphor), 1984);
+    assert_eq!(offset_of!(ControlResponse, hands), 1776);
+    assert_eq!(offset_of!(ControlResponse, generation), 2456);
+    assert_eq!(offset_of!(ControlResponse, metaphor), 2464);
+    assert_eq!(offset_of!(ControlResponse, user_count), 2468);
+    assert_eq!(offset_of!(ControlResponse, users), 2472);
+    assert_eq!((MAX_USERS, MAX_HANDS), (4, 8));
 }
 
 #[test]
@@ -107,19 +119,19 @@ fn payload_type_names_are_versioned() {
     assert_eq!(
         names,
         [
-            "vas::input::TrackerSample::v1",
-            "vas::input::GloveSample::v1",
-            "vas::input::HandJointsSample::v1",
+            "vas::input::TrackerSample::v2",
+            "vas::input::GloveSample::v2",
+            "vas::input::HandJointsSample::v2",
             "vas::output::PartsFrameHeader::v2",
             "vas::output::PartState::v1",
-            "vas::output::HandFrame::v3",
-            "vas::output::SimEvent::v4",
-            "vas::output::ForceFrame::v2",
+            "vas::output::HandFrame::v4",
+            "vas::output::SimEvent::v5",
+            "vas::output::ForceFrame::v3",
             "vas::output::ClearancePair::v1",
             "vas::output::ClearanceFrame::v1",
-            "vas::scene::GeometryHeader::v1",
+            "vas::scene::GeometryHeader::v2",
             "vas::control::ControlRequest::v1",
-            "vas::control::ControlResponse::v7",
+            "vas::control::ControlResponse::v8",
         ]
     );
 }

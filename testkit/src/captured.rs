@@ -251,6 +251,7 @@ fn untracked(side: HandSide, seq: u64, timestamp_ns: u64) -> HandJointsSample {
             HandSide::Right => HandSide::Right as u32,
             HandSide::Left => HandSide::Left as u32,
         },
+        user: 0,
     }
 }
 

@@ -378,5 +378,8 @@ pub fn tracker(seq: u64, position: [f64; 3]) -> vas_protocol::TrackerSample {
         },
         cart: vas_protocol::WirePose::IDENTITY,
         sensor_id: 0,
+        user: 0,
+        side: 0,
+        reserved: 0,
     }
 }

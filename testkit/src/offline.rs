@@ -94,8 +94,7 @@ pub fn hand_targets(
     scene: &Scene,
     samples: impl IntoIterator<Item = InputSample>,
 ) -> (Vec<Vec<HandTarget>>, usize) {
-    let models = scene.hands.iter().map(|hand| hand.model.as_ref());
-    let mut state = Inputs::for_hands(models, scene.params.tracking);
+    let mut state = Inputs::for_hands(scene.hand_models(), scene.params.tracking);
     let mut inputs = Vec::new();
     let mut rejected = 0;
     for sample in samples {

@@ -77,6 +77,9 @@ pub enum Motion {
     Captured(CapturedMotion),
     /// The two-handed hand-over: the right hand by tracker and glove, the left by hand joints.
     HandOver,
+    /// The same hand-over between two users: the first user's right hand by tracker and
+    /// glove, the second user's left hand by hand joints.
+    UsersHandOver,
 }
 
 impl Motion {
@@ -86,6 +89,7 @@ impl Motion {
             Motion::Script(script) => script.name(),
             Motion::Captured(captured) => captured.name(),
             Motion::HandOver => "two_hand_handover",
+            Motion::UsersHandOver => "two_user_handover",
         }
     }
 }
@@ -155,7 +159,7 @@ const fn by(hand: usize, kind: EventKind, part: &'static str, grasp: GraspType) 
 }
 
 /// Every recorded scenario and what its replay must give.
-pub const EXPECTED: [Scenario; 15] = [
+pub const EXPECTED: [Scenario; 17] = [
     Scenario {
         motion: Motion::Script(RecordedScenario::PegInsert),
         scene: "peg_insert.toml",
@@ -203,15 +207,12 @@ pub const EXPECTED: [Scenario; 15] = [
     Scenario {
         motion: Motion::Script(RecordedScenario::Push),
         scene: "push.toml",
-        events: &[
-            by(0, EventKind::PushBegin, "block", GraspType::None),
-            by(0, EventKind::PushEnd, "block", GraspType::None),
-        ],
-        // Never grasped; pushed the 2 cm the palm aims past the face it meets, along x, and left
-        // there.
+        events: &[push_begin("block"), push_end("block")],
+        // Never grasped; pushed the 2 cm the palm aims past the face it meets, along x across
+        // the table, and left there, resting on the table (its top at z = 0.1398).
         final_pose: ExpectedPose {
             part: "block",
-            position: [0.12, 0.0, 0.2],
+            position: [0.12, 0.0, 0.1998],
             rpy_degrees: [0.0, 0.0, 0.0],
             position_tolerance: 0.001,
             angle_tolerance: 1e-9,
@@ -236,12 +237,14 @@ pub const EXPECTED: [Scenario; 15] = [
     Scenario {
         motion: Motion::Script(RecordedScenario::DemoPegIntoBlock),
         scene: "default.toml",
+        // The fingers touching the peg before the palm does move nothing: no push, only the
+        // power grasp the palm's touch makes.
         events: &[grasp("peg", GraspType::Power), release("peg")],
-        // Over the block's hole at (0.25, 0.15), 1 cm into it: its middle 3 cm above the block's
-        // top (z = 0.8), upright.
+        // Let go 1 cm into the block's hole at (0.25, 0.15), it drops through the hole onto the
+        // table (z = 0.75): its middle 4 cm above it, upright.
         final_pose: ExpectedPose {
             part: "peg",
-            position: [0.25, 0.15, 0.83],
+            position: [0.25, 0.15, 0.79],
             rpy_degrees: [0.0, 0.0, 0.0],
             position_tolerance: 0.002,
             angle_tolerance: 0.05,
@@ -294,23 +297,8 @@ pub const EXPECTED: [Scenario; 15] = [
     Scenario {
         motion: Motion::HandOver,
         scene: "two_hand_handover.toml",
-        events: &[
-            by(0, EventKind::Grasp, "handle", GraspType::Power),
-            // The left hand's fingers and thumb hold the handle before its palm comes down.
-            by(1, EventKind::Grasp, "handle", GraspType::Precision),
-            by(0, EventKind::HandOver, "handle", GraspType::None),
-            by(1, EventKind::Release, "handle", GraspType::None),
-        ],
-        // Pushed 9 cm along its axis by the left hand, its end 3 cm into the block's hole, sunk
-        // the 3 to 5 mm the hands' scripts press down after their grasps (they aim 5 mm into the
-        // handle).
-        final_pose: ExpectedPose {
-            part: "handle",
-            position: [-0.09, 0.075, -0.0625],
-            rpy_degrees: [0.0, 90.0, 0.0],
-            position_tolerance: 0.003,
-            angle_tolerance: 0.05,
-        },
+        events: HAND_OVER_EVENTS,
+        final_pose: HAND_OVER_FINAL_POSE,
         min_held_back: 0.0,
     },
     Scenario {
@@ -331,10 +319,11 @@ pub const EXPECTED: [Scenario; 15] = [
         motion: Motion::Script(RecordedScenario::PushIntoWall),
         scene: "push_into_wall.toml",
         events: &[push_begin("block"), push_end("block")],
-        // Pushed 1 cm, until its far face meets the wall (x = 0.14), not the 3 cm aimed at.
+        // Pushed 1 cm across the table, until its far face meets the wall (x = 0.14), not the
+        // 3 cm aimed at; resting on the table (its top at z = 0.1398).
         final_pose: ExpectedPose {
             part: "block",
-            position: [0.11, 0.0, 0.2],
+            position: [0.11, 0.0, 0.1998],
             rpy_degrees: [0.0, 0.0, 0.0],
             position_tolerance: 0.001,
             angle_tolerance: 1e-9,
@@ -359,13 +348,14 @@ pub const EXPECTED: [Scenario; 15] = [
         motion: Motion::Script(RecordedScenario::ReleaseOverSlope),
         scene: "release_over_slope.toml",
         events: &[grasp("peg", GraspType::Power), release("peg")],
-        // Resting on the plane tilted 10 degrees about x (its top face 1 cm from the origin) by
-        // the +y edge of its lower end: that end's middle at z = (0.01 + 0.009 sin 10°) / cos 10°,
-        // and not slid off.
+        // Landed on the plane tilted 10 degrees about x (its top face 1 cm from the origin) by
+        // the +y edge of its lower end, at y = 0.009, z = (0.01 + 0.009 sin 10°) / cos 10°, and
+        // turned 10 degrees about that edge onto its end face, not slid: its middle 9 mm across
+        // and 4 cm up its end, turned, from that edge.
         final_pose: ExpectedPose {
             part: "peg",
-            position: [0.0, 0.0, 0.051_741],
-            rpy_degrees: [0.0, 0.0, 0.0],
+            position: [0.0, -0.006_809, 0.049_570],
+            rpy_degrees: [10.0, 0.0, 0.0],
             position_tolerance: 0.001,
             angle_tolerance: 0.05,
         },
@@ -385,4 +375,50 @@ pub const EXPECTED: [Scenario; 15] = [
         },
         min_held_back: 0.0,
     },
+    Scenario {
+        motion: Motion::Script(RecordedScenario::PushOffTable),
+        scene: "push_off_table.toml",
+        events: &[push_begin("block"), push_end("block")],
+        // Pushed until its middle is 2.5 cm past the table's edge, it tips over the edge once the
+        // push ends, falls, and lies on its front face on the ground (z = 0), a quarter turn about
+        // y: its middle 3 cm up, 6 cm past the edge.
+        final_pose: ExpectedPose {
+            part: "block",
+            position: [0.160_5, 0.0, 0.03],
+            rpy_degrees: [0.0, 90.0, 0.0],
+            position_tolerance: 0.001,
+            angle_tolerance: 0.05,
+        },
+        min_held_back: 0.0,
+    },
+    Scenario {
+        motion: Motion::UsersHandOver,
+        scene: "two_user_handover.toml",
+        // Hand 0 is anna's right hand, hand 1 ben's left: the events of the two-hand hand-over,
+        // between users.
+        events: HAND_OVER_EVENTS,
+        final_pose: HAND_OVER_FINAL_POSE,
+        min_held_back: 0.0,
+    },
 ];
+
+/// The hand-over's events: the first hand grasps the handle, the second takes it over and lets
+/// go of it in the block.
+const HAND_OVER_EVENTS: &[ExpectedEvent] = &[
+    by(0, EventKind::Grasp, "handle", GraspType::Power),
+    // The second hand's fingers and thumb hold the handle before its palm comes down.
+    by(1, EventKind::Grasp, "handle", GraspType::Precision),
+    by(0, EventKind::HandOver, "handle", GraspType::None),
+    by(1, EventKind::Release, "handle", GraspType::None),
+];
+
+/// Where the hand-over leaves the handle: pushed 9 cm along its axis by the second hand, its end
+/// 3 cm into the block's hole, sunk the 3 to 5 mm the hands' scripts press down after their
+/// grasps (they aim 5 mm into the handle).
+const HAND_OVER_FINAL_POSE: ExpectedPose = ExpectedPose {
+    part: "handle",
+    position: [-0.09, 0.075, -0.0625],
+    rpy_degrees: [0.0, 90.0, 0.0],
+    position_tolerance: 0.003,
+    angle_tolerance: 0.05,
+};

@@ -7,10 +7,14 @@
 // sample a hand frame answers (its tracker timestamp, wall clock) to the moment the frame was
 // drawn, for live input only (see `LIVE_INPUT_MS`). Everything tests look at is on
 // `window.vasViewer`.
+//
+// In a scene of several users, the headset's hands are those of the user the page's address
+// names (`?user=NAME`), or of the scene's first user without one; a name the scene does not have
+// is refused on the panel, and no hands are sent.
 
 import { Connection } from './connection.js';
 import { Panel } from './panel.js';
-import { COLOURS, PALETTE, View, clearanceColour, stateOf } from './view.js';
+import { COLOURS, PALETTE, View, clearanceColour, stateOf, userColour } from './view.js';
 import { setupXr } from './xr.js';
 
 // A hand frame published more than this after its tracker sample's stamp answers input that is
@@ -25,6 +29,9 @@ const EVENT_WINDOW = 1000;
 // Frames whose timing is kept for the browser benchmark (B9 in BENCHMARKS.md).
 const TIMING_WINDOW = 100000;
 
+// The user named in the page's address, or null.
+const REQUESTED_USER = new URLSearchParams(window.location.search).get('user');
+
 const view = new View(document.getElementById('view'));
 const state = {
   open: false,
@@ -37,6 +44,9 @@ const state = {
   metaphor: null,
   // The sides (`right`, `left`) whose hands have answered input since the scene started.
   handsSeen: [],
+  // The user the headset's hands are sent as: name and index in the scene's users (index null:
+  // the scene has no such user, and no hands are sent).
+  xrUser: { name: REQUESTED_USER, index: null },
   waiting: null, // the newest frame not drawn yet: { text, arrivedMs }
   newest: null, // the newest frame received
   received: { frames: 0, events: 0, scenes: 0 },
@@ -78,6 +88,8 @@ const connection = new Connection({
     panel.showHands(state.handsSeen);
     view.setScene(scene, meshes);
     panel.showScene(scene.name);
+    showLegend(scene.users ?? []);
+    chooseXrUser(scene.users ?? []);
   },
   // A frame as the link's worker posts it: its JSON text, parsed only if it is drawn.
   frame(text, scene, arrivedMs, transport, superseded) {
@@ -110,10 +122,29 @@ const panel = new Panel((command) => connection.send(command));
 // A colour number (0xrrggbb) as CSS writes it.
 const cssHex = (colour) => `#${colour.toString(16).padStart(6, '0')}`;
 const xr = setupXr(view, panel, connection);
-panel.showLegend(
-  PALETTE.map(({ colour, words }) => ({ css: cssHex(colour), words })),
-  [0, 0.5, 1].map((closeness) => clearanceColour(closeness).getStyle()),
-);
+// The legend: the palette, then in a scene of several users each user's hand colour and name.
+function showLegend(users) {
+  const named = users.length > 1 ? users : [];
+  const hands = named.map((name, user) => ({ css: cssHex(userColour(user)), words: `${name}'s hands` }));
+  panel.showLegend(
+    [...PALETTE.map(({ colour, words }) => ({ css: cssHex(colour), words })), ...hands],
+    [0, 0.5, 1].map((closeness) => clearanceColour(closeness).getStyle()),
+  );
+}
+showLegend([]);
+
+// Chooses the user of `users` (the scene's) whose hands the headset sends.
+function chooseXrUser(users) {
+  const index = REQUESTED_USER === null ? 0 : users.indexOf(REQUESTED_USER);
+  state.xrUser = { name: REQUESTED_USER ?? users[0] ?? null, index: index >= 0 ? index : null };
+  xr.hands.setUser(state.xrUser.index);
+  if (index < 0) {
+    const message = `no user "${REQUESTED_USER}" in this scene (its users: ${users.join(', ')}): ` +
+      'the headset\'s hands are not sent';
+    state.warnings.push(message);
+    panel.showReply(message, true);
+  }
+}
 
 // Wall clock in milliseconds since the Unix epoch, as the frames' timestamps count it.
 const wallClockMs = () => performance.timeOrigin + performance.now();
@@ -166,9 +197,14 @@ function noteDrawn(frame) {
   }
 }
 
-// Adds the side of `hand` (a frame's hand) to the hands seen once it answers input.
+// Adds the side of `hand` (a frame's hand) to the hands seen once it answers input, with its
+// user's name in a scene of several users ("anna's right").
 function noteHandSeen(hand) {
-  const side = state.scene?.hands.find((scene) => scene.hand === hand.hand)?.side;
+  const ofScene = state.scene?.hands.find(
+    (scene) => scene.hand === hand.hand && scene.user === hand.user,
+  );
+  const named = (state.scene?.users ?? []).length > 1;
+  const side = ofScene && (named ? `${ofScene.user_name}'s ${ofScene.side}` : ofScene.side);
   if (!hand.answered || !side || state.handsSeen.includes(side)) return;
   state.handsSeen = [...state.handsSeen, side];
   panel.showHands(state.handsSeen);
@@ -198,6 +234,7 @@ window.vasViewer = {
   get currentScene() { return state.currentScene; },
   get metaphor() { return state.metaphor; },
   get handsSeen() { return [...state.handsSeen]; },
+  get xrUser() { return { ...state.xrUser }; },
   // What the panel shows: its scene and metaphor menus' selections, its hands line, its legend's
   // swatches (CSS backgrounds, as computed) and its latency figure.
   panel() {
@@ -257,6 +294,16 @@ window.vasViewer = {
       quaternion: mesh.quaternion.toArray(),
       state: mesh.userData.state,
       colour: hex(mesh.material.color),
+    }));
+  },
+  // Every user's name label as drawn, by its hand's key (`handKey`).
+  names() {
+    return [...view.nameLabels.entries()].map(([hand, label]) => ({
+      hand,
+      text: label.userData.text,
+      colour: label.userData.colour,
+      visible: label.visible,
+      position: label.position.toArray(),
     }));
   },
   // Every hand's segments as drawn.

@@ -30,6 +30,22 @@ export const PALETTE = [
 ];
 // The palette's colours by key.
 export const COLOURS = Object.fromEntries(PALETTE.map(({ key, colour }) => [key, colour]));
+// Each user's hand colour, by the user's index: the first user's is the palette's hand colour,
+// so that a scene of one user looks as it always did.
+export const USER_COLOURS = [COLOURS.hand, 0x9fb4ff, 0xb6e07a, 0xe59ad6];
+// A user's name label: its height above the palm (metres).
+const NAME_ABOVE_PALM = 0.06;
+
+// The key of a scene's hand in `View.hands`: user × 2 + side code (a user has at most one hand
+// of each side), so that the first user's hands keep their side's code as their key.
+export function handKey(user, side) {
+  return user * 2 + side;
+}
+
+// The hand colour of user `user`.
+export function userColour(user) {
+  return USER_COLOURS[user % USER_COLOURS.length];
+}
 // How long a contact marker stays, in milliseconds.
 const MARKER_MS = 1500;
 // A clearance label's height in the world (metres) and its canvas's size in pixels.
@@ -81,6 +97,8 @@ export class View {
 
     this.parts = [];
     this.hands = new Map();
+    // A name label per hand, by the hands' key, in a scene of several users.
+    this.nameLabels = new Map();
     this.markers = [];
     // One segment and label per clearance pair drawn, reused from frame to frame.
     this.gaps = [];
@@ -104,6 +122,7 @@ export class View {
     for (const mesh of [...this.markers, ...this.parts]) this.dispose(mesh);
     this.markers = [];
     for (const hand of this.hands.values()) hand.forEach((segment) => this.dispose(segment));
+    for (const label of this.nameLabels.values()) this.dispose(label);
     const geometries = meshes.map(geometryOf);
     this.parts = scene.parts.map((part) => {
       const mesh = this.addMesh(geometries[part.mesh], COLOURS.resting);
@@ -113,9 +132,14 @@ export class View {
     });
     this.hands = new Map(
       scene.hands.map((hand) => [
-        hand.hand,
-        hand.segments.map((mesh) => this.addMesh(geometries[mesh], COLOURS.hand)),
+        handKey(hand.user, hand.hand),
+        hand.segments.map((mesh) => this.addMesh(geometries[mesh], userColour(hand.user))),
       ]),
+    );
+    // Names over the hands when the scene has several users.
+    const named = (scene.users ?? []).length > 1 ? scene.hands : [];
+    this.nameLabels = new Map(
+      named.map((hand) => [handKey(hand.user, hand.hand), this.addName(hand.user_name, hand.user)]),
     );
     // A new scene is framed once its parts have poses; the same scene again keeps the camera.
     if (scene.name !== this.sceneName) this.fitPending = true;
@@ -157,14 +181,21 @@ export class View {
       }
     }
     for (const hand of frame.hands) {
-      const segments = this.hands.get(hand.hand) ?? [];
+      const key = handKey(hand.user, hand.hand);
+      const segments = this.hands.get(key) ?? [];
       hand.segments.forEach((pose, index) => {
         const mesh = segments[index];
         if (!mesh) return;
         place(mesh, pose.position, pose.rotation);
         const touching = (hand.touching >> index) & 1;
-        mesh.material.color.setHex(touching ? COLOURS.handTouching : COLOURS.hand);
+        mesh.material.color.setHex(touching ? COLOURS.handTouching : userColour(hand.user));
       });
+      const label = this.nameLabels.get(key);
+      const palm = hand.segments[0];
+      if (label && palm) {
+        label.position.set(palm.position[0], palm.position[1], palm.position[2] + NAME_ABOVE_PALM);
+        label.visible = true;
+      }
     }
     this.drawClearance(frame.clearance);
     if (this.fitPending && this.parts.some((mesh) => mesh.visible)) {
@@ -204,6 +235,28 @@ export class View {
         gap.label.material.map.needsUpdate = true;
       }
     });
+  }
+
+  // A label naming user `user` in their colour, hidden until their hand is placed.
+  addName(name, user) {
+    const canvas = document.createElement('canvas');
+    [canvas.width, canvas.height] = LABEL_PIXELS;
+    const colour = `#${userColour(user).toString(16).padStart(6, '0')}`;
+    drawLabel(canvas, name, colour);
+    const material = new THREE.SpriteMaterial({
+      map: new THREE.CanvasTexture(canvas),
+      transparent: true,
+      depthTest: false,
+    });
+    const label = new THREE.Sprite(material);
+    label.scale.set((LABEL_HEIGHT * LABEL_PIXELS[0]) / LABEL_PIXELS[1], LABEL_HEIGHT, 1);
+    label.renderOrder = 2;
+    label.visible = false;
+    Object.assign(label.userData, { text: name, colour });
+    // Its own geometry: `dispose` frees it, and sprites share one unless given theirs.
+    label.geometry = label.geometry.clone();
+    this.world.add(label);
+    return label;
   }
 
   // A clearance segment and its label, hidden until used.

@@ -10,7 +10,9 @@
 // (so the server's hand is where the user's hand is in the drawn scene), and sent as one binary
 // message per hand (layout below; vas-viewer publishes it on the server's hand-joints service).
 // A hand with no poses this frame is sent with no joint valid, which the server reads as
-// tracking lost; a hand that goes away (or a session that ends) is sent so once.
+// tracking lost; a hand that goes away (or a session that ends) is sent so once. The hands are
+// the hands of one of the scene's users (`HandSender.user`, which main.js chooses); with none
+// chosen, nothing is sent.
 
 import * as THREE from 'three';
 import { VRButton } from 'three/addons/webxr/VRButton.js';
@@ -28,14 +30,15 @@ export const JOINTS = [
 ];
 
 // The hand-joints message (viewer/src/hand_joints.rs), little-endian:
-//   u32 kind = 1, u32 side (0 right, 1 left), u32 valid (bit i: joint i has a pose),
+//   u32 kind = 1, u32 user (the scene's user index), u32 side (0 right, 1 left),
+//   u32 valid (bit i: joint i has a pose),
 //   f32 [25][8]: position x, y, z, orientation x, y, z, w, radius; metres, in the vas world.
 // Binary because it is the cheap form at two hands and up to 120 frames a second: a fixed
-// 812-byte buffer written in place, with no string built here and no JSON parsed in the viewer,
+// 816-byte buffer written in place, with no string built here and no JSON parsed in the viewer,
 // and its length alone says it holds 25 joints.
 const HAND_KIND = 1;
 const SIDES = { right: 0, left: 1 };
-const HEADER_BYTES = 12;
+const HEADER_BYTES = 16;
 const JOINT_VALUES = 8;
 const MESSAGE_BYTES = HEADER_BYTES + 4 * JOINT_VALUES * JOINTS.length;
 
@@ -70,6 +73,8 @@ class HandSender {
   constructor(world, connection) {
     this.world = world;
     this.connection = connection;
+    // The scene's user whose hands these are (an index into the scene's users), or null: none.
+    this.user = 0;
     // Whether the last message sent for each side had a joint with a pose.
     this.tracked = { right: false, left: false };
     // Messages handed to the link, per side.
@@ -81,8 +86,16 @@ class HandSender {
     this.values = new Float32Array(JOINT_VALUES);
   }
 
+  // Sends the hands as user `user`'s from now on (null: sends none), once the hands sent as
+  // another's are sent untracked.
+  setUser(user) {
+    if (user === this.user) return;
+    this.lost();
+    this.user = user;
+  }
+
   send(frame, referenceSpace) {
-    if (!referenceSpace) return;
+    if (!referenceSpace || this.user === null) return;
     // The world group places vas in the reference space; its inverse takes the joints back.
     this.world.updateMatrixWorld();
     this.toVas.copy(this.world.matrixWorld).invert();
@@ -95,14 +108,16 @@ class HandSender {
       this.post(handedness, this.read(frame, source.hand, referenceSpace, SIDES[handedness]));
     }
     for (const handedness of Object.keys(SIDES)) {
-      if (!seen[handedness] && this.tracked[handedness]) this.post(handedness, untracked(handedness));
+      if (!seen[handedness] && this.tracked[handedness]) {
+        this.post(handedness, untracked(this.user, handedness));
+      }
     }
   }
 
   // Every side last sent as tracked, sent as untracked (the session ends).
   lost() {
     for (const handedness of Object.keys(SIDES)) {
-      if (this.tracked[handedness]) this.post(handedness, untracked(handedness));
+      if (this.tracked[handedness]) this.post(handedness, untracked(this.user, handedness));
     }
   }
 
@@ -133,12 +148,12 @@ class HandSender {
       values.forEach((value, offset) => data.setFloat32(at + 4 * offset, value, true));
       valid |= 1 << index;
     });
-    writeHeader(data, side, valid);
+    writeHeader(data, this.user, side, valid);
     return buffer;
   }
 
   post(handedness, buffer) {
-    const valid = new DataView(buffer).getUint32(8, true);
+    const valid = new DataView(buffer).getUint32(12, true);
     if (this.connection.sendHandJoints(buffer)) {
       this.tracked[handedness] = valid !== 0;
       this.posted[handedness] += 1;
@@ -146,15 +161,16 @@ class HandSender {
   }
 }
 
-// A message saying that the hand of `handedness` is not tracked: no joint has a pose.
-function untracked(handedness) {
+// A message saying that `user`'s hand of `handedness` is not tracked: no joint has a pose.
+function untracked(user, handedness) {
   const buffer = new ArrayBuffer(MESSAGE_BYTES);
-  writeHeader(new DataView(buffer), SIDES[handedness], 0);
+  writeHeader(new DataView(buffer), user, SIDES[handedness], 0);
   return buffer;
 }
 
-function writeHeader(data, side, valid) {
+function writeHeader(data, user, side, valid) {
   data.setUint32(0, HAND_KIND, true);
-  data.setUint32(4, side, true);
-  data.setUint32(8, valid >>> 0, true);
+  data.setUint32(4, user, true);
+  data.setUint32(8, side, true);
+  data.setUint32(12, valid >>> 0, true);
 }

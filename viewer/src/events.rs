@@ -7,8 +7,12 @@ use vas_client::{EventKind, HAND_PART_ID, SceneWords, SimEvent};
 
 /// The event in words, naming the hand where it is about one that the words leave unnamed (a
 /// page may show two): "right hand: grasp peg (power) at sample 44". The rest of the sentence
-/// is `vas-client`'s, so that its sample number reads as `vas-client replay` prints it.
+/// is `vas-client`'s, so that its sample number reads as `vas-client replay` prints it; in a
+/// scene of several users it names the user's hand itself ("anna's right hand grasps ...").
 fn text(event: &SimEvent, words: &SceneWords) -> String {
+    if words.names_users() {
+        return words.event(event);
+    }
     let about_a_hand = match EventKind::try_from(event.kind) {
         Ok(EventKind::Grasp | EventKind::Release) => true,
         Ok(EventKind::ContactBegin | EventKind::ContactEnd) => {
@@ -37,6 +41,7 @@ pub fn message(scene_version: u64, event: &SimEvent, words: &SceneWords) -> Mess
         "text": text(event, words),
         "frame": event.frame,
         "hand": hand_name(event.hand),
+        "user": words.user(event.user),
         "part": event.part,
         "other": event.other,
         "point": contact.then_some(event.point),
@@ -70,6 +75,8 @@ mod tests {
             normal: [0.0; 3],
             other_point: [0.0; 3],
             distance: 0.0,
+            user: 0,
+            reserved: 0,
         }
     }
 

@@ -7,6 +7,7 @@
 //!
 //! ```text
 //! u32 kind  = 1 (KIND)
+//! u32 user  : the scene's user the hand is (an index into the scene message's `users`)
 //! u32 side  = 0 right, 1 left (HandSide codes)
 //! u32 valid : bit i set when WebXR joint i has a pose this frame; bits 25 and up are 0
 //! f32 joints[25][8]: position x, y, z (metres), orientation x, y, z, w, radius (metres)
@@ -15,11 +16,12 @@
 //! The joints are WebXR's 25 in WebXR order (wrist first), each in vas's world frame (metres, z
 //! up): the page takes them out of the session's reference space through the inverse of the
 //! transform it draws the vas world with. A joint whose bit is clear is sent as zeros and read
-//! as unknown; a hand with no bit set is an untracked hand.
+//! as unknown; a hand with no bit set is an untracked hand. The page picks the user (its
+//! `?user=NAME`, else the scene's first); the server refuses and counts a user its scene lacks.
 
 use vas_client::protocol::{
     JOINT_ORIENTATION_TRACKED, JOINT_ORIENTATION_VALID, JOINT_POSITION_TRACKED,
-    JOINT_POSITION_VALID,
+    JOINT_POSITION_VALID, MAX_USERS,
 };
 use vas_client::{HAND_JOINT_COUNT, HandJointsSample, HandSide, JointLocation};
 
@@ -32,8 +34,8 @@ pub const KIND: u32 = 1;
 /// Values per joint: position (3), orientation (4), radius.
 const JOINT_VALUES: usize = 8;
 
-/// Bytes before the joints: kind, side, valid bits.
-const HEADER_BYTES: usize = 12;
+/// Bytes before the joints: kind, user, side, valid bits.
+const HEADER_BYTES: usize = 16;
 
 /// A hand-joints message's exact length in bytes.
 pub const MESSAGE_BYTES: usize = HEADER_BYTES + 4 * JOINT_VALUES * WEBXR_JOINT_COUNT;
@@ -54,6 +56,8 @@ pub enum HandJointsError {
     Length,
     /// The first word is not [`KIND`].
     Kind,
+    /// The user is beyond the most users a scene has.
+    User,
     /// The side is neither right (0) nor left (1).
     Side,
     /// A valid bit names no WebXR joint.
@@ -68,6 +72,7 @@ impl HandJointsError {
         match self {
             Self::Length => "hand joints: not 25 joints of 8 values",
             Self::Kind => "hand joints: not a hand-joints message",
+            Self::User => "hand joints: no scene has that user",
             Self::Side => "hand joints: side is neither right nor left",
             Self::ValidBits => "hand joints: a valid bit names no joint",
             Self::NonFinite => "hand joints: a value is not finite",
@@ -89,6 +94,8 @@ pub struct Joint {
 /// One hand in one XR frame, as the page sent it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HandJoints {
+    /// Whose hand: the scene's user index.
+    pub user: u32,
     /// Which hand.
     pub side: HandSide,
     /// WebXR's 25 joints in WebXR order; `None` where the frame had no pose for the joint.
@@ -108,8 +115,12 @@ impl HandJoints {
         if word(0) != KIND {
             return Err(HandJointsError::Kind);
         }
-        let side = HandSide::try_from(word(1)).map_err(|_| HandJointsError::Side)?;
-        let valid = word(2);
+        let user = word(1);
+        if user as usize >= MAX_USERS {
+            return Err(HandJointsError::User);
+        }
+        let side = HandSide::try_from(word(2)).map_err(|_| HandJointsError::Side)?;
+        let valid = word(3);
         if valid & !JOINT_BITS != 0 {
             return Err(HandJointsError::ValidBits);
         }
@@ -130,7 +141,7 @@ impl HandJoints {
                 radius: values[7],
             });
         }
-        Ok(Self { side, joints })
+        Ok(Self { user, side, joints })
     }
 
     /// Whether the frame had a pose for any joint (a hand with none is not tracked).
@@ -169,18 +180,19 @@ impl HandJoints {
             timestamp_ns,
             joints: locations,
             side: self.side as u32,
+            user: self.user,
         }
     }
 }
 
-/// A message of `joints` for `side` (`None`: no pose), as the page writes it; for tests and
-/// tools.
-pub fn encode(side: u32, joints: &[Option<Joint>; WEBXR_JOINT_COUNT]) -> Vec<u8> {
+/// A message of `joints` for `user`'s hand of `side` (`None`: no pose), as the page writes it;
+/// for tests and tools.
+pub fn encode(user: u32, side: u32, joints: &[Option<Joint>; WEBXR_JOINT_COUNT]) -> Vec<u8> {
     let mut bytes = Vec::with_capacity(MESSAGE_BYTES);
     let valid = (joints.iter().enumerate())
         .filter(|(_, joint)| joint.is_some())
         .fold(0u32, |bits, (index, _)| bits | 1 << index);
-    for word in [KIND, side, valid] {
+    for word in [KIND, user, side, valid] {
         bytes.extend_from_slice(&word.to_le_bytes());
     }
     for joint in joints {
@@ -196,16 +208,16 @@ pub fn encode(side: u32, joints: &[Option<Joint>; WEBXR_JOINT_COUNT]) -> Vec<u8>
     bytes
 }
 
-/// Numbers each side's samples from 1, as the server expects of one sender.
+/// Numbers each hand's samples (by user and side) from 1, as the server expects of one sender.
 #[derive(Debug, Default)]
 pub struct Sequence {
-    last: [u64; 2],
+    last: [[u64; 2]; MAX_USERS],
 }
 
 impl Sequence {
-    /// The next number for `side`.
-    pub fn next(&mut self, side: HandSide) -> u64 {
-        let last = &mut self.last[side as usize];
+    /// The next number for the hand of `joints`.
+    pub fn next(&mut self, joints: &HandJoints) -> u64 {
+        let last = &mut self.last[joints.user as usize][joints.side as usize];
         *last += 1;
         *last
     }
@@ -230,17 +242,17 @@ mod tests {
 
     #[test]
     fn a_hand_reads_back_and_maps_to_openxr_joints_with_the_palm_unknown() {
-        let bytes = encode(HandSide::Left as u32, &hand());
+        let bytes = encode(2, HandSide::Left as u32, &hand());
         assert_eq!(bytes.len(), MESSAGE_BYTES);
         assert!(is_hand_joints(&bytes));
         let read = HandJoints::parse(&bytes).expect("a well-formed message");
-        assert_eq!(read.side, HandSide::Left);
+        assert_eq!((read.user, read.side), (2, HandSide::Left));
         assert_eq!(read.joints, hand());
         assert!(read.any_valid());
 
         let sample = read.sample(7, 123);
         assert_eq!((sample.seq, sample.timestamp_ns), (7, 123));
-        assert_eq!(sample.side, HandSide::Left as u32);
+        assert_eq!((sample.user, sample.side), (2, HandSide::Left as u32));
         assert_eq!(sample.joints[0].flags, 0, "WebXR has no palm");
         assert_eq!(sample.joints[0].rotation, [0.0, 0.0, 0.0, 1.0]);
         // OpenXR joint i + 1 is WebXR joint i.
@@ -258,7 +270,7 @@ mod tests {
 
     #[test]
     fn a_hand_without_poses_is_sent_untracked_and_a_missing_joint_unknown() {
-        let untracked = HandJoints::parse(&encode(0, &[None; WEBXR_JOINT_COUNT])).unwrap();
+        let untracked = HandJoints::parse(&encode(0, 0, &[None; WEBXR_JOINT_COUNT])).unwrap();
         assert_eq!(untracked.side, HandSide::Right);
         assert!(!untracked.any_valid());
         let sample = untracked.sample(1, 1);
@@ -267,14 +279,16 @@ mod tests {
 
         let mut joints = hand();
         joints[3] = None;
-        let sample = HandJoints::parse(&encode(0, &joints)).unwrap().sample(2, 2);
+        let sample = HandJoints::parse(&encode(0, 0, &joints))
+            .unwrap()
+            .sample(2, 2);
         assert_eq!(sample.joints[4].flags, 0);
         assert_eq!(sample.joints[5].flags, 0b1111);
     }
 
     #[test]
     fn malformed_messages_are_rejected_with_their_reason() {
-        let good = encode(1, &hand());
+        let good = encode(0, 1, &hand());
         // Wrong joint counts: one joint short, one too many, a huge array, nothing.
         let mut short = good.clone();
         short.truncate(MESSAGE_BYTES - 4 * JOINT_VALUES);
@@ -289,18 +303,21 @@ mod tests {
                 bytes.len()
             );
         }
-        // A bad side, a bad kind, a bit for a 26th joint.
+        // A user beyond any scene's, a bad side, a bad kind, a bit for a 26th joint.
+        let mut bad_user = good.clone();
+        bad_user[4..8].copy_from_slice(&(MAX_USERS as u32).to_le_bytes());
+        assert_eq!(HandJoints::parse(&bad_user), Err(HandJointsError::User));
         let mut bad_side = good.clone();
-        bad_side[4..8].copy_from_slice(&2u32.to_le_bytes());
+        bad_side[8..12].copy_from_slice(&2u32.to_le_bytes());
         assert_eq!(HandJoints::parse(&bad_side), Err(HandJointsError::Side));
-        bad_side[4..8].copy_from_slice(&u32::MAX.to_le_bytes());
+        bad_side[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
         assert_eq!(HandJoints::parse(&bad_side), Err(HandJointsError::Side));
         let mut bad_kind = good.clone();
         bad_kind[0..4].copy_from_slice(&2u32.to_le_bytes());
         assert_eq!(HandJoints::parse(&bad_kind), Err(HandJointsError::Kind));
         assert!(!is_hand_joints(&bad_kind));
         let mut extra_bit = good.clone();
-        extra_bit[8..12].copy_from_slice(&(JOINT_BITS | 1 << 25).to_le_bytes());
+        extra_bit[12..16].copy_from_slice(&(JOINT_BITS | 1 << 25).to_le_bytes());
         assert_eq!(
             HandJoints::parse(&extra_bit),
             Err(HandJointsError::ValidBits)
@@ -318,24 +335,30 @@ mod tests {
                 _ => joint.radius = bad,
             }
             assert_eq!(
-                HandJoints::parse(&encode(1, &joints)),
+                HandJoints::parse(&encode(0, 1, &joints)),
                 Err(HandJointsError::NonFinite)
             );
         }
         // A joint without a pose may hold anything: it is not read.
-        let mut unknown_nan = encode(1, &hand());
-        unknown_nan[8..12].copy_from_slice(&(JOINT_BITS & !1).to_le_bytes());
+        let mut unknown_nan = encode(0, 1, &hand());
+        unknown_nan[12..16].copy_from_slice(&(JOINT_BITS & !1).to_le_bytes());
         unknown_nan[HEADER_BYTES..HEADER_BYTES + 4].copy_from_slice(&f32::NAN.to_le_bytes());
         let read = HandJoints::parse(&unknown_nan).expect("the NaN is in no joint with a pose");
         assert_eq!(read.joints[0], None);
     }
 
     #[test]
-    fn each_side_is_numbered_from_one() {
+    fn each_hand_is_numbered_from_one() {
+        let hand = |user, side| HandJoints {
+            user,
+            side,
+            joints: [None; WEBXR_JOINT_COUNT],
+        };
         let mut sequence = Sequence::default();
-        assert_eq!(sequence.next(HandSide::Right), 1);
-        assert_eq!(sequence.next(HandSide::Right), 2);
-        assert_eq!(sequence.next(HandSide::Left), 1);
-        assert_eq!(sequence.next(HandSide::Right), 3);
+        assert_eq!(sequence.next(&hand(0, HandSide::Right)), 1);
+        assert_eq!(sequence.next(&hand(0, HandSide::Right)), 2);
+        assert_eq!(sequence.next(&hand(0, HandSide::Left)), 1);
+        assert_eq!(sequence.next(&hand(1, HandSide::Right)), 1);
+        assert_eq!(sequence.next(&hand(0, HandSide::Right)), 3);
     }
 }

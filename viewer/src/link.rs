@@ -189,7 +189,7 @@ impl Link<'_> {
                 Stats::count(&self.hub.stats.hand_joints_dropped);
                 continue;
             }
-            let sample = joints.sample(self.sequence.next(joints.side), arrived_ns);
+            let sample = joints.sample(self.sequence.next(&joints), arrived_ns);
             client.send_hand_joints(&sample)?;
             Stats::count(&self.hub.stats.hand_joints_published);
         }
@@ -360,6 +360,7 @@ mod tests {
             stats: InputStats::default(),
             up: [0.0, 0.0, 1.0],
             metres_per_unit: 1.0,
+            users: vec!["user".into()],
             hands: Vec::new(),
             scenes_offered: 2,
             generation: 1,

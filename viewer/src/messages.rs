@@ -72,6 +72,8 @@ struct PartsView<'a> {
 struct HandView<'a> {
     /// The side's code (right 0, left 1), as the scene's hands name it.
     hand: u32,
+    /// The user's index, as the scene's hands name it.
+    user: u32,
     frame: u64,
     /// The answered tracker sample's timestamp (ns since the Unix epoch), for the latency.
     tracker_ns: u64,
@@ -184,6 +186,7 @@ fn part_view(part: &PartState) -> PartView<'_> {
 fn hand_view(hand: &HandFrame) -> HandView<'_> {
     HandView {
         hand: hand.hand,
+        user: hand.user,
         frame: hand.frame,
         tracker_ns: hand.tracker.timestamp_ns,
         published_ns: hand.timestamp_ns,

@@ -279,7 +279,7 @@ mod tests {
 
     #[test]
     fn binary_hand_joints_are_taken_and_other_binary_refused() {
-        let untracked = encode(1, &[None; WEBXR_JOINT_COUNT]);
+        let untracked = encode(0, 1, &[None; WEBXR_JOINT_COUNT]);
         match judge(&Message::Binary(untracked.clone().into())) {
             Judged::HandJoints(joints) => assert!(!joints.any_valid()),
             other => panic!("{other:?}"),
@@ -291,7 +291,7 @@ mod tests {
             Judged::Refused(Refusal::HandJoints(HandJointsError::Length))
         );
         let mut no_side = untracked;
-        no_side[4] = 9;
+        no_side[8] = 9;
         assert_eq!(
             judge(&Message::Binary(no_side.into())),
             Judged::Refused(Refusal::HandJoints(HandJointsError::Side))
@@ -301,7 +301,7 @@ mod tests {
             Judged::Refused(Refusal::Malformed)
         );
         // The same bytes as text are no command.
-        let text = String::from_utf8_lossy(&encode(0, &[None; WEBXR_JOINT_COUNT])).into_owned();
+        let text = String::from_utf8_lossy(&encode(0, 0, &[None; WEBXR_JOINT_COUNT])).into_owned();
         assert_eq!(
             judge(&Message::Text(text.into())),
             Judged::Refused(Refusal::Malformed)

@@ -31,13 +31,14 @@ pub fn messages(version: u64, info: &SceneInfo, geometry: &SceneGeometry) -> Sce
             let segments: Vec<usize> = hand.segments.iter().map(&mut add).collect();
             json!({
                 "hand": hand.side as u32, "side": hand.side.name(), "model": hand.model,
-                "segments": segments,
+                "user": hand.user, "user_name": info.user_name(hand.user), "segments": segments,
             })
         })
         .collect();
     let description = json!({
         "type": "scene", "version": version, "generation": geometry.generation,
-        "name": info.name, "parts": parts, "hands": hands, "meshes": meshes.len(),
+        "name": info.name, "parts": parts, "users": info.users, "hands": hands,
+        "meshes": meshes.len(),
     });
     SceneMessages {
         description: Some(Message::Text(description.to_string().into())),

@@ -137,6 +137,8 @@ pub fn along(
             seq,
             timestamp_ns: wall_clock_ns(),
             flex: key.input().flex,
+            user: 0,
+            side: 0,
         })?;
     }
     drive.seconds = start.elapsed().as_secs_f64();
@@ -152,5 +154,8 @@ pub fn tracker(key: &Keyframe, seq: u64) -> TrackerSample {
         hand: input.tracker.into(),
         cart: input.cart.into(),
         sensor_id: 0,
+        user: 0,
+        side: 0,
+        reserved: 0,
     }
 }

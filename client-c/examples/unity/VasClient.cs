@@ -45,6 +45,8 @@ namespace Vas
     /// <summary>One hand's segment meshes, in segment order.</summary>
     public sealed class HandMeshes
     {
+        /// <summary>Whose hand: an index into the scene's users.</summary>
+        public uint User;
         public HandSide Side;
         public string Model;
         public MeshData[] Segments;
@@ -206,6 +208,7 @@ namespace Vas
                 Parts = Array.ConvertAll(Text.Structs<NativeMesh>(geometry.Parts, geometry.PartCount), CopyMesh),
                 Hands = Array.ConvertAll(hands, hand => new HandMeshes
                 {
+                    User = hand.User,
                     Side = (HandSide)hand.Side,
                     Model = Text.Read(hand.Model),
                     Segments = Array.ConvertAll(Text.Structs<NativeMesh>(hand.Segments, hand.SegmentCount), CopyMesh),

@@ -147,7 +147,7 @@ namespace Vas
         public uint Hand;
         public uint Tracked;
         public uint SegmentPoseCount;
-        public uint Reserved;
+        public uint User;
         [MarshalAs(UnmanagedType.ByValArray, SizeConst = SegmentCount)]
         public WirePose[] Segments;
     }
@@ -159,7 +159,7 @@ namespace Vas
         public ulong Frame;
         public InputStamp Tracker, Glove, Joints;
         public ulong TimestampNs;
-        public uint Kind, GraspType, Part, Other, Hand, Segment;
+        public uint Kind, GraspType, Part, Other, Hand, Segment, User, Reserved;
         public Vec3 Point, Normal, OtherPoint;
         public double Distance;
     }
@@ -173,6 +173,7 @@ namespace Vas
         public ulong TimestampNs;
         public Vec3 Force, Torque;
         public uint Hand;
+        public uint User;
     }
 
     /// <summary>A 6-DOF tracker sample (VasTrackerSample).</summary>
@@ -184,6 +185,9 @@ namespace Vas
         public WirePose Hand;
         public WirePose Cart;
         public uint SensorId;
+        public uint User;
+        public HandSide Side;
+        public uint Reserved;
     }
 
     /// <summary>A data glove's 22 flex values in radians (VasGloveSample).</summary>
@@ -194,6 +198,8 @@ namespace Vas
         public ulong TimestampNs;
         [MarshalAs(UnmanagedType.ByValArray, SizeConst = HandFrame.FlexCount)]
         public float[] Flex;
+        public uint User;
+        public HandSide Side;
     }
 
     /// <summary>One tracked joint of a hand (VasJointLocation).</summary>
@@ -217,6 +223,7 @@ namespace Vas
         [MarshalAs(UnmanagedType.ByValArray, SizeConst = JointCount)]
         public JointLocation[] Joints;
         public uint Side;
+        public uint User;
     }
 
     /// <summary>One mesh of the geometry as the library holds it (VasMesh).</summary>
@@ -236,6 +243,7 @@ namespace Vas
     public struct NativeHandGeometry
     {
         public uint Side;
+        public uint User;
         public IntPtr Model;
         public IntPtr Segments;
         public UIntPtr SegmentCount;
@@ -263,6 +271,7 @@ namespace Vas
         public ulong JointsRejectedQuaternion, JointsRejectedOutOfRange, JointsRejectedAnatomy;
         public ulong JointsRejectedNoSuchHand;
         public ulong RejectedAhead;
+        public ulong RejectedNoSuchUser, RejectedNoSuchHand;
     }
 
     /// <summary>One part of the scene as the library holds it (VasPartInfo).</summary>
@@ -286,6 +295,7 @@ namespace Vas
     public struct NativeHandInfo
     {
         public uint Side;
+        public uint User;
         public IntPtr Model;
     }
 
@@ -305,6 +315,8 @@ namespace Vas
         public uint ScenesOffered;
         public uint Metaphor;
         public InputStats Stats;
+        public IntPtr Users;
+        public UIntPtr UserCount;
     }
 
     /// <summary>The library's functions. Every pointer's lifetime is the header's.</summary>
@@ -343,8 +355,8 @@ namespace Vas
             out UIntPtr count);
 
         [DllImport(Library)]
-        public static extern Status vas_client_latest_hand_of(IntPtr client, HandSide side,
-            out HandFrame hand);
+        public static extern Status vas_client_latest_hand_of(IntPtr client, uint user,
+            HandSide side, out HandFrame hand);
 
         [DllImport(Library)]
         public static extern Status vas_client_latest_force(IntPtr client, out ForceFrame force);

@@ -21,7 +21,9 @@ namespace Vas
         private ulong? generation;
         private readonly List<GameObject> drawn = new List<GameObject>();
         private readonly List<Transform> parts = new List<Transform>();
-        private readonly Dictionary<uint, Transform[]> handSegments = new Dictionary<uint, Transform[]>();
+        // Keyed by user and side: every user's hands are drawn.
+        private readonly Dictionary<(uint, uint), Transform[]> handSegments =
+            new Dictionary<(uint, uint), Transform[]>();
 
         private void Start()
         {
@@ -59,7 +61,7 @@ namespace Vas
             foreach (HandFrame hand in client.LatestHands())
             {
                 Transform[] segments;
-                if (!handSegments.TryGetValue(hand.Hand, out segments))
+                if (!handSegments.TryGetValue((hand.User, hand.Hand), out segments))
                 {
                     continue;
                 }
@@ -98,7 +100,8 @@ namespace Vas
             }
             foreach (HandMeshes hand in geometry.Hands)
             {
-                handSegments[(uint)hand.Side] = System.Array.ConvertAll(hand.Segments, mesh => Build(mesh, HandMaterial));
+                handSegments[(hand.User, (uint)hand.Side)] =
+                    System.Array.ConvertAll(hand.Segments, mesh => Build(mesh, HandMaterial));
             }
         }
 

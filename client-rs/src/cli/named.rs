@@ -5,9 +5,10 @@ use vas_client::words::{event_name, grasp_name, hand_name};
 use vas_client::{Frame, HandSegment, SceneWords};
 
 /// `frame` as a JSON object (`{"event":{...}}`, `{"hand":{...}}`...), its codes kept and their
-/// names added: events get `kind_name`, `grasp_name`, `part_name`, `other_name`, `hand_name`
-/// and `text`; hand frames `grasp_name`, `hand_name` and `touching_names`; parts frames each
-/// part's `name`; clearance frames each pair's `part_name`, `other_name` and `text`.
+/// names added: events get `kind_name`, `grasp_name`, `part_name`, `other_name`, `hand_name`,
+/// `user_name` and `text`; hand frames `grasp_name`, `hand_name`, `user_name` and
+/// `touching_names`; force frames `hand_name` and `user_name`; parts frames each part's `name`;
+/// clearance frames each pair's `part_name`, `other_name` and `text`.
 pub fn named(frame: &Frame, words: &SceneWords) -> serde_json::Result<Value> {
     let mut value = serde_json::to_value(frame)?;
     let Some((_, inner)) = value
@@ -26,11 +27,13 @@ pub fn named(frame: &Frame, words: &SceneWords) -> serde_json::Result<Value> {
             "part_name": words.part(event.part),
             "other_name": words.part(event.other),
             "hand_name": hand_name(event.hand),
+            "user_name": words.user(event.user),
             "text": words.event(event),
         }),
         Frame::Hand(hand) => json!({
             "grasp_name": grasp_name(hand.grasp_type),
             "hand_name": hand_name(hand.hand),
+            "user_name": words.user(hand.user),
             "touching_names": HandSegment::ALL
                 .iter()
                 .filter(|segment| hand.touching & segment.bit() != 0)
@@ -59,7 +62,11 @@ pub fn named(frame: &Frame, words: &SceneWords) -> serde_json::Result<Value> {
             }
             return Ok(value);
         }
-        Frame::Force(_) | Frame::Geometry(_) => return Ok(value),
+        Frame::Force(force) => json!({
+            "hand_name": hand_name(force.hand),
+            "user_name": words.user(force.user),
+        }),
+        Frame::Geometry(_) => return Ok(value),
     };
     if let Value::Object(names) = names {
         fields.extend(names);

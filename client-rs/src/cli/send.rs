@@ -8,7 +8,8 @@ use anyhow::{Context, bail};
 use vas_client::recording::InputSample;
 use vas_client::{Frame, Roles};
 use vas_protocol::{
-    FLEX_COUNT, GloveSample, HandJointsSample, InputStats, TrackerSample, WirePose, wall_clock_ns,
+    FLEX_COUNT, GloveSample, HandJointsSample, HandSide, InputStats, TrackerSample, WirePose,
+    wall_clock_ns,
 };
 
 /// Arguments of `vas-client send-tracker`.
@@ -53,6 +54,8 @@ pub struct TrackerArgs {
     #[arg(long, default_value_t = 0)]
     sensor: u32,
     #[command(flatten)]
+    hand: HandArgs,
+    #[command(flatten)]
     answer: AnswerArgs,
 }
 
@@ -71,6 +74,8 @@ pub struct GloveArgs {
     #[arg(long, default_value_t = 1)]
     seq: u64,
     #[command(flatten)]
+    hand: HandArgs,
+    #[command(flatten)]
     answer: AnswerArgs,
 }
 
@@ -85,7 +90,40 @@ pub struct HandJointsArgs {
     #[arg(long, default_value_t = 1)]
     seq: u64,
     #[command(flatten)]
+    user: UserArgs,
+    #[command(flatten)]
     answer: AnswerArgs,
+}
+
+/// Whose hand a sample drives.
+#[derive(Debug, clap::Args)]
+struct UserArgs {
+    /// The user whose hand the sample drives, by name, as the scene info lists the users
+    /// (`vas-client info`); default the scene's first user.
+    #[arg(long)]
+    user: Option<String>,
+}
+
+/// Which hand a tracker or glove sample drives.
+#[derive(Debug, clap::Args)]
+struct HandArgs {
+    #[command(flatten)]
+    user: UserArgs,
+    /// Which of the user's hands: right or left.
+    #[arg(long, default_value = "right", value_parser = ["right", "left"])]
+    side: String,
+}
+
+impl HandArgs {
+    /// The side's code.
+    fn side_code(&self) -> u32 {
+        let side = if self.side == "left" {
+            HandSide::Left
+        } else {
+            HandSide::Right
+        };
+        side as u32
+    }
 }
 
 /// Waiting for the hand frame that answers the sample.
@@ -108,8 +146,16 @@ pub fn tracker(prefix: Option<&str>, args: &TrackerArgs) -> anyhow::Result<()> {
         hand: pose(&args.position, &args.rotation).context("hand pose")?,
         cart: pose(&args.cart_position, &args.cart_rotation).context("cart pose")?,
         sensor_id: args.sensor,
+        user: 0,
+        side: args.hand.side_code(),
+        reserved: 0,
     };
-    send(prefix, &InputSample::Tracker(sample), &args.answer)
+    send(
+        prefix,
+        InputSample::Tracker(sample),
+        &args.hand.user,
+        &args.answer,
+    )
 }
 
 /// Sends one glove sample, stamped now.
@@ -122,8 +168,15 @@ pub fn glove(prefix: Option<&str>, args: &GloveArgs) -> anyhow::Result<()> {
         seq: args.seq,
         timestamp_ns: wall_clock_ns(),
         flex,
+        user: 0,
+        side: args.hand.side_code(),
     };
-    send(prefix, &InputSample::Glove(sample), &args.answer)
+    send(
+        prefix,
+        InputSample::Glove(sample),
+        &args.hand.user,
+        &args.answer,
+    )
 }
 
 /// Sends one hand-joints sample read from JSON, numbered `--seq` and stamped now.
@@ -145,7 +198,7 @@ pub fn hand_joints(prefix: Option<&str>, args: &HandJointsArgs) -> anyhow::Resul
         ..read
     })
     .with_timestamp(wall_clock_ns());
-    send(prefix, &sample, &args.answer)
+    send(prefix, sample, &args.user, &args.answer)
 }
 
 /// Sends `sample` and waits until the server has taken it in; with `--answer`, prints the hand
@@ -158,7 +211,12 @@ pub fn hand_joints(prefix: Option<&str>, args: &HandJointsArgs) -> anyhow::Resul
 /// wire, where an event per rejection would let a broken sender flood every reader's events; a
 /// sample rejected for another sender between the two reads would be taken for this one's,
 /// which a script sending one sample at a time does not meet.
-fn send(prefix: Option<&str>, sample: &InputSample, args: &AnswerArgs) -> anyhow::Result<()> {
+fn send(
+    prefix: Option<&str>,
+    sample: InputSample,
+    user: &UserArgs,
+    args: &AnswerArgs,
+) -> anyhow::Result<()> {
     // Only a sender that waits for its answer reads frames.
     let roles = if args.answer {
         Roles::INPUT | Roles::RENDER
@@ -166,6 +224,20 @@ fn send(prefix: Option<&str>, sample: &InputSample, args: &AnswerArgs) -> anyhow
         Roles::INPUT
     };
     let mut client = super::connect(prefix, roles)?;
+    let sample = match &user.user {
+        None => sample,
+        Some(name) => {
+            let scene = client.scene_info(super::CONTROL_TIMEOUT)?;
+            let index = scene.user_index(name).with_context(|| {
+                format!(
+                    "the scene has no user {name:?} (its users: {})",
+                    scene.users.join(", ")
+                )
+            })?;
+            sample.with_user(index)
+        }
+    };
+    let sample = &sample;
     if !args.answer {
         client.send_input(sample)?;
         return Ok(client.flush_inputs(super::CONTROL_TIMEOUT)?);

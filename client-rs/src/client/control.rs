@@ -31,7 +31,10 @@ pub struct SceneInfo {
     pub up: [f64; 3],
     /// Metres per unit of every length (1: metres).
     pub metres_per_unit: f64,
-    /// The scene's hands: side and model name.
+    /// The scene's users' names, by the index that samples and frames name them with: those of
+    /// its `[[users]]`, or one (`user`) for a scene that names its hands without users.
+    pub users: Vec<String>,
+    /// The scene's hands: user, side and model name, grouped by user.
     pub hands: Vec<HandInfo>,
     /// How many scenes the server may load by name ([`Client::scene_names`]).
     pub scenes_offered: u32,
@@ -43,9 +46,30 @@ pub struct SceneInfo {
     pub metaphor: SlidingMetaphor,
 }
 
+impl SceneInfo {
+    /// The name of user `user`; "user N" for an index the scene does not have (a frame of
+    /// another scene).
+    pub fn user_name(&self, user: u32) -> String {
+        match self.users.get(user as usize) {
+            Some(name) => name.clone(),
+            None => format!("user {user}"),
+        }
+    }
+
+    /// The index of the user called `name`, if the scene has one.
+    pub fn user_index(&self, name: &str) -> Option<u32> {
+        (0u32..)
+            .zip(&self.users)
+            .find(|(_, user)| *user == name)
+            .map(|(index, _)| index)
+    }
+}
+
 /// A hand of the scene.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HandInfo {
+    /// Whose hand: an index into [`SceneInfo::users`].
+    pub user: u32,
     /// Which hand.
     pub side: HandSide,
     /// The hand model's name.
@@ -252,6 +276,7 @@ fn scene_info_of(
         .take(summary.hand_count as usize)
         .map(|hand| {
             Ok(HandInfo {
+                user: hand.user,
                 side: HandSide::try_from(hand.side)?,
                 model: hand.model.as_str()?.to_owned(),
             })
@@ -264,6 +289,7 @@ fn scene_info_of(
         stats: summary.stats,
         up: summary.up,
         metres_per_unit: summary.metres_per_unit,
+        users: summary.user_names().map(str::to_owned).collect(),
         hands,
         scenes_offered: summary.listed_count,
         generation: summary.generation,

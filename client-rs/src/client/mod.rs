@@ -176,62 +176,58 @@ impl Client {
 
     /// Receives every queued frame, keeps the newest of each kind for [`Client::geometry`],
     /// [`Client::latest_parts`] and [`Client::latest_hands`], and returns them all in arrival
-    /// order per kind: geometry, parts frames, events, force frames, clearance frames, then hand frames (the
-    /// server publishes a frame's hand last, so the parts and events of a hand frame's own frame
-    /// come with it or before it, and a new scene's geometry before its frames). It first empties
-    /// the wake-up listeners, so that their descriptors are readable again only for what the
-    /// server publishes after it.
+    /// order per kind: geometry, parts frames, events, force frames, clearance frames, then hand
+    /// frames. The server publishes a frame's hands last; they are taken first here (and the
+    /// rest after them), so that whatever the server sent before a hand frame taken, its own
+    /// frame's parts and events included, comes in the same call, however the two processes
+    /// interleave. It first empties the wake-up listeners, so that their descriptors are
+    /// readable again only for what the server publishes after it.
     pub fn receive(&mut self) -> Result<Vec<Frame>, ClientError> {
         let outputs = self.outputs("receive frames")?;
         // Emptied first, so that a notification of a sample published meanwhile stays.
         empty_listeners(&outputs.listeners())?;
-        let mut frames = Vec::new();
-        while let Some(sample) = outputs
-            .geometry
-            .receive()
-            .map_err(|error| ClientError::ipc("receive the geometry", error))?
-        {
-            let geometry = SceneGeometry::decode(sample.user_header(), sample.payload())?;
-            frames.push(Frame::Geometry(Arc::new(geometry)));
-        }
-        while let Some(sample) = outputs
-            .parts
-            .receive()
-            .map_err(|error| ClientError::ipc("receive a parts frame", error))?
-        {
-            frames.push(Frame::Parts(PartsFrame {
-                header: *sample.user_header(),
-                parts: sample.payload().to_vec(),
-            }));
-        }
-        while let Some(sample) = outputs
-            .events
-            .receive()
-            .map_err(|error| ClientError::ipc("receive an event", error))?
-        {
-            frames.push(Frame::Event(*sample.payload()));
-        }
-        while let Some(sample) = outputs
-            .force
-            .receive()
-            .map_err(|error| ClientError::ipc("receive a force frame", error))?
-        {
-            frames.push(Frame::Force(*sample.payload()));
-        }
-        while let Some(sample) = outputs
-            .clearance
-            .receive()
-            .map_err(|error| ClientError::ipc("receive a clearance frame", error))?
-        {
-            frames.push(Frame::Clearance(Box::new(*sample.payload())));
-        }
-        while let Some(sample) = outputs
-            .hand
-            .receive()
-            .map_err(|error| ClientError::ipc("receive a hand frame", error))?
-        {
-            frames.push(Frame::Hand(*sample.payload()));
-        }
+        let geometry = drain(
+            || outputs.geometry.receive(),
+            "receive the geometry",
+            |sample| {
+                let geometry = SceneGeometry::decode(sample.user_header(), sample.payload())?;
+                Ok(Frame::Geometry(Arc::new(geometry)))
+            },
+        )?;
+        let hands = drain(
+            || outputs.hand.receive(),
+            "receive a hand frame",
+            |sample| Ok(Frame::Hand(*sample.payload())),
+        )?;
+        let clearance = drain(
+            || outputs.clearance.receive(),
+            "receive a clearance frame",
+            |sample| Ok(Frame::Clearance(Box::new(*sample.payload()))),
+        )?;
+        let forces = drain(
+            || outputs.force.receive(),
+            "receive a force frame",
+            |sample| Ok(Frame::Force(*sample.payload())),
+        )?;
+        let events = drain(
+            || outputs.events.receive(),
+            "receive an event",
+            |sample| Ok(Frame::Event(*sample.payload())),
+        )?;
+        let parts = drain(
+            || outputs.parts.receive(),
+            "receive a parts frame",
+            |sample| {
+                Ok(Frame::Parts(PartsFrame {
+                    header: *sample.user_header(),
+                    parts: sample.payload().to_vec(),
+                }))
+            },
+        )?;
+        let frames: Vec<Frame> = [geometry, parts, events, forces, clearance, hands]
+            .into_iter()
+            .flatten()
+            .collect();
         for frame in &frames {
             self.latest.keep(frame);
         }
@@ -291,18 +287,19 @@ impl Client {
     }
 
     /// The newest frame of each hand received so far (by [`Client::poll`] or
-    /// [`Client::receive`]), right then left (by [`HandSide`] code): one per hand of the
-    /// current scene. The server publishes every hand's frame each frame, and a client that
+    /// [`Client::receive`]), by user, each user's right then left (by [`HandSide`] code): one
+    /// per hand of the current scene, every user's. The server publishes every hand's frame each frame, and a client that
     /// connects gets them all at once; a load or reset forgets the hands the new scene does not
     /// have.
     pub fn latest_hands(&self) -> &[HandFrame] {
         &self.latest.hands
     }
 
-    /// The newest frame of the hand on `side` (see [`Client::latest_hands`]); `None` before one
-    /// arrived or when the current scene has no such hand.
-    pub fn latest_hand_of(&self, side: HandSide) -> Option<&HandFrame> {
-        self.latest.hand_of(side)
+    /// The newest frame of user `user`'s hand on `side` (see [`Client::latest_hands`]; the
+    /// user's index as the scene info lists the users, 0 in a scene of one user); `None` before
+    /// one arrived or when the current scene has no such hand.
+    pub fn latest_hand_of(&self, user: u32, side: HandSide) -> Option<&HandFrame> {
+        self.latest.hand_of(user, side)
     }
 
     /// The newest clearance frame received so far (by [`Client::poll`] or [`Client::receive`]):
@@ -328,4 +325,18 @@ impl Client {
             Err(_) => Wake::Terminated,
         }
     }
+}
+
+/// Every sample `next` still has, each made a frame by `frame`; `action` names a failure to
+/// receive.
+fn drain<S, E: std::fmt::Debug>(
+    mut next: impl FnMut() -> Result<Option<S>, E>,
+    action: &'static str,
+    mut frame: impl FnMut(S) -> Result<Frame, ClientError>,
+) -> Result<Vec<Frame>, ClientError> {
+    let mut frames = Vec::new();
+    while let Some(sample) = next().map_err(|error| ClientError::ipc(action, error))? {
+        frames.push(frame(sample)?);
+    }
+    Ok(frames)
 }

@@ -38,11 +38,16 @@ fn samples_sent_by_a_client_reach_an_input_tap() {
         },
         cart: WirePose::IDENTITY,
         sensor_id: 4,
+        user: 0,
+        side: 0,
+        reserved: 0,
     };
     let glove = GloveSample {
         seq: 1,
         timestamp_ns: 20,
         flex: [0.25; FLEX_COUNT],
+        user: 0,
+        side: 0,
     };
     client.send_tracker(&tracker).expect("send tracker");
     client.send_glove(&glove).expect("send glove");
@@ -76,7 +81,7 @@ fn waiting_without_frames_times_out() {
     assert_eq!(client.poll().expect("poll"), Default::default());
     assert!(client.latest_parts().is_none());
     assert!(client.latest_hands().is_empty());
-    assert!(client.latest_hand_of(HandSide::Right).is_none());
+    assert!(client.latest_hand_of(0, HandSide::Right).is_none());
     drop(client);
     // SAFETY: the client was the prefix's only node.
     unsafe { forget(&prefix) };

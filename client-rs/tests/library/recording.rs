@@ -21,6 +21,9 @@ fn tracker(seq: u64, timestamp_ns: u64) -> InputSample {
         },
         cart: WirePose::IDENTITY,
         sensor_id: 1,
+        user: 0,
+        side: 0,
+        reserved: 0,
     })
 }
 
@@ -31,6 +34,8 @@ fn glove(seq: u64, timestamp_ns: u64) -> InputSample {
         seq,
         timestamp_ns,
         flex,
+        user: 0,
+        side: 0,
     })
 }
 
@@ -46,6 +51,7 @@ fn hand_joints(seq: u64, timestamp_ns: u64) -> InputSample {
         timestamp_ns,
         joints: std::array::from_fn(joint),
         side: HandSide::Left as u32,
+        user: 0,
     })
 }
 

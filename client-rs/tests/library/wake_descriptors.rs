@@ -69,7 +69,7 @@ fn descriptors_are_readable_from_a_publish_until_a_poll() {
     notifier.notify().expect("notify");
     assert_eq!(readable(&descriptors, PATIENCE), 1, "the hand's descriptor");
     assert_eq!(client.poll().expect("poll").hand, 1);
-    assert_eq!(client.latest_hand_of(HandSide::Right), Some(&frame));
+    assert_eq!(client.latest_hand_of(0, HandSide::Right), Some(&frame));
     assert_eq!(
         readable(&descriptors, Duration::ZERO),
         0,

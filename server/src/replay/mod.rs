@@ -76,10 +76,9 @@ impl<'s> Replay<'s> {
         if scene.hands.is_empty() {
             return Err(ReplayError::NoHand(scene.name.clone()));
         }
-        let models = scene.hands.iter().map(|hand| hand.model.as_ref());
         Ok(Replay {
             scene,
-            inputs: Inputs::for_hands(models, scene.params.tracking),
+            inputs: Inputs::for_hands(scene.hand_models(), scene.params.tracking),
             placed: None,
             frames: 0,
             rejected: 0,

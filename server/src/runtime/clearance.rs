@@ -262,6 +262,8 @@ pub(super) fn publish(ports: &Ports, report: &ClearanceReport) -> Result<(), Run
             other: reading.other,
             hand: HandSide::Right as u32,
             segment: 0,
+            user: 0,
+            reserved: 0,
             point: reading.point.into(),
             normal: [0.0; 3],
             other_point: reading.other_point.into(),

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use vas_protocol::{
     ControlRequest, ControlRequestKind, ControlResponse, ControlStatus, HandDescription, MAX_HANDS,
-    MAX_NAME_BYTES, PART_MOVABLE, PartDescription, SlidingMetaphor, WirePose, WireText,
+    MAX_NAME_BYTES, MAX_USERS, PART_MOVABLE, PartDescription, SlidingMetaphor, WirePose, WireText,
 };
 
 use super::inputs::Inputs;
@@ -87,10 +87,7 @@ impl Session {
         let scene = Arc::new(scene);
         let restart = Restart::new(Arc::clone(&scene), 1)?;
         let session = Session {
-            inputs: Inputs::for_hands(
-                scene.hands.iter().map(|hand| hand.model.as_ref()),
-                scene.params.tracking,
-            ),
+            inputs: Inputs::for_hands(scene.hand_models(), scene.params.tracking),
             metaphor: scene.params.sliding.metaphor,
             scene,
             epoch: 1,
@@ -117,10 +114,8 @@ impl Session {
         let restart = Restart::new(Arc::clone(&scene), self.epoch + 1)
             .map_err(|error| (ControlStatus::SceneLoadFailed, error.to_string()))?;
         self.epoch += 1;
-        self.inputs.restart(
-            scene.hands.iter().map(|hand| hand.model.as_ref()),
-            scene.params.tracking,
-        );
+        self.inputs
+            .restart(scene.hand_models(), scene.params.tracking);
         self.metaphor = scene.params.sliding.metaphor;
         self.scene = scene;
         Ok(restart.into_change())
@@ -212,12 +207,18 @@ fn respond(
     let (scene_name, name_cut) = WireText::truncated(&scene.name);
     let (scene_source, source_cut) = WireText::truncated(&scene.source.display().to_string());
     let mut hands = [HandDescription::default(); MAX_HANDS];
-    // A scene has at most one hand of each side: MAX_HANDS.
+    // A scene has at most MAX_USERS users of at most one hand of each side: MAX_HANDS.
     for (described, hand) in hands.iter_mut().zip(&scene.hands) {
         *described = HandDescription {
             side: hand.model.side() as u32,
+            user: hand.user,
             model: WireText::truncated(hand.model.name()).0,
         };
+    }
+    let mut users = [WireText::EMPTY; MAX_USERS];
+    // The scene refuses more users and longer names, so nothing is cut here.
+    for (described, name) in users.iter_mut().zip(&scene.users) {
+        *described = WireText::truncated(name).0;
     }
     let mut response = ControlResponse {
         status: ControlStatus::Ok as u32,
@@ -231,12 +232,14 @@ fn respond(
         message: WireText::EMPTY,
         up: [0.0, 0.0, 1.0],
         metres_per_unit: 1.0,
-        hand_count: u32::try_from(scene.hands.len().min(MAX_HANDS)).expect("at most two"),
+        hand_count: u32::try_from(scene.hands.len().min(MAX_HANDS)).expect("at most eight"),
         listed_count: u32::try_from(session.catalogue.names().len()).unwrap_or(u32::MAX),
         hands,
         listed: WireText::EMPTY,
         generation: session.epoch,
         metaphor: session.metaphor as u32,
+        user_count: u32::try_from(scene.users.len().min(MAX_USERS)).expect("at most four"),
+        users,
     };
     match outcome {
         Ok((part, change)) => {
@@ -386,6 +389,9 @@ mod tests {
             hand: WirePose::IDENTITY,
             cart: WirePose::IDENTITY,
             sensor_id: 0,
+            user: 0,
+            side: 0,
+            reserved: 0,
         };
         nan.hand.position[0] = f64::NAN;
         assert!(session.inputs.apply_tracker(&nan).is_err());

@@ -26,7 +26,9 @@ pub(super) struct ServedGeometry {
 impl ServedGeometry {
     /// The geometry of `restart`'s scene and hand, as generation `restart.epoch`.
     pub(super) fn of(restart: &Restart) -> Self {
-        let hands = restart.hand_bodies.iter().map(|bodies| HandGeometry {
+        let owners = restart.scene.hands.iter().map(|hand| hand.user);
+        let hands = (restart.hand_bodies.iter().zip(owners)).map(|(bodies, user)| HandGeometry {
+            user,
             side: bodies.model.side(),
             model: bodies.model.name().to_owned(),
             segments: bodies

@@ -140,12 +140,12 @@ impl JointsHand {
             Ok(fit) => {
                 // The filter times the samples by their own timestamps, whatever the tracking
                 // clock, so that a replay is smoothed alike however fast it is played.
-                let at_s = sample.timestamp_ns as f64 * 1e-9;
                 let raw = Sample {
                     root: fit.root,
                     values: fit.flex,
                 };
-                let filtered = (self.filter.apply(at_s, raw)).map_err(JointsRejection::Filter)?;
+                let filtered = (self.filter.apply_stamped(sample.timestamp_ns, raw))
+                    .map_err(JointsRejection::Filter)?;
                 self.target = Some(JointsTarget {
                     stamp,
                     at_ns,
@@ -202,7 +202,7 @@ pub fn read_joints(sample: &HandJointsSample, side: vas_protocol::HandSide) -> H
 }
 
 /// The wire sample of `joints`, numbered `seq` and stamped `timestamp_ns`: what a tracker
-/// sends for them.
+/// sends for them, as the hand of the scene's first user.
 pub fn wire_joints(joints: &HandJoints, seq: u64, timestamp_ns: u64) -> HandJointsSample {
     let locations: [JointLocation; HAND_JOINT_COUNT] = joints.joints.map(|joint| {
         let q = joint.orientation;
@@ -218,6 +218,7 @@ pub fn wire_joints(joints: &HandJoints, seq: u64, timestamp_ns: u64) -> HandJoin
         timestamp_ns,
         joints: locations,
         side: joints.side as u32,
+        user: 0,
     }
 }
 

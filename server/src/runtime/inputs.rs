@@ -1,13 +1,16 @@
 //! The I/O thread's input state: validation and counters of tracker, glove and hand-joints
 //! samples, and the latest accepted target of each, as the hand input of the next frame.
 //!
-//! Tracker samples place the cart, which carries every hand. Hand-joints samples drive the hand
-//! of their side. The tracker's hand pose and the glove's flex values drive the scene's first
-//! hand until it has had a hand-joints sample; then it follows its joints (its root in the
-//! cart's frame and flex values from its latest tracked joints sample). Joints take the hand
-//! over for good rather than whichever stream spoke last, so that a tracker that only navigates
-//! the cart never snaps a joints-driven hand to its own hand pose. A second hand without joints
-//! yet stays parked at the cart's origin, untracked.
+//! Every sample names its user and side, and drives that hand; a sample naming a user or side
+//! the scene has no hand for is rejected and counted. Tracker samples also place their user's
+//! cart, which carries every hand of that user. A hand's tracker pose and glove flex values drive
+//! it until it has had a hand-joints sample; then it follows its joints (its root in the cart's
+//! frame and flex values from its latest tracked joints sample). Joints take the hand over for
+//! good rather than whichever stream spoke last, so that a tracker that only navigates the cart
+//! never snaps a joints-driven hand to its own hand pose. Each user's first hand is tracked by
+//! tracker and glove from the start (at the cart's origin before any sample, as a single glove
+//! hand always was); a user's second hand without input yet stays parked at the cart's origin,
+//! untracked.
 //!
 //! A joints-driven hand is untracked when its latest sample says so, or when that sample is
 //! older than the scene's `params.tracking.lost_after`; it keeps its last tracked target, and
@@ -18,27 +21,31 @@
 //! closed) is noticed while no other input comes ([`Inputs::tick`]).
 //!
 //! Tracked input is smoothed by the scene's One Euro filter (`params.tracking.filter`): each
-//! joints-driven hand's retargeted root and flex values ([`JointsHand`]), and the tracker's
-//! hand root. Not the cart: it navigates, carries every hand, and comes from a device that is
-//! not hand tracking, so smoothing it would only make every hand trail a moving cart. Nor the
-//! glove's flex values, measured by bend sensors rather than fitted to noisy joints. A sample
-//! whose timestamp is not after its stream's previous one restarts the stream's filter from it
-//! and is counted ([`Inputs::filter_restarts`]).
+//! joints-driven hand's retargeted root and flex values ([`JointsHand`]), and each hand's
+//! tracker root. Not the cart: it navigates, carries every hand of its user, and comes from a
+//! device that is not hand tracking, so smoothing it would only make the hands trail a moving
+//! cart. Nor the glove's flex values, measured by bend sensors rather than fitted to noisy
+//! joints. A sample whose timestamp is not after its stream's previous one restarts the stream's
+//! filter from it and is counted ([`Inputs::filter_restarts`]).
 
 use std::time::Duration;
 
 use nalgebra::Isometry3;
 use vas_protocol::{
-    FLEX_COUNT, GloveSample, GloveTarget, HandJointsSample, HandSide, InputRejection, InputStamp,
-    InputStats, MAX_TIMESTAMP_AHEAD_NS, TrackerSample, TrackerTarget, wall_clock_ns,
+    FLEX_COUNT, GloveSample, HandJointsSample, HandSide, InputRejection, InputStamp, InputStats,
+    MAX_TIMESTAMP_AHEAD_NS, TrackerSample, TrackerTarget, wall_clock_ns,
 };
 
 use super::hand_joints::{JointsHand, JointsOutcome, JointsRejection, JointsTarget};
 use crate::grasping::retarget::JointsError;
 use crate::grasping::{HandInput, HandModel};
 use crate::scene::TrackingParams;
-use crate::simulation::filter::{Passage, Sample, StreamFilter, TimeFault};
+use crate::simulation::filter::{Passage, Sample, TimeFault};
 use crate::simulation::frames::{HandTarget, InputFrame, Stamps};
+
+mod hand;
+
+use hand::HandInputs;
 
 /// The clock that times a joints-driven hand's tracking.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -53,17 +60,15 @@ pub enum TrackingClock {
 }
 
 /// The latest validated targets and the input counters.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Inputs {
-    tracker: Option<TrackerTarget>,
-    /// The filter of the tracker's hand root.
-    tracker_filter: StreamFilter<0>,
-    glove: Option<GloveTarget>,
-    /// The scene's hands, in its order, as hand-joints samples drive them (`None` for a model
-    /// the retargeting cannot take); empty without hand models.
-    hands: Vec<Option<JointsHand>>,
-    /// The latest accepted hand-joints sample, of any hand.
-    joints: InputStamp,
+    /// The scene's hands, in its order (grouped by user); in a scene without hand models, one:
+    /// the first user's right hand, where tracker and glove put it.
+    hands: Vec<HandInputs>,
+    /// Each user's cart, from their latest accepted tracker sample.
+    carts: Vec<Option<Isometry3<f64>>>,
+    /// The latest accepted sample of each stream, of any hand.
+    stamps: Stamps,
     /// Now on `clock`: the newest time an accepted sample, of any stream, was taken in (or a
     /// tick).
     now_ns: u64,
@@ -74,20 +79,36 @@ pub struct Inputs {
     filter_restarts: u64,
 }
 
+impl Default for Inputs {
+    /// The input state of a scene without hand models.
+    fn default() -> Self {
+        Inputs::for_hands([], TrackingParams::default())
+    }
+}
+
 impl Inputs {
-    /// The input state of a scene with the hand `models` (in the scene's order) and the
-    /// `tracking` parameters.
+    /// The input state of a scene with the hand `models`, each with its user's index (in the
+    /// scene's order), and the `tracking` parameters.
     pub fn for_hands<'a>(
-        models: impl IntoIterator<Item = &'a HandModel>,
+        models: impl IntoIterator<Item = (u32, &'a HandModel)>,
         tracking: TrackingParams,
     ) -> Inputs {
+        let mut hands: Vec<HandInputs> = (models.into_iter())
+            .map(|(user, model)| HandInputs::of_model(user, model, &tracking))
+            .collect();
+        if hands.is_empty() {
+            hands.push(HandInputs::without_model(0, HandSide::Right, &tracking));
+        }
+        let users = hands.iter().map(|hand| hand.user as usize + 1).max();
         Inputs {
-            hands: (models.into_iter())
-                .map(|model| JointsHand::new(model, &tracking))
-                .collect(),
-            tracker_filter: StreamFilter::new(&tracking),
+            carts: vec![None; users.unwrap_or(1)],
+            hands,
+            stamps: Stamps::default(),
+            now_ns: 0,
+            clock: TrackingClock::default(),
             tracking,
-            ..Inputs::default()
+            stats: InputStats::default(),
+            filter_restarts: 0,
         }
     }
 
@@ -134,7 +155,7 @@ impl Inputs {
 
     /// Each joints-driven hand's tracking now: whether it is tracked and whether it lets go.
     fn tracking_states(&self) -> Vec<Option<(bool, bool)>> {
-        (self.hands.iter().flatten())
+        (self.hands.iter().filter_map(|hand| hand.joints.as_ref()))
             .map(|hand| hand.target().map(|target| self.tracking_of(target)))
             .collect()
     }
@@ -156,9 +177,21 @@ impl Inputs {
         tracing::debug!(stream, %fault, "the input filter restarted");
     }
 
-    /// The tracker `target` with its hand root smoothed.
+    /// The index of the hand of `user` and `side`, or why there is none.
+    fn hand_of(&self, user: u32, side: u32) -> Result<usize, InputRejection> {
+        if user as usize >= self.carts.len() {
+            return Err(InputRejection::NoSuchUser { user });
+        }
+        let side_code = HandSide::try_from(side).ok();
+        (self.hands.iter())
+            .position(|hand| hand.user == user && Some(hand.side) == side_code)
+            .ok_or(InputRejection::NoSuchHand { user, side })
+    }
+
+    /// The tracker `target` for hand `index` with its hand root smoothed by that hand's filter.
     fn smooth_tracker(
         &mut self,
+        index: usize,
         mut target: TrackerTarget,
         timestamp_ns: u64,
     ) -> Result<TrackerTarget, InputRejection> {
@@ -166,7 +199,8 @@ impl Inputs {
             root: target.hand,
             values: [],
         };
-        let filtered = (self.tracker_filter.apply(timestamp_ns as f64 * 1e-9, raw))
+        let filtered = (self.hands[index].tracker_filter)
+            .apply_stamped(timestamp_ns, raw)
             .map_err(|_| InputRejection::NonFinite { field: "hand" })?;
         if let Passage::Restarted(fault) = filtered.passage {
             self.count_restart("tracker", fault);
@@ -175,51 +209,70 @@ impl Inputs {
         Ok(target)
     }
 
-    /// Validates a tracker sample and, if valid, makes it the hand root target; counts it
-    /// either way.
+    /// Validates a tracker sample and, if valid, makes it the root target of its user's hand of
+    /// its side and its cart that user's; counts it either way.
     pub fn apply_tracker(&mut self, sample: &TrackerSample) -> Result<(), InputRejection> {
-        let validated = (self.not_ahead(sample.timestamp_ns)).and_then(|()| sample.validate());
-        match validated.and_then(|target| self.smooth_tracker(target, sample.timestamp_ns)) {
-            Ok(target) => {
+        let validated = (self.not_ahead(sample.timestamp_ns))
+            .and_then(|()| self.hand_of(sample.user, sample.side))
+            .and_then(|index| Ok((index, sample.validate()?)));
+        let smoothed = validated.and_then(|(index, target)| {
+            Ok((
+                index,
+                self.smooth_tracker(index, target, sample.timestamp_ns)?,
+            ))
+        });
+        match smoothed {
+            Ok((index, target)) => {
                 self.stats.tracker_accepted += 1;
-                self.tracker = Some(target);
+                self.hands[index].tracker = Some(target);
+                self.carts[sample.user as usize] = Some(target.cart);
+                self.stamps.tracker = target.stamp;
                 self.taken_at(self.time_of(sample.timestamp_ns));
                 Ok(())
             }
             Err(rejection) => {
-                match rejection {
-                    InputRejection::NonFinite { .. } => self.stats.tracker_rejected_non_finite += 1,
+                let stats = &mut self.stats;
+                *match rejection {
+                    InputRejection::NonFinite { .. } => &mut stats.tracker_rejected_non_finite,
                     InputRejection::NotUnitQuaternion { .. } => {
-                        self.stats.tracker_rejected_quaternion += 1;
+                        &mut stats.tracker_rejected_quaternion
                     }
-                    InputRejection::OutOfRange { .. } => {
-                        self.stats.tracker_rejected_out_of_range += 1;
-                    }
-                    InputRejection::Ahead { .. } => self.stats.rejected_ahead += 1,
-                }
+                    InputRejection::OutOfRange { .. } => &mut stats.tracker_rejected_out_of_range,
+                    InputRejection::Ahead { .. } => &mut stats.rejected_ahead,
+                    InputRejection::NoSuchUser { .. } => &mut stats.rejected_no_such_user,
+                    InputRejection::NoSuchHand { .. } => &mut stats.rejected_no_such_hand,
+                } += 1;
                 Err(rejection)
             }
         }
     }
 
-    /// Validates a glove sample and, if finite, makes its clamped flex values the finger target;
-    /// counts it, and the values clamped, either way. Returns the bits of the clamped values.
+    /// Validates a glove sample and, if finite, makes its clamped flex values the finger target
+    /// of its user's hand of its side; counts it, and the values clamped, either way. Returns
+    /// the bits of the clamped values.
     pub fn apply_glove(&mut self, sample: &GloveSample) -> Result<u32, InputRejection> {
-        match (self.not_ahead(sample.timestamp_ns)).and_then(|()| sample.validate()) {
-            Ok(target) => {
+        let validated = (self.not_ahead(sample.timestamp_ns))
+            .and_then(|()| self.hand_of(sample.user, sample.side))
+            .and_then(|index| Ok((index, sample.validate()?)));
+        match validated {
+            Ok((index, target)) => {
                 self.stats.glove_accepted += 1;
                 if target.clamped != 0 {
                     self.stats.glove_samples_clamped += 1;
                     self.stats.glove_values_clamped += u64::from(target.clamped_count());
                 }
-                self.glove = Some(target);
+                self.hands[index].glove = Some(target);
+                self.stamps.glove = target.stamp;
                 self.taken_at(self.time_of(sample.timestamp_ns));
                 Ok(target.clamped)
             }
             Err(rejection) => {
+                let stats = &mut self.stats;
                 *match rejection {
-                    InputRejection::Ahead { .. } => &mut self.stats.rejected_ahead,
-                    _ => &mut self.stats.glove_rejected_non_finite,
+                    InputRejection::Ahead { .. } => &mut stats.rejected_ahead,
+                    InputRejection::NoSuchUser { .. } => &mut stats.rejected_no_such_user,
+                    InputRejection::NoSuchHand { .. } => &mut stats.rejected_no_such_hand,
+                    _ => &mut stats.glove_rejected_non_finite,
                 } += 1;
                 Err(rejection)
             }
@@ -232,22 +285,24 @@ impl Inputs {
         &mut self,
         sample: &HandJointsSample,
     ) -> Result<JointsOutcome, JointsRejection> {
-        let side = HandSide::try_from(sample.side).ok();
         let at_ns = self.time_of(sample.timestamp_ns);
-        let ahead = self.not_ahead(sample.timestamp_ns);
-        let hand = (self.hands.iter_mut().flatten()).find(|hand| Some(hand.side()) == side);
-        let outcome = match (ahead, hand) {
-            (Err(rejection), _) => Err(JointsRejection::Sample(rejection)),
-            (Ok(()), Some(hand)) => hand.apply(sample, at_ns).map(|(outcome, fault)| {
-                if let Some(fault) = fault {
-                    self.count_restart("hand_joints", fault);
-                }
-                outcome
-            }),
-            (Ok(()), None) => Err(JointsRejection::NoSuchHand { side: sample.side }),
-        };
+        let routed = (self.not_ahead(sample.timestamp_ns))
+            .and_then(|()| self.hand_of(sample.user, sample.side))
+            .map_err(|rejection| match rejection {
+                InputRejection::NoSuchHand { side, .. } => JointsRejection::NoSuchHand { side },
+                other => JointsRejection::Sample(other),
+            });
+        let outcome = routed.and_then(|index| {
+            let hand = (self.hands[index].joints.as_mut())
+                .ok_or(JointsRejection::NoSuchHand { side: sample.side })?;
+            let (outcome, fault) = hand.apply(sample, at_ns)?;
+            if let Some(fault) = fault {
+                self.count_restart("hand_joints", fault);
+            }
+            Ok(outcome)
+        });
         if outcome.is_ok() {
-            self.joints = sample.stamp();
+            self.stamps.joints = sample.stamp();
             self.taken_at(at_ns);
         }
         let stats = &mut self.stats;
@@ -255,6 +310,9 @@ impl Inputs {
             Ok(JointsOutcome::Tracked) => &mut stats.joints_accepted,
             Ok(JointsOutcome::Untracked) => &mut stats.joints_untracked,
             Err(JointsRejection::NoSuchHand { .. }) => &mut stats.joints_rejected_no_such_hand,
+            Err(JointsRejection::Sample(InputRejection::NoSuchUser { .. })) => {
+                &mut stats.rejected_no_such_user
+            }
             Err(JointsRejection::Sample(_)) => &mut stats.rejected_ahead,
             Err(JointsRejection::Filter(_)) => &mut stats.joints_rejected_non_finite,
             Err(JointsRejection::Joints(error)) => match error {
@@ -274,68 +332,52 @@ impl Inputs {
     /// The next frame's input: the latest targets (the identity cart and root and a flat hand
     /// before the first sample of a stream), stamped with the samples they come from.
     pub fn frame(&self) -> InputFrame {
-        let cart = self
-            .tracker
-            .map_or_else(Isometry3::identity, |target| target.cart);
-        let hands = if self.hands.is_empty() {
-            vec![self.glove_driven(cart)]
-        } else {
-            (self.hands.iter().enumerate())
-                .map(|(index, hand)| {
-                    let joints = hand.as_ref().and_then(JointsHand::target);
-                    let stamp = joints.map_or_else(InputStamp::default, |target| target.stamp);
-                    match joints.and_then(|target| target.pose.map(|pose| (target, pose))) {
-                        Some((target, (tracker, flex))) => {
-                            let (tracked, let_go) = self.tracking_of(target);
-                            HandTarget {
-                                input: HandInput {
-                                    cart,
-                                    tracker,
-                                    flex,
-                                },
-                                joints: stamp,
-                                tracked,
-                                let_go,
-                            }
-                        }
-                        // Until its first tracked joints, the first hand is the glove's; a
-                        // hand whose joints so far all said "not tracked" is not tracked.
-                        None if index == 0 => HandTarget {
-                            joints: stamp,
-                            tracked: joints.is_none(),
-                            ..self.glove_driven(cart)
-                        },
-                        None => HandTarget {
+        let hands = (self.hands.iter().enumerate())
+            .map(|(index, hand)| {
+                let cart = (self.carts[hand.user as usize]).unwrap_or_else(Isometry3::identity);
+                let joints = hand.joints.as_ref().and_then(JointsHand::target);
+                let stamp = joints.map_or_else(InputStamp::default, |target| target.stamp);
+                let users_first = index == 0 || self.hands[index - 1].user != hand.user;
+                match joints.and_then(|target| target.pose.map(|pose| (target, pose))) {
+                    Some((target, (tracker, flex))) => {
+                        let (tracked, let_go) = self.tracking_of(target);
+                        HandTarget {
                             input: HandInput {
                                 cart,
-                                tracker: Isometry3::identity(),
-                                flex: [0.0; FLEX_COUNT],
+                                tracker,
+                                flex,
                             },
                             joints: stamp,
-                            tracked: false,
-                            let_go: false,
-                        },
+                            tracked,
+                            let_go,
+                        }
                     }
-                })
-                .collect()
-        };
+                    // Until its first tracked joints, a hand is its tracker's and glove's; a
+                    // hand whose joints so far all said "not tracked" is not tracked.
+                    None if users_first || hand.tracker.is_some() || hand.glove.is_some() => {
+                        HandTarget {
+                            joints: stamp,
+                            tracked: joints.is_none(),
+                            ..HandTarget::tracking(hand.glove_driven(cart))
+                        }
+                    }
+                    None => HandTarget {
+                        input: HandInput {
+                            cart,
+                            tracker: Isometry3::identity(),
+                            flex: [0.0; FLEX_COUNT],
+                        },
+                        joints: stamp,
+                        tracked: false,
+                        let_go: false,
+                    },
+                }
+            })
+            .collect();
         InputFrame {
-            stamps: Stamps {
-                tracker: self.tracker.map_or_else(InputStamp::default, |t| t.stamp),
-                glove: self.glove.map_or_else(InputStamp::default, |g| g.stamp),
-                joints: self.joints,
-            },
+            stamps: self.stamps,
             hands,
         }
-    }
-
-    /// The hand as tracker and glove drive it, on `cart`.
-    fn glove_driven(&self, cart: Isometry3<f64>) -> HandTarget {
-        HandTarget::tracking(HandInput {
-            cart,
-            tracker: (self.tracker).map_or_else(Isometry3::identity, |target| target.hand),
-            flex: self.glove.map_or([0.0; FLEX_COUNT], |target| target.flex),
-        })
     }
 
     /// Whether a joints-driven hand with `target` is tracked now, and whether it has been
@@ -350,11 +392,11 @@ impl Inputs {
         (tracked, let_go)
     }
 
-    /// Forgets the targets (a reset, or another scene) and takes the hand `models` and the
-    /// `tracking` parameters; the counters and the clock go on.
+    /// Forgets the targets (a reset, or another scene) and takes the hand `models` with their
+    /// users' indices and the `tracking` parameters; the counters and the clock go on.
     pub fn restart<'a>(
         &mut self,
-        models: impl IntoIterator<Item = &'a HandModel>,
+        models: impl IntoIterator<Item = (u32, &'a HandModel)>,
         tracking: TrackingParams,
     ) {
         *self = Inputs {

@@ -18,8 +18,8 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use vas_protocol::{
-    ControlResponse, ControlStatus, ForceFrame, HAND_SEGMENT_COUNT, HandFrame, HandSide,
-    InputStats, PART_GRASPED, PartState, PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
+    ControlResponse, ControlStatus, ForceFrame, HAND_SEGMENT_COUNT, HandFrame, InputStats,
+    PART_GRASPED, PartState, PartsFrameHeader, SimEvent, WirePose, wall_clock_ns,
 };
 
 use super::clearance::{self, ClearanceJob, ClearanceWatch};
@@ -28,6 +28,7 @@ use super::geometry::ServedGeometry;
 use super::inputs::TrackingClock;
 use super::loader::{Loaded, PendingRequest, SceneLoader};
 use super::loops::{Links, LoopWork, Loops};
+use super::owners::{HandOwner, hand_owners};
 use super::ports::{Ports, Wakeups};
 use super::rendezvous::{ANNOUNCED_WAIT, AwakeWatch, Handoff, Work};
 use super::wakeup::{Waker, WakeupReceiver};
@@ -61,9 +62,10 @@ struct Io {
     loader: SceneLoader,
     /// The served scene's render meshes.
     geometry: ServedGeometry,
-    /// The sides of the served scene's hands, in its order (the right one in a scene without
-    /// hand models, for the hand the tracker places).
-    hand_sides: Vec<HandSide>,
+    /// The user and side of each of the served scene's hands, in its order (the first user's
+    /// right hand in a scene without hand models, for the hand the tracker places).
+    /// Shared, so that publishing a frame reads them without copying them while it mutates `self`.
+    hand_owners: Arc<[HandOwner]>,
     /// The latest published part states, for the periodic parts frames.
     parts: Vec<PartState>,
     /// Measures the published frames' clearance beside the loops.
@@ -133,7 +135,7 @@ impl InteractionManager {
             TrackingClock::Arrival
         });
         let geometry = ServedGeometry::of(start);
-        let hand_sides = hand_sides(&session.scene);
+        let hand_owners = hand_owners(&session.scene);
         let (ports, wakeups) = Ports::open(
             node,
             session.scene.parts.len(),
@@ -152,7 +154,7 @@ impl InteractionManager {
             answer: Answer::default(),
             loader: SceneLoader::new(waker, options.load.clone()),
             geometry,
-            hand_sides,
+            hand_owners,
             lockstep: Lockstep {
                 enabled: options.lockstep,
                 in_flight: false,
@@ -441,7 +443,7 @@ impl Io {
             if let Change::Restart(restart) = &change {
                 self.geometry.restart(restart);
                 self.clearance.restart(&restart.scene, restart.epoch);
-                self.hand_sides = hand_sides(&restart.scene);
+                self.hand_owners = hand_owners(&restart.scene);
             }
             let restarted = matches!(change, Change::Restart(_));
             self.submit(Work::Control(change));
@@ -518,8 +520,8 @@ impl Io {
         let now = wall_clock_ns();
         self.hand_frames += 1;
         let stamps = frame.stamps;
-        let sides = self.hand_sides.clone();
-        let side = |hand: usize| sides.get(hand).copied().unwrap_or(HandSide::Right);
+        let owners = Arc::clone(&self.hand_owners);
+        let owner = |hand: usize| owners.get(hand).copied().unwrap_or_default();
         let events = frame.events.iter().map(|event| SimEvent {
             frame: self.hand_frames,
             tracker: stamps.tracker,
@@ -530,8 +532,10 @@ impl Io {
             grasp_type: event.grasp as u32,
             part: event.part,
             other: event.other,
-            hand: side(event.hand) as u32,
+            hand: owner(event.hand).side as u32,
             segment: event.at.map_or(0, |at| at.segment),
+            user: owner(event.hand).user,
+            reserved: 0,
             point: event.at.map_or([0.0; 3], |at| at.point.into()),
             normal: event.at.map_or([0.0; 3], |at| at.normal.into()),
             other_point: [0.0; 3],
@@ -548,7 +552,8 @@ impl Io {
                 timestamp_ns: now,
                 force: wrench.force.into(),
                 torque: wrench.torque.into(),
-                hand: side(index) as u32,
+                hand: owner(index).side as u32,
+                user: owner(index).user,
             })
         });
         self.log_failure(self.ports.publish_forces(forces));
@@ -596,11 +601,11 @@ impl Io {
                 flex: hand.flex,
                 touching: hand.touching,
                 grasp_type: hand.grasp as u32,
-                hand: side(index) as u32,
+                hand: owner(index).side as u32,
                 tracked: u32::from(hand.tracked),
                 segment_count: u32::try_from(segments.len().min(HAND_SEGMENT_COUNT))
                     .expect("at most 16"),
-                reserved: 0,
+                user: owner(index).user,
                 segments: std::array::from_fn(|i| {
                     segments
                         .get(i)
@@ -666,15 +671,6 @@ impl Io {
             tracing::error!("{error}");
         }
     }
-}
-
-/// The sides of `scene`'s hands, in its order; the right one for a scene without a hand model
-/// (its tracked hand).
-fn hand_sides(scene: &crate::scene::Scene) -> Vec<HandSide> {
-    if scene.hands.is_empty() {
-        return vec![HandSide::Right];
-    }
-    (scene.hands.iter()).map(|hand| hand.model.side()).collect()
 }
 
 fn part_state(id: u32, pose: &nalgebra::Isometry3<f64>, flags: u32) -> PartState {

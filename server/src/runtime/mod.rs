@@ -28,6 +28,7 @@ mod io_thread;
 mod loader;
 pub(crate) mod loops;
 mod meter;
+mod owners;
 mod ports;
 pub mod priority;
 pub(crate) mod rendezvous;

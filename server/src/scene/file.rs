@@ -18,6 +18,8 @@ pub(super) struct SceneFile {
     pub(super) hand: Option<PathBuf>,
     pub(super) hands: Option<Vec<PathBuf>>,
     #[serde(default)]
+    pub(super) users: Vec<UserFile>,
+    #[serde(default)]
     pub(super) params: AlgorithmParams,
     #[serde(default)]
     pub(super) rates: Rates,
@@ -27,6 +29,15 @@ pub(super) struct SceneFile {
     pub(super) parts: Vec<PartFile>,
     #[serde(default)]
     pub(super) assemblies: Vec<AssemblyFile>,
+}
+
+/// One `[[users]]` entry: a person's name and their hand models.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct UserFile {
+    pub(super) name: String,
+    pub(super) hand: Option<PathBuf>,
+    pub(super) hands: Option<Vec<PathBuf>>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -7,8 +7,11 @@
 //! ```toml
 //! name = "peg in hole"
 //! # hand = "hands/right.toml"          # optional hand model, relative to this file
-//! # hands = ["hands/right.toml", "hands/left.toml"]  # or two, one of each side; the first
-//! #                                    # is the one the tracker and the glove drive
+//! # hands = ["hands/right.toml", "hands/left.toml"]  # or two, one of each side: one user's,
+//! #                                    # named "user"
+//! # [[users]]                          # or up to four users, each with one or two hands
+//! # name = "anna"                      # (instead of hand or hands)
+//! # hands = ["hands/right.toml", "hands/left.toml"]
 //!
 //! [params]                             # all optional, with defaults
 //! dop_orientations = 24
@@ -94,9 +97,12 @@ pub struct Scene {
     pub source: PathBuf,
     /// The parts; a part's id is its index here.
     pub parts: Vec<Part>,
-    /// The hand models the scene names (`hand`, or `hands`: at most one of each side), loaded
-    /// and validated with it. The first is the hand that tracker and glove samples drive;
-    /// hand-joints samples drive the hand of their side.
+    /// The names of the scene's users, by index: those of `[[users]]`, or [`DEFAULT_USER`]
+    /// alone for a scene that gives `hand` or `hands` (or no hand at all).
+    pub users: Vec<String>,
+    /// The hand models of every user (at most one of each side per user), grouped by user in
+    /// the users' order, loaded and validated with the scene. Every input sample names the user
+    /// and side of the hand it drives.
     pub hands: Vec<SceneHand>,
     /// Parameters of the algorithms.
     pub params: AlgorithmParams,
@@ -106,9 +112,15 @@ pub struct Scene {
     pub groups: Groups,
 }
 
-/// The hand model of a scene: its file, resolved against the scene's folder, and the model.
+/// The one user of a scene that names its hands with `hand` or `hands` rather than `[[users]]`.
+pub const DEFAULT_USER: &str = "user";
+
+/// A hand model of a scene: whose it is, its file, resolved against the scene's folder, and the
+/// model.
 #[derive(Debug, Clone)]
 pub struct SceneHand {
+    /// The user's index in [`Scene::users`].
+    pub user: u32,
     /// The hand model file.
     pub path: PathBuf,
     /// The model loaded from it.
@@ -174,6 +186,11 @@ impl Scene {
             part.adjacency();
             ready(part, started.elapsed().as_secs_f64());
         });
+    }
+
+    /// Each hand's model with its user's index, in the scene's order.
+    pub fn hand_models(&self) -> impl Iterator<Item = (u32, &HandModel)> {
+        (self.hands.iter()).map(|hand| (hand.user, hand.model.as_ref()))
     }
 
     /// The triangles of all parts (a mesh shared by several parts counts for each).

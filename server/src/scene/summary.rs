@@ -91,7 +91,13 @@ impl Scene {
             r.publish_hz, r.collision_hz, r.sliding_hz, r.grasping_hz
         );
         let hands: Vec<String> = (self.hands.iter())
-            .map(|hand| hand.path.display().to_string())
+            .map(|hand| {
+                let user = self
+                    .users
+                    .get(hand.user as usize)
+                    .map_or("?", String::as_str);
+                format!("{} ({user})", hand.path.display())
+            })
             .collect();
         let _ = write!(
             s,

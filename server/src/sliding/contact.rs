@@ -13,6 +13,9 @@
 //!   triangle decides. Edges of both triangles cross the other: edge/edge with those edges; only
 //!   `p`'s edges cross `q`: vertex/face; only `q`'s: face/vertex.
 //!
+//! An edge between coplanar triangles is no edge, and a vertex with no sharp edge around it no
+//! vertex: both are the inside of a face (the cell boundaries of a subdivided face).
+//!
 //! Stored normals and winding are never used: a plane normal comes from a cross product of the
 //! triangle's edges, and every normal is oriented against the approach, the motion of the contact
 //! point from the last free pose to the colliding one. So inconsistent winding and sheets touched
@@ -132,33 +135,71 @@ enum Feature {
 const FLAT_EDGE_SINE: f64 = 0.01;
 
 impl ContactSide<'_> {
-    /// The feature of triangle `t` touching the other side: from the count of its neighbours
-    /// touching the same triangle (`touching`, first one and count), or, when none does (rims,
-    /// shallow touches), from which of its edges cross the other triangle.
-    fn feature(&self, t: u32, touching: Option<(u32, usize)>, crossings: &Crossings) -> Feature {
+    /// The feature of triangle `t` touching the other triangle: from the count of its neighbours
+    /// that `touch` it too, or, when none does (rims, shallow touches), from which of its edges
+    /// cross the other triangle. A vertex inside a flat region (a cell corner of a subdivided
+    /// face) is a face, as an edge between coplanar triangles is: a block's side dipping through
+    /// a table at one of the table's grid corners is stopped by the table's face, not by a
+    /// "vertex" pushing it back sideways.
+    fn feature(&self, t: u32, touch: impl Fn(u32) -> bool, crossings: &Crossings) -> Feature {
         let edges = self.adjacency.triangle_edges(t as usize);
-        let edge = match touching {
-            Some((_, count)) if count >= 2 => return Feature::Vertex,
-            Some((neighbour, _)) => {
-                let of_neighbour = self.adjacency.triangle_edges(neighbour as usize);
-                edges.into_iter().find(|e| of_neighbour.contains(e))
-            }
-            None => match crossings.count {
+        // Per edge of `t`, how many triangles across it touch the other triangle.
+        let across = edges.map(|edge| {
+            (self.adjacency.edge_triangles(edge as usize).iter())
+                .filter(|&&n| n != t && touch(n))
+                .count()
+        });
+        let edge = match across.iter().sum::<usize>() {
+            0 => match crossings.count {
                 0 => return Feature::Face,
-                1 => Some(edges[crossings.edges[0]]),
-                _ => return Feature::Vertex,
+                1 => crossings.edges[0],
+                _ => {
+                    let crossing = |k: usize| crossings.edges[..crossings.count].contains(&k);
+                    return self.vertex_unless_flat(t, [0, 1, 2].map(crossing));
+                }
             },
+            1 => (0..3)
+                .find(|&k| across[k] > 0)
+                .expect("one edge has a touching triangle"),
+            _ => return self.vertex_unless_flat(t, across.map(|n| n > 0)),
         };
-        match edge {
-            Some(edge) if self.is_sharp(edge as usize) => {
-                let [u, v] = self.adjacency.edge(edge as usize);
-                let vertices = self.mesh.vertices();
-                Feature::Edge(self.pose * (vertices[v as usize] - vertices[u as usize]))
-            }
-            Some(_) => Feature::Face,
-            // Neighbours sharing no edge index (a duplicate triangle): treat as a face.
-            None => Feature::Face,
+        let edge = edges[edge] as usize;
+        if self.is_sharp(edge) {
+            let [u, v] = self.adjacency.edge(edge);
+            let vertices = self.mesh.vertices();
+            Feature::Edge(self.pose * (vertices[v as usize] - vertices[u as usize]))
+        } else {
+            Feature::Face
         }
+    }
+
+    /// A vertex of triangle `t`, where its edges marked `involved` (edge `k` joins corners `k`
+    /// and `k + 1`) meet the other triangle: the corner two of them share, or the ends of the
+    /// only one; a face when every such corner lies inside a flat region.
+    fn vertex_unless_flat(&self, t: u32, involved: [bool; 3]) -> Feature {
+        let several = involved.iter().filter(|&&i| i).count() >= 2;
+        // Corner `c` ends edges `c` and `c + 2`.
+        let mut corners = (0..3).filter(|&c| {
+            let (a, b) = (involved[c], involved[(c + 2) % 3]);
+            if several { a && b } else { a || b }
+        });
+        if corners.all(|c| self.is_flat_vertex(self.mesh.triangles()[t as usize][c])) {
+            Feature::Face
+        } else {
+            Feature::Vertex
+        }
+    }
+
+    /// Whether no edge at `vertex` is sharp: it lies inside a flat region.
+    fn is_flat_vertex(&self, vertex: u32) -> bool {
+        let triangles = self.mesh.triangles();
+        (self.adjacency.vertex_triangles(vertex as usize).iter()).all(|&n| {
+            let corners = triangles[n as usize];
+            let edges = self.adjacency.triangle_edges(n as usize);
+            (0..3)
+                .filter(|&k| corners[k] == vertex || corners[(k + 1) % 3] == vertex)
+                .all(|k| !self.is_sharp(edges[k] as usize))
+        })
     }
 
     /// Whether an edge is a geometric feature: a rim, non-manifold, or folded.
@@ -195,18 +236,8 @@ pub fn classify_pairs(
         let crossings_q = Crossings::of(&tq, &tp);
         let point = contact_point(&crossings_p, &crossings_q, &tp, &tq);
         let approach_at_point = approach.point_displacement(&(point - pivot));
-        let neighbours_p = part.adjacency.triangle_neighbours(p as usize);
-        let neighbours_q = other.adjacency.triangle_neighbours(q as usize);
-        let feature_p = part.feature(
-            p,
-            first_and_count(neighbours_p.filter(|&n| touching(n, q))),
-            &crossings_p,
-        );
-        let feature_q = other.feature(
-            q,
-            first_and_count(neighbours_q.filter(|&n| touching(p, n))),
-            &crossings_q,
-        );
+        let feature_p = part.feature(p, |n| touching(n, q), &crossings_p);
+        let feature_q = other.feature(q, |n| touching(p, n), &crossings_q);
         let (kind, normal) = match (feature_p, feature_q) {
             (Feature::Vertex, Feature::Vertex) | (Feature::Face, Feature::Face) => {
                 (ContactKind::FaceFace, plane_normal(&tq))
@@ -231,12 +262,6 @@ pub fn classify_pairs(
             });
         }
     }
-}
-
-/// The first item of an iterator and how many there are; None when empty.
-fn first_and_count(mut items: impl Iterator<Item = u32>) -> Option<(u32, usize)> {
-    let first = items.next()?;
-    Some((first, 1 + items.count()))
 }
 
 /// The normal across two edges; for (nearly) parallel edges, the part of the reversed approach
@@ -491,6 +516,53 @@ mod tests {
             assert_eq!(c.kind, ContactKind::FaceVertex);
             assert!((c.normal.into_inner() - Vector3::z()).norm() < 1e-12);
         }
+    }
+
+    /// A 2 x 2 square sheet in z = 0 of four cells, each cut along its x = y diagonal: its
+    /// middle vertex is inside the flat sheet, the middles of its sides on its rim.
+    fn subdivided_sheet() -> (TriMesh, EdgeAdjacency) {
+        let vertex = |i: u32, j: u32| i * 3 + j;
+        let vertices = (0..3)
+            .flat_map(|i| (0..3).map(move |j| p(f64::from(i) - 1.0, f64::from(j) - 1.0, 0.0)))
+            .collect();
+        let triangles = (0..2)
+            .flat_map(|i| (0..2).map(move |j| (i, j)))
+            .flat_map(|(i, j)| {
+                let [a, b, c, d] =
+                    [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)].map(|(x, y)| vertex(x, y));
+                [[a, b, c], [a, c, d]]
+            })
+            .collect();
+        mesh(vertices, triangles)
+    }
+
+    /// A wall in the plane x = `x`, its lower rim 1 mm below z = 0.
+    fn wall(x: f64) -> (TriMesh, EdgeAdjacency) {
+        let v = vec![p(x, -0.5, -0.001), p(x, 0.5, -0.001), p(x, 0.0, 0.5)];
+        mesh(v, vec![[0, 1, 2]])
+    }
+
+    #[test]
+    fn a_wall_dipping_into_a_face_at_a_cell_corner_gets_the_face_normal_and_at_a_rim_the_wall_normal()
+     {
+        // Sliding along +x and a little down, the wall's foot dips into the sheet beside the
+        // sheet's middle vertex: a corner of its cells, inside its face, which holds the wall up
+        // and never pushes it back.
+        let approach = Vector3::new(1.0, 0.0, -0.1);
+        let inside = classify(&wall(-0.001), &subdivided_sheet(), approach);
+        for c in &inside {
+            assert!(
+                (c.normal.into_inner() - Vector3::z()).norm() < 1e-12,
+                "{c:?}"
+            );
+        }
+        // Beside the middle of the sheet's rim, a vertex of the sheet's rim meets the wall.
+        let rim = classify(&wall(0.999), &subdivided_sheet(), approach);
+        assert!(
+            rim.iter().any(|c| c.kind == ContactKind::FaceVertex
+                && (c.normal.into_inner() + Vector3::x()).norm() < 1e-12),
+            "{rim:?}"
+        );
     }
 
     #[test]

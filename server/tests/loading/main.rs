@@ -8,3 +8,4 @@ mod mesh_files;
 mod overlaps;
 mod scene_refusals;
 mod scenes;
+mod users;

@@ -10,7 +10,7 @@ use crate::scenes::{PEG, configs, scratch_dir, write};
 
 /// Loads `contents` as a scene and returns the error's message, checking that it names the
 /// file and contains every one of `needles` (the key and the reason).
-fn refused(test: &str, contents: &str, needles: &[&str]) -> SceneError {
+pub(crate) fn refused(test: &str, contents: &str, needles: &[&str]) -> SceneError {
     let dir = scratch_dir(test);
     let path = write(&dir, "scene.toml", contents);
     let error = Scene::load(&path).expect_err("the scene must be refused");
@@ -125,7 +125,7 @@ fn duplicate_part_names_are_refused() {
     refused(
         "duplicate_names",
         &format!("name = \"s\"\n{PEG}{PEG}"),
-        &["parts[1].name", "\"peg\"", "parts[0]"],
+        &["parts[1].name", "is the name of parts[0] too"],
     );
 }
 
@@ -134,7 +134,10 @@ fn unknown_groups_in_the_interest_matrix_are_refused() {
     refused(
         "unknown_group",
         &format!("name = \"s\"\n[groups]\nnot_of_interest = [[\"parts\", \"tools\"]]\n{PEG}"),
-        &["groups.not_of_interest[0]", "\"tools\""],
+        &[
+            "groups.not_of_interest[0]",
+            "its second group is the group of no part",
+        ],
     );
 }
 
@@ -221,13 +224,72 @@ fn unknown_parts_in_the_interest_matrix_are_refused() {
     refused(
         "unknown_interest_part",
         &format!("name = \"s\"\n[groups]\nparts_not_of_interest = [[\"peg\", \"nail\"]]\n{PEG}"),
-        &["groups.parts_not_of_interest[0]", "\"nail\""],
+        &[
+            "groups.parts_not_of_interest[0]",
+            "its second name is the name of no part",
+        ],
     );
     refused(
         "same_interest_part",
         &format!("name = \"s\"\n[groups]\nparts_not_of_interest = [[\"peg\", \"peg\"]]\n{PEG}"),
         &["groups.parts_not_of_interest[0]", "twice"],
     );
+}
+
+/// A refusal names the key, never the value: a config's names, groups and paths, even on lines
+/// of their own or in multi-line strings, are not quoted, so that asking the server to load a
+/// file shows nothing of the file.
+#[test]
+fn refusals_quote_no_value_of_the_config() {
+    let long = "a_value_long_enough_to_be_noticed_if_quoted";
+    let sphere = "shape = { kind = \"sphere\", radius = 0.1, triangles = 20 }";
+    for (test, contents, key) in [
+        (
+            "unknown_interest_group",
+            format!(
+                "name = \"s\"\n[groups]\nnot_of_interest = [[\n\"default\",\n\"{long}\"\n]]\n{PEG}"
+            ),
+            "groups.not_of_interest[0]",
+        ),
+        (
+            "unknown_interest_part",
+            format!(
+                "name = \"s\"\n[groups]\nparts_not_of_interest = [[\n\"peg\",\n\"{long}\"\n]]\n{PEG}"
+            ),
+            "groups.parts_not_of_interest[0]",
+        ),
+        (
+            "multi_line_name",
+            format!("name = \"\"\"\n{long}\n\"\"\"\n{PEG}"),
+            "name",
+        ),
+        (
+            "multi_line_part_name",
+            format!("name = \"s\"\n[[parts]]\nname = '''\n{long}\n'''\n{sphere}\n"),
+            "parts[0].name",
+        ),
+        (
+            "multi_line_group",
+            format!("name = \"s\"\n[[parts]]\nname = \"p\"\ngroup = '''\n{long}\n'''\n{sphere}\n"),
+            "parts[0].group",
+        ),
+        (
+            "multi_line_mesh",
+            format!("name = \"s\"\n[[parts]]\nname = \"p\"\nmesh = \"\"\"\n{long}\n\"\"\"\n"),
+            "parts[0].mesh",
+        ),
+        (
+            "multi_line_hand",
+            format!("name = \"s\"\nhands = [\"\"\"\n{long}\n\"\"\"]\n{PEG}"),
+            "hands[0]",
+        ),
+    ] {
+        let message = refused(test, &contents, &[key]).to_string();
+        assert!(
+            !message.contains(long),
+            "{test}: the value is quoted in {message}"
+        );
+    }
 }
 
 /// Scenes whose derived values would overflow: a scale that makes the mesh's coordinates huge

@@ -7,11 +7,11 @@ use std::fmt;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use vas_server::scene::{Part, Scene};
 
-use super::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, open_hand};
+use super::{HANDLE_RADIUS, Keyframe, ScriptedGrasp, fist, open_hand};
 
 mod unheld;
 
-use unheld::{FlatPush, Thumb, release_in_mid_air};
+use unheld::{FlatPush, release_in_mid_air};
 
 /// A scene lacks a part a recorded scenario moves or aims at.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -38,19 +38,20 @@ pub enum RecordedScenario {
     PipeThroughSheet,
     /// Thumb and index tips pinch a small pin, lift it and open.
     PrecisionPinch,
-    /// The flat hand, fingers straight, pushes the side of a block 2 cm along and withdraws;
-    /// nothing is grasped.
+    /// The flat hand, fingers straight, pushes the side of a block standing on a table 2 cm
+    /// across the table and withdraws; nothing is grasped.
     Push,
     /// A power grasp on a handle, then the cart drives and turns while the hand stays still in
     /// the cart's frame; then the hand opens.
     NavigateHolding,
     /// In the demo scene: a power grasp on the peg standing on the table, carried over the
-    /// block, lowered into its hole and released there.
+    /// block, lowered into its hole and released; it drops through onto the table.
     DemoPegIntoBlock,
     /// The flat hand, thumb up, pushes a slider standing in a slot along the slot, aiming past
     /// its end stop, and withdraws.
     PushAlongRail,
-    /// The flat hand pushes a block standing before a wall, aiming past the wall, and withdraws.
+    /// The flat hand pushes a block standing on a table before a wall, aiming past the wall, and
+    /// withdraws.
     PushIntoWall,
     /// A power grasp on a peg above a table, lifted and released in mid-air: it settles.
     ReleaseOverTable,
@@ -58,6 +59,9 @@ pub enum RecordedScenario {
     ReleaseOverSlope,
     /// A power grasp on a peg with nothing below, lifted and released in mid-air: it settles.
     ReleaseOverNothing,
+    /// The flat hand, thumb up, pushes a block standing on a table over the table's edge, and
+    /// withdraws: the block tips over the edge and falls onto the ground.
+    PushOffTable,
 }
 
 impl fmt::Display for RecordedScenario {
@@ -84,6 +88,17 @@ const PIPE_DRIFT: f64 = 0.004;
 const DEMO_GRASP_RAISE: f64 = 0.02;
 /// How deep the demo's peg goes into the block's hole (metres).
 const DEMO_INSERT_DEPTH: f64 = 0.01;
+/// How far short of the demo's peg the palm stops while the fingers close on it (metres): the
+/// demo scene pushes parts, and a palm pressing on the peg alone would push it away.
+const DEMO_PALM_GAP: f64 = 0.0015;
+/// How far the palm then presses into the demo's peg (metres), the fingers around it: a power
+/// grasp, which holds, so nothing pushes the peg.
+const DEMO_PALM_PRESS: f64 = 0.002;
+/// The thumb's flex values (CyberGlove order: rotation, its two joints, abduction).
+const THUMB: std::ops::Range<usize> = 0..4;
+/// How far the hand draws back from the demo's peg while it opens (metres): it lets go touching
+/// nothing, so no push holds the peg and it settles.
+const DEMO_WITHDRAW: f64 = 0.03;
 /// The palm's inside face, this far from the hand root along -z (metres).
 const PALM_FACE: f64 = 0.0125;
 /// The palm's middle, this far from the hand root along +y (metres).
@@ -97,6 +112,9 @@ const RAIL_PUSH_DEPTH: f64 = 0.05;
 const RAIL_PUSH_RAISE: f64 = 0.01;
 /// The push into the wall aims this far into the block (metres): 2 cm past the wall.
 const WALL_PUSH_DEPTH: f64 = 0.03;
+/// The push off the table aims this far into the block (metres): its middle 2.5 cm past the
+/// table's edge.
+const TABLE_PUSH_DEPTH: f64 = 0.04;
 /// How far the cart drives while the hand holds the handle (metres, in the world).
 const CART_DRIVE: [f64; 3] = [0.3, 0.2, 0.0];
 /// How far the cart turns about its vertical axis meanwhile (degrees).
@@ -104,7 +122,7 @@ const CART_TURN_DEGREES: f64 = 40.0;
 
 impl RecordedScenario {
     /// Every recorded scenario, in the order of the fixtures' documentation.
-    pub const ALL: [RecordedScenario; 11] = [
+    pub const ALL: [RecordedScenario; 12] = [
         RecordedScenario::PegInsert,
         RecordedScenario::PipeThroughSheet,
         RecordedScenario::PrecisionPinch,
@@ -116,6 +134,7 @@ impl RecordedScenario {
         RecordedScenario::ReleaseOverTable,
         RecordedScenario::ReleaseOverSlope,
         RecordedScenario::ReleaseOverNothing,
+        RecordedScenario::PushOffTable,
     ];
 
     /// The scenario's name: its fixture's file stem.
@@ -132,6 +151,7 @@ impl RecordedScenario {
             RecordedScenario::ReleaseOverTable => "release_over_table",
             RecordedScenario::ReleaseOverSlope => "release_over_slope",
             RecordedScenario::ReleaseOverNothing => "release_over_nothing",
+            RecordedScenario::PushOffTable => "push_off_table",
         }
     }
 
@@ -152,24 +172,25 @@ impl RecordedScenario {
                 "thumb and index tips pinch the pin, lift it 5 cm, and open"
             }
             RecordedScenario::Push => {
-                "the flat hand pushes against the block's side, aiming 2 cm into it, and \
-                 withdraws; nothing is grasped"
+                "the flat hand, thumb up, pushes against the side of the block on the table, \
+                 aiming 2 cm into it, and withdraws; nothing is grasped"
             }
             RecordedScenario::NavigateHolding => {
                 "power grasp on the handle, then the cart drives 36 cm and turns 40 degrees with \
                  the hand still in the cart's frame, then the hand opens"
             }
             RecordedScenario::DemoPegIntoBlock => {
-                "in the demo scene: power grasp on the peg, carried over the block, lowered 1 cm \
-                 into its hole (1 mm of clearance), released there"
+                "in the demo scene: the fingers close on the peg, then the palm (a power grasp); \
+                 carried over the block, lowered 1 cm into its hole (1 mm of clearance); the hand \
+                 opens drawing back, and the peg drops through the hole onto the table"
             }
             RecordedScenario::PushAlongRail => {
                 "the flat hand, thumb up, pushes the slider along its slot, aiming 2 cm past the \
                  end stop, and withdraws; nothing is grasped"
             }
             RecordedScenario::PushIntoWall => {
-                "the flat hand pushes the block towards the wall 1 cm behind it, aiming 3 cm \
-                 into it, and withdraws; nothing is grasped"
+                "the flat hand, thumb up, pushes the block on the table towards the wall 1 cm \
+                 behind it, aiming 3 cm into it, and withdraws; nothing is grasped"
             }
             RecordedScenario::ReleaseOverTable => {
                 "power grasp on the peg above the table, lifted 3 cm, released in mid-air"
@@ -179,6 +200,10 @@ impl RecordedScenario {
             }
             RecordedScenario::ReleaseOverNothing => {
                 "power grasp on the peg with nothing below, lifted 3 cm, released in mid-air"
+            }
+            RecordedScenario::PushOffTable => {
+                "the flat hand, thumb up, pushes the block on the table, aiming 4 cm into it, its \
+                 middle past the table's edge, and withdraws; nothing is grasped"
             }
         }
     }
@@ -202,7 +227,6 @@ impl RecordedScenario {
             RecordedScenario::PipeThroughSheet => pipe_through_sheet(part("pipe")?, part("sheet")?),
             RecordedScenario::PrecisionPinch => precision_pinch(part("pin")?),
             RecordedScenario::Push => FlatPush {
-                thumb: Thumb::Down,
                 raise: 0.0,
                 depth: PUSH_DEPTH,
             }
@@ -210,17 +234,20 @@ impl RecordedScenario {
             RecordedScenario::NavigateHolding => navigate_holding(part("handle")?),
             RecordedScenario::DemoPegIntoBlock => demo_peg_into_block(part("peg")?, part("block")?),
             RecordedScenario::PushAlongRail => FlatPush {
-                thumb: Thumb::Up,
                 raise: RAIL_PUSH_RAISE,
                 depth: RAIL_PUSH_DEPTH,
             }
             .keyframes(part("slider")?),
             RecordedScenario::PushIntoWall => FlatPush {
-                thumb: Thumb::Down,
                 raise: 0.0,
                 depth: WALL_PUSH_DEPTH,
             }
             .keyframes(part("block")?),
+            RecordedScenario::PushOffTable => FlatPush {
+                raise: 0.0,
+                depth: TABLE_PUSH_DEPTH,
+            }
+            .keyframes_then_fall(part("block")?),
             RecordedScenario::ReleaseOverTable
             | RecordedScenario::ReleaseOverSlope
             | RecordedScenario::ReleaseOverNothing => release_in_mid_air(part("peg")?),
@@ -245,22 +272,29 @@ fn power_grasp_on(part: &Part) -> Vec<Keyframe> {
 /// grasped. The hand comes as much closer to the axis as the cylinder is thinner than the
 /// script's handle, so that the palm meets its surface as it meets the handle's.
 pub fn power_grasp_at(handle: &Isometry3<f64>, radius: f64) -> Vec<Keyframe> {
-    let script = ScriptedGrasp::PowerOnHandle;
-    let thinner = Translation3::new(0.0, 0.0, HANDLE_RADIUS - radius);
-    let placement = handle * (thinner * script.part_pose()).inverse();
-    let mut keys: Vec<Keyframe> = script
-        .keyframes()
-        .into_iter()
-        .filter(|k| k.time <= script.milestones().grasped_by)
-        .map(|k| Keyframe {
-            tracker: placement * k.tracker,
-            ..k
-        })
-        .collect();
+    let mut keys = power_grasp_closing(handle, radius, 0.0);
     then(&mut keys, 0.1, |k| {
         k.tracker *= Translation3::new(0.0, 0.0, POWER_GRASP_PRESS);
     });
     keys
+}
+
+/// The scripted power grasp's approach and closing fist on a cylinder of `radius` whose axis
+/// and middle are at `handle`, with the hand held `back` metres farther from the axis than the
+/// script has it (along the palm's normal; the script presses [`POWER_GRASP_PRESS`] into it).
+fn power_grasp_closing(handle: &Isometry3<f64>, radius: f64, back: f64) -> Vec<Keyframe> {
+    let script = ScriptedGrasp::PowerOnHandle;
+    let thinner = Translation3::new(0.0, 0.0, HANDLE_RADIUS - radius);
+    let placement = handle * (thinner * script.part_pose()).inverse();
+    script
+        .keyframes()
+        .into_iter()
+        .filter(|k| k.time <= script.milestones().grasped_by)
+        .map(|k| Keyframe {
+            tracker: placement * k.tracker * Translation3::new(0.0, 0.0, back),
+            ..k
+        })
+        .collect()
 }
 
 /// Appends a keyframe `duration` seconds after the last one, changed by `change`.
@@ -325,6 +359,11 @@ fn peg_insert(peg: &Part, block: &Part) -> Vec<Keyframe> {
     keys
 }
 
+/// The demo scene pushes parts and settles released ones, and smooths the tracked hand: the
+/// fingers close before the palm presses on the peg, so that the touch forming the grasp never
+/// pushes it (only the hand's root pushes), and the hand draws back as it opens, so that it
+/// lets go touching nothing and the peg drops through the hole onto the table. Each move is
+/// followed by a pause in which the smoothed hand catches up with the script.
 fn demo_peg_into_block(peg: &Part, block: &Part) -> Vec<Keyframe> {
     let up = Vector3::z();
     let (lift, over) = carry_over(peg, block);
@@ -333,7 +372,31 @@ fn demo_peg_into_block(peg: &Part, block: &Part) -> Vec<Keyframe> {
         * peg.pose
         * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), PI);
     let (left, right) = extent(peg, &Vector3::x());
-    let mut keys = power_grasp_at(&handle, (right - left) / 2.0);
+    let along_palm = |distance: f64| {
+        move |k: &mut Keyframe| {
+            k.tracker *= Translation3::new(0.0, 0.0, distance);
+        }
+    };
+    // The thumb waits: thumb and fingers alone would make a precision grasp.
+    let mut keys = power_grasp_closing(
+        &handle,
+        (right - left) / 2.0,
+        POWER_GRASP_PRESS + DEMO_PALM_GAP,
+    );
+    for key in &mut keys {
+        key.flex[THUMB].copy_from_slice(&open_hand()[THUMB]);
+    }
+    then(&mut keys, 0.2, |_| {});
+    then(
+        &mut keys,
+        0.1,
+        along_palm(-(DEMO_PALM_GAP + DEMO_PALM_PRESS)),
+    );
+    then(&mut keys, 0.3, |_| {});
+    then(&mut keys, 0.2, |k| {
+        k.flex = fist();
+        along_palm(DEMO_PALM_PRESS)(k);
+    });
     then(&mut keys, 0.3, shift(lift));
     then(&mut keys, 0.6, shift(over));
     then(&mut keys, 0.1, |_| {});
@@ -342,8 +405,12 @@ fn demo_peg_into_block(peg: &Part, block: &Part) -> Vec<Keyframe> {
         0.4,
         shift(-(PEG_CARRY_GAP + DEMO_INSERT_DEPTH) * up),
     );
-    then(&mut keys, 0.05, |_| {});
-    open_and_rest(&mut keys);
+    then(&mut keys, 0.2, |_| {});
+    then(&mut keys, 0.2, |k| {
+        k.flex = open_hand();
+        along_palm(DEMO_WITHDRAW)(k);
+    });
+    then(&mut keys, 0.5, |_| {});
     keys
 }
 

@@ -94,7 +94,7 @@ fn a_tracker_sample_is_answered_by_a_hand_frame_carrying_its_seq() {
     assert_eq!(frame.root.position, [0.1, -0.2, 1.3], "cart * hand");
     assert!(frame.timestamp_ns >= sample.timestamp_ns);
     let side = frame.side().expect("a hand frame names its side");
-    assert_eq!(client.latest_hand_of(side), Some(&frame));
+    assert_eq!(client.latest_hand_of(0, side), Some(&frame));
     assert!(client.latest_hands().contains(&frame));
     let stats = client.input_stats(PATIENCE).expect("stats");
     assert_eq!(stats.tracker_accepted, 1);
@@ -110,6 +110,8 @@ fn glove_values_beyond_the_joint_limits_are_clamped_and_counted() {
         seq: 7,
         timestamp_ns: wall_clock_ns(),
         flex,
+        user: 0,
+        side: 0,
     };
     client.send_glove(&sample).expect("send");
     // The clasp brings the fingers to the glove's values over a few frames (it moves a segment at
@@ -419,6 +421,8 @@ fn record_writes_the_samples_clients_send() {
         seq: 1,
         timestamp_ns: first.timestamp_ns + 1,
         flex: [0.3; FLEX_COUNT],
+        user: 0,
+        side: 0,
     };
     let second = TrackerSample {
         timestamp_ns: first.timestamp_ns + 2,
@@ -528,9 +532,12 @@ fn a_lockstep_replay_answers_every_sample_the_same_way_twice() {
     assert_eq!(
         events,
         [
-            "contact begin peg – hand at sample 20",
-            "grasp peg (power) at sample 49",
-            "release peg at sample 219"
+            "contact begin peg – hand at sample 47",
+            "grasp peg (power) at sample 112",
+            "contact begin peg – block at sample 300",
+            "release peg at sample 304",
+            "contact end peg – block at sample 304",
+            "contact end peg – hand at sample 304"
         ]
     );
 }

@@ -111,6 +111,8 @@ fn bursts_of_malformed_input_are_rejected_and_counted_and_change_nothing() {
                 seq,
                 timestamp_ns: wall_clock_ns(),
                 flex,
+                user: 0,
+                side: 0,
             };
             client.send_glove(&glove).expect("send");
         }

@@ -7,6 +7,7 @@ use std::fs;
 use nalgebra::Isometry3;
 
 use vas_client::recording::Recording;
+use vas_protocol::EventKind::{self, PushEnd, Release};
 use vas_server::scene::Scene;
 use vas_testkit::captured::CapturedMotion;
 use vas_testkit::fixtures::write_fixture;
@@ -158,6 +159,11 @@ fn two_hand_handover() {
 }
 
 #[test]
+fn two_user_handover() {
+    check_twice(scenario("two_user_handover"));
+}
+
+#[test]
 fn captured_tracking_loss() {
     check(&EXPECTED[8]);
 }
@@ -174,21 +180,21 @@ fn push_into_wall() {
 
 #[test]
 fn release_over_table() {
-    let (scene, run) = lands_within_half_a_second(scenario("release_over_table"));
+    let (scene, run) = lands_within_half_a_second(scenario("release_over_table"), Release);
     let gap = nearest_gap(&scene, &run.final_poses, "peg");
     assert!(gap <= 1.0, "the peg rests {gap} mm above the table");
 }
 
 #[test]
 fn release_over_slope() {
-    let (scene, run) = lands_within_half_a_second(scenario("release_over_slope"));
+    let (scene, run) = lands_within_half_a_second(scenario("release_over_slope"), Release);
     let gap = nearest_gap(&scene, &run.final_poses, "peg");
     assert!(gap <= 1.0, "the peg rests {gap} mm above the slope");
 }
 
 #[test]
 fn release_over_nothing() {
-    let (scene, run) = lands_within_half_a_second(scenario("release_over_nothing"));
+    let (scene, run) = lands_within_half_a_second(scenario("release_over_nothing"), Release);
     let peg = part_index(&scene, "peg");
     let lowest = (scene.parts[peg].mesh.vertices().iter())
         .map(|v| (run.final_poses[peg] * v).z)
@@ -200,15 +206,30 @@ fn release_over_nothing() {
     );
 }
 
-/// Checks a release scenario (twice), and that its part has come to rest within half a second
-/// of simulated time after the release: the recording cut there leaves it where the whole
-/// recording does.
-fn lands_within_half_a_second(scenario: &Scenario) -> (Scene, OfflineRun) {
+#[test]
+fn push_off_table() {
+    let (scene, run) = lands_within_half_a_second(scenario("push_off_table"), PushEnd);
+    let gap = nearest_gap(&scene, &run.final_poses, "block");
+    assert!(gap <= 1.0, "the block rests {gap} mm above the ground");
+    let block = part_index(&scene, "block");
+    let lowest = (scene.parts[block].mesh.vertices().iter())
+        .map(|v| (run.final_poses[block] * v).z)
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        (0.0..=0.001).contains(&lowest),
+        "the block's lowest point is at z = {lowest}, not on the ground"
+    );
+}
+
+/// Checks a scenario whose part settles (twice), and that the part has come to rest within half
+/// a second of simulated time after the event `settles` (a release, or the end of a push): the
+/// recording cut there leaves it where the whole recording does.
+fn lands_within_half_a_second(scenario: &Scenario, settles: EventKind) -> (Scene, OfflineRun) {
     let (scene, run) = check_twice(scenario);
     let recording = Recording::load(&scenario.fixture_path()).expect("loads");
     let release = (run.events.iter())
-        .find(|event| event.kind == vas_protocol::EventKind::Release)
-        .expect("released");
+        .find(|event| event.kind == settles)
+        .expect("the part starts settling");
     let released_at = recording.samples[release.frame].time;
     let mut cut = recording.clone();
     cut.samples
@@ -357,7 +378,7 @@ fn every_recorded_scenario_has_one_expected_outcome() {
     let listed: Vec<_> = EXPECTED.iter().map(|s| s.motion).collect();
     let motions: Vec<_> = (RecordedScenario::ALL.into_iter().map(Motion::Script))
         .chain(CapturedMotion::ALL.into_iter().map(Motion::Captured))
-        .chain([Motion::HandOver])
+        .chain([Motion::HandOver, Motion::UsersHandOver])
         .collect();
     assert_eq!(listed.len(), motions.len());
     for motion in motions {
@@ -366,38 +387,12 @@ fn every_recorded_scenario_has_one_expected_outcome() {
     }
 }
 
-/// The demo's peg, released in the block's hole in a scene where released parts settle, goes on
-/// down until it rests on what is below it, within the recording's last half second, and nothing
-/// enters anything on the way (parry judges every frame).
+/// The demo's peg, let go 1 cm into the block's hole (the demo scene settles released parts),
+/// drops through the hole and comes to rest on the table within half a second of the release,
+/// and nothing enters anything on the way (parry judges every frame).
 #[test]
 fn a_released_part_settles_onto_what_is_below_it() {
-    use vas_server::scene::ReleaseMode;
-    let demo = &EXPECTED[5];
-    let mut scene = Scene::load(&demo.scene_path()).expect("loads");
-    scene.params.release.mode = ReleaseMode::Settle;
-    let recording = Recording::load(&demo.fixture_path()).expect("loads");
-    let run = offline::replay(&scene, &recording).expect("replays");
-    assert!(
-        run.penetrations.is_empty(),
-        "{:?}",
-        run.penetrations.first()
-    );
-    let release = (run.events.iter())
-        .find(|event| event.kind == vas_protocol::EventKind::Release)
-        .expect("released");
-    let after =
-        recording.samples.last().expect("samples").time - recording.samples[release.frame].time;
-    assert!(after <= 0.5, "{after} s of recording after the release");
-    let held_there = demo.final_pose.pose();
-    let pose = run.final_poses[part_index(&scene, "peg")];
-    assert!(
-        pose.translation.z < held_there.translation.z - 0.001,
-        "the peg stayed at {pose:?}"
-    );
-    // Resting: within a millimetre of a part it is of interest to, by parry.
-    let nearest = nearest_gap(&scene, &run.final_poses, "peg");
-    assert!(
-        nearest <= 1.0,
-        "the peg rests {nearest} mm from the nearest part"
-    );
+    let (scene, run) = lands_within_half_a_second(scenario("demo_peg_into_block"), Release);
+    let gap = nearest_gap(&scene, &run.final_poses, "peg");
+    assert!(gap <= 1.0, "the peg rests {gap} mm from the nearest part");
 }

@@ -3,6 +3,8 @@
 //! iceoryx2 prefix.
 
 mod bench_tools;
+mod bridge;
+mod bridge_users;
 mod c_library;
 mod clearance;
 mod client_roles;

@@ -1,7 +1,8 @@
 //! The recorded scenarios replayed in lockstep through the real `vas-server` binary with the
 //! client library: the grasp and release events in order, the final part pose, no penetration
 //! in any published frame (judged by parry), and the same output on a second replay after a
-//! reset.
+//! reset. The samples go straight into the server's input streams here; [`check_through`] sends
+//! them another way in (the bridge's zenoh peers, in `bridge_users.rs`) and judges the same.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -10,7 +11,7 @@ use std::time::Instant;
 use nalgebra::Isometry3;
 use vas_client::recording::{InputSample, Recording};
 use vas_client::{Client, Frame};
-use vas_protocol::{EventKind, GraspType, HandFrame, HandSide, wall_clock_ns};
+use vas_protocol::{EventKind, GraspType, HandFrame, HandSide, SimEvent, wall_clock_ns};
 use vas_server::grasping::HandModel;
 use vas_server::scene::Scene;
 use vas_server::simulation::restart::Restart;
@@ -18,11 +19,14 @@ use vas_testkit::offline::{Oracle, VisibleHand};
 use vas_testkit::scenarios::{EXPECTED, Scenario};
 use vas_testkit::{PATIENCE, Server};
 
+/// Whose hand a frame or event is: the user's index and the side code.
+type HandKey = (u32, u32);
+
 /// A hand frame without its frame number and timestamps (which differ between runs).
 #[derive(Debug, PartialEq)]
 struct Answer {
-    /// The hand's side code.
-    hand: u32,
+    /// The hand's user and side code.
+    hand: HandKey,
     /// Sequence numbers of the tracker, glove and hand-joints samples it answers.
     seqs: [u64; 3],
     /// Root position and rotation.
@@ -39,11 +43,11 @@ struct Answer {
 
 /// What one replay published.
 #[derive(Debug, PartialEq)]
-struct Replay {
+pub(crate) struct Replay {
     /// Per sample, the hand frames of the frame answering it, one per hand.
     answers: Vec<Vec<Answer>>,
-    /// Every event: kind, hand, grasp, part, other.
-    events: Vec<[u32; 5]>,
+    /// Every event: kind, user, hand, grasp, part, other.
+    pub(crate) events: Vec<[u32; 6]>,
     /// The last parts frame's poses.
     final_poses: Vec<Isometry3<f64>>,
     /// Whether a parts frame flagged a part pushed (how many did depends on the publishing rate).
@@ -52,13 +56,42 @@ struct Replay {
     penetrations: Vec<String>,
 }
 
-/// The scene's hands as the judge needs them: side code and model, in the scene's order.
-type Hands<'a> = [(u32, &'a HandModel)];
+/// The scene's hands as the judge needs them: user and side code, and model, in the scene's
+/// order.
+type Hands<'a> = [(HandKey, &'a HandModel)];
 
-/// Sends every sample of `recording`, each after the answer to the previous one, and gathers
-/// what the server published.
+impl Replay {
+    /// The user of every event but contacts (grasps, hand-overs, releases), in order.
+    pub(crate) fn grasping_users(&self) -> Vec<u32> {
+        let contacts = [EventKind::ContactBegin, EventKind::ContactEnd].map(|kind| kind as u32);
+        (self.events.iter())
+            .filter(|[kind, ..]| !contacts.contains(kind))
+            .map(|&[_, user, ..]| user)
+            .collect()
+    }
+}
+
+/// The way a replay's samples reach the server.
+pub(crate) trait Inputs {
+    /// Hands `input` to the server; `client` is the replay's own connection, which reads what
+    /// the server answers.
+    fn send(&mut self, client: &Client, input: &InputSample);
+}
+
+/// Straight into the server's input streams, as `vas-client replay` sends them.
+struct Direct;
+
+impl Inputs for Direct {
+    fn send(&mut self, client: &Client, input: &InputSample) {
+        client.send_input(input).expect("send");
+    }
+}
+
+/// Sends every sample of `recording` through `inputs`, each after the answer to the previous
+/// one, and gathers what the server published.
 fn replay(
     client: &mut Client,
+    inputs: &mut impl Inputs,
     scene: &Scene,
     (oracle, hands): (&Oracle, &Hands),
     recording: &Recording,
@@ -80,7 +113,7 @@ fn replay(
     let start_ns = wall_clock_ns().saturating_sub(recording.duration_ns());
     for (index, recorded) in recording.samples.iter().enumerate() {
         let input = recorded.stamped(start_ns);
-        client.send_input(&input).expect("send");
+        inputs.send(client, &input);
         let deadline = Instant::now() + PATIENCE;
         let mut answered = None;
         // The answer, then every hand's frame of the same frame (they come one after another).
@@ -101,11 +134,11 @@ fn replay(
         };
         let visible: Vec<VisibleHand> = (frames.iter())
             .zip(hands)
-            .map(|(frame, &(side, model))| {
+            .map(|(frame, &(key, model))| {
                 let hand = VisibleHand {
                     root: frame.root.to_isometry(),
                     flex: frame.flex.map(f64::from),
-                    held: seen.held.get(&side).copied(),
+                    held: seen.held.get(&key).copied(),
                 };
                 assert_segments_placed(frame, &hand, model, index);
                 hand
@@ -126,7 +159,7 @@ fn answer(frame: &HandFrame) -> Answer {
     let [x, y, z] = frame.root.position;
     let [qx, qy, qz, qw] = frame.root.rotation;
     Answer {
-        hand: frame.hand,
+        hand: (frame.user, frame.hand),
         seqs: [frame.tracker.seq, frame.glove.seq, frame.joints.seq],
         root: [x, y, z, qx, qy, qz, qw],
         flex: frame.flex.iter().map(|v| v.to_bits()).collect(),
@@ -159,11 +192,11 @@ fn assert_segments_placed(answer: &HandFrame, hand: &VisibleHand, model: &HandMo
 }
 
 /// The state the frames received so far show: the latest part poses, each hand's latest frame
-/// and held part (by side code).
+/// and held part (by user and side code).
 struct Seen {
     poses: Vec<Isometry3<f64>>,
-    held: BTreeMap<u32, usize>,
-    hands: BTreeMap<u32, HandFrame>,
+    held: BTreeMap<HandKey, usize>,
+    hands: BTreeMap<HandKey, HandFrame>,
 }
 
 impl Seen {
@@ -182,25 +215,20 @@ impl Seen {
                         .collect();
                 }
                 Frame::Event(event) => {
+                    let key = (event.user, event.hand);
                     match EventKind::try_from(event.kind) {
                         Ok(EventKind::Grasp) => {
-                            self.held.insert(event.hand, event.part as usize);
+                            self.held.insert(key, event.part as usize);
                         }
                         Ok(EventKind::Release | EventKind::HandOver) => {
-                            self.held.remove(&event.hand);
+                            self.held.remove(&key);
                         }
                         _ => {}
                     }
-                    out.events.push([
-                        event.kind,
-                        event.hand,
-                        event.grasp_type,
-                        event.part,
-                        event.other,
-                    ]);
+                    out.events.push(identity(&event));
                 }
                 Frame::Hand(hand) => {
-                    self.hands.insert(hand.hand, hand);
+                    self.hands.insert((hand.user, hand.hand), hand);
                     hands.push(hand);
                 }
                 Frame::Force(_) | Frame::Clearance(_) | Frame::Geometry(_) => {}
@@ -212,9 +240,9 @@ impl Seen {
     /// Every hand's frame numbered `frame`, in the order of `hands`, once all have come.
     fn hand_frames(&self, frame: u64, hands: &Hands) -> Option<Vec<HandFrame>> {
         (hands.iter())
-            .map(|(side, _)| {
+            .map(|(key, _)| {
                 self.hands
-                    .get(side)
+                    .get(key)
                     .filter(|hand| hand.frame == frame)
                     .copied()
             })
@@ -222,8 +250,19 @@ impl Seen {
     }
 }
 
-/// Replays `scenario` twice and checks it; returns what the first replay published.
+/// Replays `scenario` twice into the server's input streams and checks it; returns what the
+/// first replay published.
 fn check(scenario: &Scenario) -> Replay {
+    check_through(scenario, |_| Direct).0
+}
+
+/// Replays `scenario` twice, its samples sent through the [`Inputs`] that `connect` makes for
+/// the server, and checks it; returns what the first replay published, the server (still
+/// serving) and the inputs, for checks of their own.
+pub(crate) fn check_through<I: Inputs>(
+    scenario: &Scenario,
+    connect: impl FnOnce(&mut Server) -> I,
+) -> (Replay, Server, I) {
     let name = scenario.motion;
     let scene = Arc::new(Scene::load(&scenario.scene_path()).expect("the scene loads"));
     let recording = Recording::load(&scenario.fixture_path()).expect("the fixture loads");
@@ -231,8 +270,11 @@ fn check(scenario: &Scenario) -> Replay {
         .expect("the scene's hands build")
         .hand_bodies;
     let oracle = Oracle::new(&scene, &bodies);
-    let hands: Vec<(u32, &HandModel)> = (bodies.iter())
-        .map(|bodies| (side_code(bodies.model.side()), bodies.model.as_ref()))
+    let hands: Vec<(HandKey, &HandModel)> = (bodies.iter().zip(&scene.hands))
+        .map(|(bodies, hand)| {
+            let key = (hand.user, side_code(bodies.model.side()));
+            (key, bodies.model.as_ref())
+        })
         .collect();
     let scene_arg = scenario.scene_path().display().to_string();
     let mut server = Server::start_with(
@@ -240,11 +282,12 @@ fn check(scenario: &Scenario) -> Replay {
         &["--lockstep", "--scene", &scene_arg],
     );
     let mut client = server.connect();
+    let mut inputs = connect(&mut server);
 
     let judge = (&oracle, hands.as_slice());
-    let first = replay(&mut client, &scene, judge, &recording);
+    let first = replay(&mut client, &mut inputs, &scene, judge, &recording);
     client.reset(PATIENCE).expect("reset");
-    let second = replay(&mut client, &scene, judge, &recording);
+    let second = replay(&mut client, &mut inputs, &scene, judge, &recording);
 
     assert_eq!(first.answers.len(), recording.samples.len(), "{name}");
     assert!(
@@ -268,13 +311,13 @@ fn check(scenario: &Scenario) -> Replay {
         EventKind::PushEnd,
     ]
     .map(|k| k as u32);
-    let grasps_and_releases: Vec<[u32; 4]> = first
+    let grasps_and_releases: Vec<[u32; 5]> = first
         .events
         .iter()
         .filter(|[kind, ..]| hand_events.contains(kind))
-        .map(|&[kind, hand, grasp, part, _]| [hand, kind, part, grasp])
+        .map(|&[kind, user, hand, grasp, part, _]| [user, hand, kind, part, grasp])
         .collect();
-    let expected: Vec<[u32; 4]> = scenario
+    let expected: Vec<[u32; 5]> = scenario
         .events
         .iter()
         .map(|event| {
@@ -282,8 +325,14 @@ fn check(scenario: &Scenario) -> Replay {
                 EventKind::Grasp => event.grasp,
                 _ => GraspType::None,
             };
-            let hand = hands[event.hand].0;
-            [hand, event.kind as u32, part_id(event.part), grasp as u32]
+            let (user, hand) = hands[event.hand].0;
+            [
+                user,
+                hand,
+                event.kind as u32,
+                part_id(event.part),
+                grasp as u32,
+            ]
         })
         .collect();
     assert_eq!(
@@ -307,7 +356,7 @@ fn check(scenario: &Scenario) -> Replay {
         recording.samples.len(),
         first.events.len()
     );
-    first
+    (first, server, inputs)
 }
 
 /// A hand model's side as the wire codes it.
@@ -318,7 +367,7 @@ fn side_code(side: HandSide) -> u32 {
     }
 }
 
-fn scenario(name: &str) -> &'static Scenario {
+pub(crate) fn scenario(name: &str) -> &'static Scenario {
     EXPECTED
         .iter()
         .find(|scenario| scenario.motion.name() == name)
@@ -365,6 +414,18 @@ fn two_hand_handover() {
     check(scenario("two_hand_handover"));
 }
 
+/// The hand-over between two users: anna's right hand grasps the handle, ben's left hand takes
+/// it over and inserts it; every event names its user.
+#[test]
+fn two_user_handover() {
+    let replay = check(scenario("two_user_handover"));
+    assert_eq!(
+        replay.grasping_users(),
+        [0, 1, 0, 1],
+        "grasp, grasp, hand-over, release: anna, ben, anna, ben"
+    );
+}
+
 #[test]
 fn push_along_rail() {
     check(scenario("push_along_rail"));
@@ -390,6 +451,11 @@ fn release_over_nothing() {
     check(scenario("release_over_nothing"));
 }
 
+#[test]
+fn push_off_table() {
+    check(scenario("push_off_table"));
+}
+
 /// The hand frames say the hand is untracked exactly while its samples do, and the pin is held
 /// through the short loss and let go in the long one.
 #[test]
@@ -408,4 +474,17 @@ fn captured_tracking_loss() {
         .collect();
     assert_eq!(untracked, lost);
     assert!(lost.iter().filter(|&&lost| lost).count() > 100);
+}
+
+/// What an event says, without its time and place: kind, user, hand, grasp, part and other, as
+/// the replays compare events however they arrived.
+pub(crate) fn identity(event: &SimEvent) -> [u32; 6] {
+    [
+        event.kind,
+        event.user,
+        event.hand,
+        event.grasp_type,
+        event.part,
+        event.other,
+    ]
 }

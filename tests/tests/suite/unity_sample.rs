@@ -108,11 +108,11 @@ fn the_unity_sample_compiles_and_lays_out_the_library_s_structs() {
         layout!(PartState, "PartState", rotation, "Rotation"),
         layout!(HandFrame, "HandFrame", segments, "Segments"),
         layout!(SimEvent, "SimEvent", distance, "Distance"),
-        layout!(ForceFrame, "ForceFrame", hand, "Hand"),
-        layout!(TrackerSample, "TrackerSample", sensor_id, "SensorId"),
-        layout!(GloveSample, "GloveSample", flex, "Flex"),
+        layout!(ForceFrame, "ForceFrame", user, "User"),
+        layout!(TrackerSample, "TrackerSample", reserved, "Reserved"),
+        layout!(GloveSample, "GloveSample", side, "Side"),
         layout!(JointLocation, "JointLocation", flags, "Flags"),
-        layout!(HandJointsSample, "HandJointsSample", side, "Side"),
+        layout!(HandJointsSample, "HandJointsSample", user, "User"),
         layout!(VasMesh, "NativeMesh", triangle_count, "TriangleCount"),
         layout!(
             VasHandGeometry,
@@ -121,10 +121,15 @@ fn the_unity_sample_compiles_and_lays_out_the_library_s_structs() {
             "SegmentCount"
         ),
         layout!(VasGeometry, "NativeGeometry", hand_count, "HandCount"),
-        layout!(InputStats, "InputStats", rejected_ahead, "RejectedAhead"),
+        layout!(
+            InputStats,
+            "InputStats",
+            rejected_no_such_hand,
+            "RejectedNoSuchHand"
+        ),
         layout!(VasPartInfo, "NativePartInfo", scale, "Scale"),
         layout!(VasHandInfo, "NativeHandInfo", model, "Model"),
-        layout!(VasSceneInfo, "NativeSceneInfo", stats, "Stats"),
+        layout!(VasSceneInfo, "NativeSceneInfo", user_count, "UserCount"),
     ];
     assert!(lines.len() > expected.len(), "{printed}");
     for (line, expected) in lines.iter().zip(&expected) {

@@ -12,5 +12,6 @@ mod remote;
 mod replay;
 mod requests;
 mod serving;
+mod users;
 mod websocket;
 mod xr;

@@ -24,9 +24,9 @@ const IWER: &str = include_str!("vendor/iwer/iwer.min.js");
 const INSTALL: &str = "window.iwerDevice = new IWER.XRDevice(IWER.metaQuest3);
 window.iwerDevice.installRuntime({ forceInstall: true });";
 
-/// Opens the viewer's page in headless Chromium with the emulated headset installed, and waits
-/// until it has drawn the scene's parts and offers "Enter VR".
-async fn open_with_headset(viewer: &Viewer) -> Browser {
+/// Opens the viewer's page at `url` in headless Chromium with the emulated headset installed,
+/// and waits until it has drawn the scene's parts and offers "Enter VR".
+pub async fn open_with_headset(url: &str) -> Browser {
     let browser = Browser::start(1280, 800).await;
     browser
         .cdp(
@@ -34,11 +34,7 @@ async fn open_with_headset(viewer: &Viewer) -> Browser {
             json!({ "source": format!("{IWER}\n{INSTALL}") }),
         )
         .await;
-    browser
-        .client
-        .goto(&viewer.url())
-        .await
-        .expect("open the page");
+    browser.client.goto(url).await.expect("open the page");
     browser
         .wait_for("window.vasViewer?.drawn.lastParts > 0")
         .await;
@@ -49,7 +45,7 @@ async fn open_with_headset(viewer: &Viewer) -> Browser {
 }
 
 /// Presses "Enter VR" and waits for the session's first frame.
-async fn enter_vr(browser: &Browser) {
+pub async fn enter_vr(browser: &Browser) {
     browser
         .client
         .find(fantoccini::Locator::Id("VRButton"))
@@ -70,7 +66,7 @@ async fn entering_vr_draws_the_scene_in_an_xr_session() {
     );
     let mut client = server.connect();
     let viewer = Viewer::start(server.prefix());
-    let browser = open_with_headset(&viewer).await;
+    let browser = open_with_headset(&viewer.url()).await;
     assert_eq!(browser.eval::<u64>("window.vasViewer.xrFrames").await, 0);
     enter_vr(&browser).await;
     let (xr_frames, drawn): (u64, u64) = browser
@@ -125,7 +121,7 @@ async fn the_headsets_tracked_hands_drive_both_of_the_servers_hands() {
     );
     let mut client = server.connect();
     let viewer = Viewer::start(server.prefix());
-    let browser = open_with_headset(&viewer).await;
+    let browser = open_with_headset(&viewer.url()).await;
     let mode: String = browser
         .eval("window.iwerDevice.primaryInputMode = 'hand'")
         .await;

@@ -30,18 +30,18 @@ public static class LayoutCheck
         Layout(typeof(PartState), "Rotation");
         Layout(typeof(HandFrame), "Segments");
         Layout(typeof(SimEvent), "Distance");
-        Layout(typeof(ForceFrame), "Hand");
-        Layout(typeof(TrackerSample), "SensorId");
-        Layout(typeof(GloveSample), "Flex");
+        Layout(typeof(ForceFrame), "User");
+        Layout(typeof(TrackerSample), "Reserved");
+        Layout(typeof(GloveSample), "Side");
         Layout(typeof(JointLocation), "Flags");
-        Layout(typeof(HandJointsSample), "Side");
+        Layout(typeof(HandJointsSample), "User");
         Layout(typeof(NativeMesh), "TriangleCount");
         Layout(typeof(NativeHandGeometry), "SegmentCount");
         Layout(typeof(NativeGeometry), "HandCount");
-        Layout(typeof(InputStats), "RejectedAhead");
+        Layout(typeof(InputStats), "RejectedNoSuchHand");
         Layout(typeof(NativePartInfo), "Scale");
         Layout(typeof(NativeHandInfo), "Model");
-        Layout(typeof(NativeSceneInfo), "Stats");
+        Layout(typeof(NativeSceneInfo), "UserCount");
 
         // vas's point (1, 2, 3) turned 90 degrees about its z axis.
         double half = Math.Sqrt(0.5);

@@ -62,14 +62,18 @@ fn closest_features(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
             consider(p, q);
         }
     }
-    for corner in t1 {
-        if let Some(q) = projection_inside(corner, t2) {
-            consider(*corner, q);
+    if let Some(face) = Face::of(t2) {
+        for corner in t1 {
+            if let Some(q) = face.foot_inside(corner) {
+                consider(*corner, q);
+            }
         }
     }
-    for corner in t2 {
-        if let Some(p) = projection_inside(corner, t1) {
-            consider(p, *corner);
+    if let Some(face) = Face::of(t1) {
+        for corner in t2 {
+            if let Some(p) = face.foot_inside(corner) {
+                consider(p, *corner);
+            }
         }
     }
     best.distance = best.distance.sqrt();
@@ -142,17 +146,40 @@ const PARALLEL: f64 = 1e-12;
 /// The foot of `point` on the plane of `triangle` when it falls inside the triangle (closed);
 /// `None` outside or for a degenerate triangle.
 fn projection_inside(point: &Point3<f64>, triangle: &Triangle) -> Option<Point3<f64>> {
-    let [a, b, c] = triangle;
-    let normal = (b - a).cross(&(c - a));
-    let area2 = normal.norm_squared();
-    if area2 == 0.0 || !area2.is_finite() {
-        return None;
+    Face::of(triangle)?.foot_inside(point)
+}
+
+/// A triangle with a face: its normal (not unit) computed once for the feet of several points.
+struct Face<'t> {
+    corners: &'t Triangle,
+    normal: Vector3<f64>,
+    /// The normal's squared length: twice the area, squared.
+    area2: f64,
+}
+
+impl<'t> Face<'t> {
+    /// The face of `triangle`; `None` when it is degenerate (no area, or not finite).
+    fn of(triangle: &'t Triangle) -> Option<Self> {
+        let [a, b, c] = triangle;
+        let normal = (b - a).cross(&(c - a));
+        let area2 = normal.norm_squared();
+        (area2 != 0.0 && area2.is_finite()).then_some(Face {
+            corners: triangle,
+            normal,
+            area2,
+        })
     }
-    let foot = point - normal * (normal.dot(&(point - a)) / area2);
-    let inside = |from: &Point3<f64>, to: &Point3<f64>| {
-        (to - from).cross(&(foot - from)).dot(&normal) >= 0.0
-    };
-    (inside(a, b) && inside(b, c) && inside(c, a)).then_some(foot)
+
+    /// The foot of `point` on the face's plane when it falls inside the triangle (closed).
+    fn foot_inside(&self, point: &Point3<f64>) -> Option<Point3<f64>> {
+        let [a, b, c] = self.corners;
+        let normal = &self.normal;
+        let foot = point - normal * (normal.dot(&(point - a)) / self.area2);
+        let inside = |from: &Point3<f64>, to: &Point3<f64>| {
+            (to - from).cross(&(foot - from)).dot(normal) >= 0.0
+        };
+        (inside(a, b) && inside(b, c) && inside(c, a)).then_some(foot)
+    }
 }
 
 /// A point shared by two intersecting triangles: where an edge of one meets the other (some edge

@@ -17,6 +17,9 @@ fn tracker(seq: u64, hand: WirePose, cart: WirePose) -> TrackerSample {
         hand,
         cart,
         sensor_id: 0,
+        user: 0,
+        side: 0,
+        reserved: 0,
     }
 }
 
@@ -118,6 +121,8 @@ fn glove_samples_are_clamped_and_counted() {
         seq: 4,
         timestamp_ns: 40,
         flex,
+        user: 0,
+        side: 0,
     };
     assert_eq!(inputs.apply_glove(&sample), Ok((1 << 6) | (1 << 20)));
     let mut broken = sample;
@@ -167,7 +172,7 @@ fn pinch(seq: u64) -> HandJointsSample {
 #[test]
 fn hand_joints_drive_the_hand_and_the_tracker_keeps_the_cart() {
     let model = right_hand();
-    let mut inputs = Inputs::for_hands([&model], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &model)], TrackingParams::default());
     assert_eq!(
         inputs.apply_hand_joints(&pinch(1)),
         Ok(JointsOutcome::Tracked)
@@ -203,7 +208,7 @@ fn hand_joints_drive_the_hand_and_the_tracker_keeps_the_cart() {
 
 #[test]
 fn impossible_hand_joints_are_rejected_counted_and_keep_the_target() {
-    let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &right_hand())], TrackingParams::default());
     inputs.apply_hand_joints(&pinch(1)).expect("a hand");
     let before = inputs.frame();
     let at = |joint: Joint| joint.index();
@@ -269,7 +274,7 @@ fn a_scene_without_a_hand_takes_no_hand_joints() {
 
 #[test]
 fn an_untracked_hand_keeps_its_target_and_says_so() {
-    let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &right_hand())], TrackingParams::default());
     let mut never = pinch(1);
     never.joints.iter_mut().for_each(|joint| joint.flags = 0);
     assert_eq!(
@@ -301,9 +306,9 @@ fn an_untracked_hand_keeps_its_target_and_says_so() {
 #[test]
 fn a_restart_forgets_the_joints_and_keeps_the_counters() {
     let model = right_hand();
-    let mut inputs = Inputs::for_hands([&model], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &model)], TrackingParams::default());
     inputs.apply_hand_joints(&pinch(1)).expect("a hand");
-    inputs.restart([&model], TrackingParams::default());
+    inputs.restart([(0, &model)], TrackingParams::default());
     let frame = inputs.frame();
     assert_eq!(frame.stamps, Stamps::default());
     assert_eq!(frame.hands[0].input.tracker, Isometry3::identity());
@@ -314,11 +319,13 @@ fn a_restart_forgets_the_joints_and_keeps_the_counters() {
 fn two_hands_take_the_glove_and_their_own_joints() {
     let right = right_hand();
     let left = right.mirrored();
-    let mut inputs = Inputs::for_hands([&right, &left], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &right), (0, &left)], TrackingParams::default());
     let glove = GloveSample {
         seq: 1,
         timestamp_ns: 1,
         flex: [0.2; FLEX_COUNT],
+        user: 0,
+        side: 0,
     };
     inputs.apply_glove(&glove).expect("valid");
     let frame = inputs.frame();
@@ -352,7 +359,7 @@ fn a_joints_hand_untracked_or_silent_is_lost_and_lets_go_after_the_grace() {
         grace: 0.5,
         ..TrackingParams::default()
     };
-    let mut inputs = Inputs::for_hands([&right_hand()], tracking);
+    let mut inputs = Inputs::for_hands([(0, &right_hand())], tracking);
     const MS: u64 = 1_000_000;
     let joints = |seq: u64, ms: u64, tracked: bool| {
         let mut sample = pinch(seq);
@@ -399,7 +406,7 @@ fn a_joints_hand_untracked_or_silent_is_lost_and_lets_go_after_the_grace() {
 #[test]
 fn on_the_arrival_clock_a_silent_hand_is_lost_by_ticks_alone() {
     const MS: u64 = 1_000_000;
-    let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &right_hand())], TrackingParams::default());
     inputs.set_clock(TrackingClock::Arrival);
     let start = wall_clock_ns();
     // Stamped long ago: on the arrival clock only when it came counts.
@@ -416,7 +423,7 @@ fn on_the_arrival_clock_a_silent_hand_is_lost_by_ticks_alone() {
     assert!(inputs.tick(start + 600 * MS), "the grace is over");
     assert_eq!(state(&inputs), (false, true));
     assert!(!inputs.tick(start + 400 * MS), "time never goes back");
-    inputs.restart([&right_hand()], TrackingParams::default());
+    inputs.restart([(0, &right_hand())], TrackingParams::default());
     inputs.apply_hand_joints(&pinch(2)).expect("a hand");
     assert!(
         inputs.tick(wall_clock_ns() + 150 * MS),
@@ -426,7 +433,7 @@ fn on_the_arrival_clock_a_silent_hand_is_lost_by_ticks_alone() {
 
 #[test]
 fn on_sample_time_ticks_change_nothing() {
-    let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &right_hand())], TrackingParams::default());
     inputs.apply_hand_joints(&pinch(1)).expect("a hand");
     assert!(!inputs.tick(u64::MAX));
     assert!(inputs.frame().hands[0].tracked);
@@ -435,7 +442,7 @@ fn on_sample_time_ticks_change_nothing() {
 #[test]
 fn samples_stamped_beyond_the_servers_clock_are_rejected_and_keep_no_hand_untracked() {
     const HOUR_NS: u64 = 3_600_000_000_000;
-    let mut inputs = Inputs::for_hands([&right_hand()], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &right_hand())], TrackingParams::default());
     let now = wall_clock_ns();
     let mut future = pinch(1);
     future.timestamp_ns = now + HOUR_NS;
@@ -453,6 +460,8 @@ fn samples_stamped_beyond_the_servers_clock_are_rejected_and_keep_no_hand_untrac
         seq: 1,
         timestamp_ns: now + HOUR_NS,
         flex: [0.0; FLEX_COUNT],
+        user: 0,
+        side: 0,
     };
     assert!(matches!(
         inputs.apply_glove(&glove),
@@ -514,7 +523,7 @@ fn a_joints_hand_is_smoothed_and_starts_afresh_when_tracking_returns() {
     let retargeter = Retargeter::new(model.clone()).expect("the right hand retargets");
     let pinch = captured("webxr_pinch.json", HandSide::Right);
     let moved = pinch.transformed(&Isometry3::translation(0.002, 0.0, 0.0));
-    let mut inputs = Inputs::for_hands([&model], TrackingParams::default());
+    let mut inputs = Inputs::for_hands([(0, &model)], TrackingParams::default());
     let root = |inputs: &Inputs| inputs.frame().hands[0].input.tracker;
     inputs
         .apply_hand_joints(&wire_joints(&pinch, 1, 10 * MS))
@@ -541,4 +550,87 @@ fn a_joints_hand_is_smoothed_and_starts_afresh_when_tracking_returns() {
         .expect("a hand");
     assert_eq!(root(&inputs), fitted);
     assert_eq!(inputs.filter_restarts(), 0);
+}
+
+#[test]
+fn each_users_samples_drive_their_own_hand_and_cart() {
+    let right = right_hand();
+    let left = right.mirrored();
+    // User 0 has a right hand, user 1 a right and a left one.
+    let mut inputs = Inputs::for_hands(
+        [(0, &right), (1, &right), (1, &left)],
+        TrackingParams::default(),
+    );
+    let for_user = |user: u32, side: HandSide, sample: TrackerSample| TrackerSample {
+        user,
+        side: side as u32,
+        ..sample
+    };
+    let first = tracker(1, at(0.1, 0.0, 0.0), at(0.0, 0.0, 1.0));
+    let second = tracker(2, at(0.2, 0.0, 0.0), at(0.0, 0.0, 2.0));
+    inputs
+        .apply_tracker(&for_user(1, HandSide::Left, second))
+        .expect("user 1 has a left hand");
+    let glove = GloveSample {
+        seq: 1,
+        timestamp_ns: 1,
+        flex: [0.3; FLEX_COUNT],
+        user: 1,
+        side: HandSide::Left as u32,
+    };
+    inputs.apply_glove(&glove).expect("valid");
+    let frame = inputs.frame();
+    let root = |hand: usize| frame.hands[hand].input.cart * frame.hands[hand].input.tracker;
+    assert_eq!(frame.hands.len(), 3);
+    assert_eq!(root(2).translation.vector, Vector3::new(0.2, 0.0, 2.0));
+    assert_eq!(frame.hands[2].input.flex, [0.3; FLEX_COUNT]);
+    assert!(frame.hands[2].tracked);
+    // User 1's right hand rides on user 1's cart; user 0's hand is untouched.
+    assert_eq!(root(1).translation.vector, Vector3::new(0.0, 0.0, 2.0));
+    assert_eq!(root(0), Isometry3::identity());
+    assert_eq!(frame.hands[0].input.flex, [0.0; FLEX_COUNT]);
+    inputs
+        .apply_tracker(&for_user(0, HandSide::Right, first))
+        .expect("user 0 has a right hand");
+    let frame = inputs.frame();
+    let root = |hand: usize| frame.hands[hand].input.cart * frame.hands[hand].input.tracker;
+    assert_eq!(root(0).translation.vector, Vector3::new(0.1, 0.0, 1.0));
+    assert_eq!(root(2).translation.vector, Vector3::new(0.2, 0.0, 2.0));
+
+    // A user or a side the scene does not have: rejected and counted, nothing moves.
+    let before = inputs.frame();
+    assert_eq!(
+        inputs.apply_tracker(&for_user(2, HandSide::Right, first)),
+        Err(InputRejection::NoSuchUser { user: 2 })
+    );
+    assert_eq!(
+        inputs.apply_tracker(&for_user(0, HandSide::Left, first)),
+        Err(InputRejection::NoSuchHand { user: 0, side: 1 })
+    );
+    assert_eq!(
+        inputs.apply_glove(&GloveSample { side: 9, ..glove }),
+        Err(InputRejection::NoSuchHand { user: 1, side: 9 })
+    );
+    let mut joints = pinch(3);
+    joints.user = 7;
+    assert_eq!(
+        inputs.apply_hand_joints(&joints),
+        Err(JointsRejection::Sample(InputRejection::NoSuchUser {
+            user: 7
+        }))
+    );
+    joints.user = 0;
+    joints.side = HandSide::Left as u32;
+    assert_eq!(
+        inputs.apply_hand_joints(&joints),
+        Err(JointsRejection::NoSuchHand { side: 1 })
+    );
+    assert_eq!(inputs.frame(), before);
+    let stats = inputs.stats();
+    assert_eq!(
+        (stats.rejected_no_such_user, stats.rejected_no_such_hand),
+        (2, 2)
+    );
+    assert_eq!(stats.joints_rejected_no_such_hand, 1);
+    assert_eq!(stats.rejected(), 5);
 }

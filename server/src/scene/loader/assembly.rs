@@ -33,7 +33,7 @@ use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use serde::Deserialize;
 
 use super::Loader;
-use crate::geometry::{GltfFile, read_mesh_file};
+use crate::geometry::{GltfFile, GltfPart, read_mesh_file};
 use crate::scene::file::default_group;
 use crate::scene::{Part, SceneError};
 
@@ -98,9 +98,8 @@ impl Loader<'_> {
         assembly: AssemblyFile,
     ) -> Result<Vec<Part>, SceneError> {
         let key = |field: &str| format!("assemblies[{index}].{field}");
-        if assembly.group.trim().is_empty() {
-            return Err(self.invalid(key("group"), "must not be empty"));
-        }
+        self.name(&key("group"), &assembly.group)?;
+        self.one_line(&key("file"), &assembly.file)?;
         let position = self.position(&key("position"), assembly.position)?;
         let rotation = match assembly.rotation {
             None => UnitQuaternion::identity(),
@@ -136,28 +135,30 @@ impl Loader<'_> {
             Movable::All(false) => HashSet::new(),
             Movable::All(true) => gltf_parts.iter().map(|p| p.name.as_str()).collect(),
             Movable::Named(names) => {
-                if let Some((i, name)) = (names.iter().enumerate())
+                if let Some((i, _)) = (names.iter().enumerate())
                     .find(|(_, name)| !gltf_parts.iter().any(|p| &p.name == *name))
                 {
                     return Err(self.invalid(
                         key(&format!("movable[{i}]")),
-                        format!("{} has no part named {name:?}", path.display()),
+                        format!("names no part of {}", path.display()),
                     ));
                 }
                 names.iter().map(String::as_str).collect()
             }
         };
 
+        // A part is named by its node: a node's name may be one of the config's values.
+        let part_key = |part: &GltfPart| format!("assemblies[{index}].file node {}", part.node);
         // The limit is checked with the counts the file announces, before any mesh is built.
         for part in &gltf_parts {
             let count = (file.triangle_count(part.mesh)).map_err(mesh_error(key("file")))?;
-            self.count_triangles(&key("file"), &part.name, count)?;
+            self.count_triangles(&part_key(part), count)?;
         }
 
         let source = path.display().to_string();
         let mut parts = Vec::with_capacity(gltf_parts.len());
         for part in &gltf_parts {
-            let part_key = format!("assemblies[{index}] part {:?}", part.name);
+            let part_key = part_key(part);
             let pose = placement * part.pose;
             self.position(&part_key, pose.translation.vector.into())?;
             let cache_key = format!("{source}#{}", part.mesh_key());

@@ -16,7 +16,6 @@ impl Loader<'_> {
     pub(super) fn mesh_file(
         &mut self,
         index: usize,
-        name: &str,
         relative: &Path,
         scale: Option<f64>,
     ) -> Result<(Arc<TriMesh>, String, PartTree), SceneError> {
@@ -27,12 +26,13 @@ impl Loader<'_> {
                 format!("must be a positive number, not {}", Readable(scale)),
             ));
         }
+        let key = format!("parts[{index}].mesh");
+        self.one_line(&key, relative)?;
         let path = self.folder.join(relative);
         let source = path.display().to_string();
         let cache_key = format!("{source} x {scale}");
-        let key = format!("parts[{index}].mesh");
         if let Some((mesh, tree)) = self.cached(&cache_key) {
-            self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
+            self.count_triangles(&key, mesh.triangles().len() as u64)?;
             return Ok((mesh, source, tree));
         }
         let mesh_error = |source| SceneError::Mesh {
@@ -54,7 +54,7 @@ impl Loader<'_> {
         };
         let mut mesh = match loaded {
             Err(GeometryError::TooManyTriangles { count, .. }) => {
-                return Err(self.too_many_triangles(&key, name, count));
+                return Err(self.too_many_triangles(&key, count));
             }
             loaded => loaded.map_err(mesh_error)?,
         };
@@ -70,7 +70,7 @@ impl Loader<'_> {
                     })
                 })?;
         }
-        self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
+        self.count_triangles(&key, mesh.triangles().len() as u64)?;
         let (mesh, tree) = self.remember(cache_key, mesh);
         Ok((mesh, source, tree))
     }
@@ -78,24 +78,23 @@ impl Loader<'_> {
     pub(super) fn shape(
         &mut self,
         index: usize,
-        name: &str,
         shape: ShapeSpec,
     ) -> Result<(Arc<TriMesh>, String, PartTree), SceneError> {
         let key = format!("parts[{index}].shape");
         let source = shape.to_string();
         if let Some((mesh, tree)) = self.cached(&source) {
-            self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
+            self.count_triangles(&key, mesh.triangles().len() as u64)?;
             return Ok((mesh, source, tree));
         }
         // The requested count, before the shape is built (which meets it within a few percent).
         let requested = shape.triangles() as u64;
         if requested > self.triangles_left() {
-            return Err(self.too_many_triangles(&key, name, requested));
+            return Err(self.too_many_triangles(&key, requested));
         }
         let mesh = shape
             .build()
             .map_err(|e| self.invalid(format!("{key}.{}", e.field), e.reason))?;
-        self.count_triangles(&key, name, mesh.triangles().len() as u64)?;
+        self.count_triangles(&key, mesh.triangles().len() as u64)?;
         let (mesh, tree) = self.remember(source.clone(), mesh);
         Ok((mesh, source, tree))
     }
@@ -151,27 +150,22 @@ impl Loader<'_> {
         self.limits.scene_triangles.saturating_sub(self.triangles)
     }
 
-    /// Adds part `name`'s `count` triangles to the scene's, refusing the part (at `key`) if the
+    /// Adds the `count` triangles of the part at `key` to the scene's, refusing the part if the
     /// scene would have more than its limit.
-    pub(super) fn count_triangles(
-        &mut self,
-        key: &str,
-        name: &str,
-        count: u64,
-    ) -> Result<(), SceneError> {
+    pub(super) fn count_triangles(&mut self, key: &str, count: u64) -> Result<(), SceneError> {
         if count > self.triangles_left() {
-            return Err(self.too_many_triangles(key, name, count));
+            return Err(self.too_many_triangles(key, count));
         }
         self.triangles += count;
         Ok(())
     }
 
-    /// The refusal of part `name`, whose `count` triangles the scene's limit has no room for.
-    pub(super) fn too_many_triangles(&self, key: &str, name: &str, count: u64) -> SceneError {
+    /// The refusal of the part at `key`, whose `count` triangles the scene's limit has no room for.
+    pub(super) fn too_many_triangles(&self, key: &str, count: u64) -> SceneError {
         self.invalid(
             key,
             format!(
-                "part {name:?} needs at least {count} triangles, but the scene's limit of {} \
+                "the part needs at least {count} triangles, but the scene's limit of {} \
                  triangles (--max-scene-triangles) leaves {} after the parts before it",
                 self.limits.scene_triangles,
                 self.triangles_left()

@@ -3,6 +3,7 @@
 
 mod assembly;
 mod meshes;
+mod users;
 
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -14,10 +15,9 @@ use vas_protocol::Readable;
 use super::file::{GroupsFile, PartFile, SceneFile};
 use super::groups::sorted_pair;
 use super::params::Problem;
-use super::{Groups, Part, PartTree, QUATERNION_NORM_TOLERANCE, Scene, SceneError, SceneHand};
+use super::{Groups, Part, PartTree, QUATERNION_NORM_TOLERANCE, Scene, SceneError};
 use crate::collision::dop_tree::TreeCache;
 use crate::geometry::{FileLimits, GeometryError, TriMesh, describe_toml_error, read_regular_text};
-use crate::grasping::HandModel;
 
 pub(super) use assembly::AssemblyFile;
 
@@ -112,26 +112,43 @@ impl Loader<'_> {
         }
     }
 
+    /// `value` checked as a name: not blank, and one line without control characters, so that
+    /// no message naming it could carry a line of the file (refusals name keys, never values).
+    fn name(&self, key: &str, value: &str) -> Result<(), SceneError> {
+        if value.trim().is_empty() {
+            return Err(self.invalid(key, "must not be empty"));
+        }
+        self.one_line(key, Path::new(value))
+    }
+
+    /// `path` checked to be one line without control characters: messages quote the paths of
+    /// files that could not be read, and a path must not carry a line of the file with it.
+    fn one_line(&self, key: &str, path: &Path) -> Result<(), SceneError> {
+        if path.to_string_lossy().chars().any(char::is_control) {
+            return Err(self.invalid(key, "must be one line, without control characters"));
+        }
+        Ok(())
+    }
+
     fn problem(&self, problem: Problem) -> SceneError {
         self.invalid(problem.key, problem.reason)
     }
 
     /// The whole scene of `file`, or the first thing wrong with it.
     fn scene(mut self, file: SceneFile) -> Result<Scene, SceneError> {
-        if file.name.trim().is_empty() {
-            return Err(self.invalid("name", "must not be empty"));
-        }
+        self.name("name", &file.name)?;
         file.params.validate().map_err(|p| self.problem(p))?;
         file.rates.validate().map_err(|p| self.problem(p))?;
         let parts = self.parts(file.parts, file.assemblies)?;
         let groups = self.groups(&parts, &file.groups)?;
         // Loaded here, so that whatever loads a scene (check-scene, run, a load-scene request)
         // refuses a broken hand model the same way.
-        let hands = self.hands(file.hand, file.hands)?;
+        let (users, hands) = self.users(file.hand, file.hands, file.users)?;
         Ok(Scene {
             name: file.name,
             source: self.path.to_owned(),
             parts,
+            users,
             hands,
             params: file.params,
             rates: file.rates,
@@ -154,7 +171,7 @@ impl Loader<'_> {
             if let Some(&first) = names.get(&part.name) {
                 return Err(self.invalid(
                     format!("parts[{index}].name"),
-                    format!("{:?} is already the name of parts[{first}]", part.name),
+                    format!("is the name of parts[{first}] too"),
                 ));
             }
             names.insert(part.name.clone(), parts.len());
@@ -165,7 +182,7 @@ impl Loader<'_> {
                 if let Some(&first) = names.get(&part.name) {
                     return Err(self.invalid(
                         format!("assemblies[{index}]"),
-                        format!("its part {:?} has the name of part {first}", part.name),
+                        format!("{} has the name of part {first}", part.mesh_source),
                     ));
                 }
                 names.insert(part.name.clone(), parts.len());
@@ -195,12 +212,13 @@ impl Loader<'_> {
         }
         let mut not_of_interest = Vec::with_capacity(rules.not_of_interest.len());
         for (index, [a, b]) in rules.not_of_interest.iter().enumerate() {
-            if let Some(unknown) = [a, b].into_iter().find(|g| !names.contains(g)) {
+            let find_group = |group: &String| names.contains(group);
+            if !(find_group(a) && find_group(b)) {
                 return Err(self.invalid(
                     format!("groups.not_of_interest[{index}]"),
                     format!(
-                        "no part is in group {unknown:?} (groups: {})",
-                        names.join(", ")
+                        "its {} group is the group of no part",
+                        if find_group(a) { "second" } else { "first" }
                     ),
                 ));
             }
@@ -216,11 +234,13 @@ impl Loader<'_> {
             match (find(a), find(b)) {
                 (Some(i), Some(j)) if i != j => parts_not_of_interest.push([i.min(j), i.max(j)]),
                 (Some(_), Some(_)) => {
-                    return Err(self.invalid(key, format!("names part {a:?} twice")));
+                    return Err(self.invalid(key, "names one part twice"));
                 }
                 _ => {
-                    let unknown = if find(a).is_none() { a } else { b };
-                    return Err(self.invalid(key, format!("there is no part named {unknown:?}")));
+                    let which = if find(a).is_none() { "first" } else { "second" };
+                    return Err(
+                        self.invalid(key, format!("its {which} name is the name of no part"))
+                    );
                 }
             }
         }
@@ -231,53 +251,10 @@ impl Loader<'_> {
         })
     }
 
-    /// The hand models of `hand` or `hands` (not both), at most one of each side.
-    fn hands(
-        &self,
-        hand: Option<PathBuf>,
-        hands: Option<Vec<PathBuf>>,
-    ) -> Result<Vec<SceneHand>, SceneError> {
-        let listed = match (hand, hands) {
-            (Some(_), Some(_)) => {
-                return Err(self.invalid("hands", "give `hand` or `hands`, not both"));
-            }
-            (Some(hand), None) => vec![("hand".to_owned(), hand)],
-            (None, Some(hands)) => (0..)
-                .zip(hands)
-                .map(|(index, hand)| (format!("hands[{index}]"), hand))
-                .collect(),
-            (None, None) => Vec::new(),
-        };
-        let mut hands: Vec<SceneHand> = Vec::with_capacity(listed.len());
-        for (key, hand) in listed {
-            let path = self.folder.join(&hand);
-            let model = HandModel::load_within(&path, self.limits)
-                .map_err(|error| self.invalid(&key, error.to_string()))?;
-            if hands.iter().any(|other| other.model.side() == model.side()) {
-                return Err(self.invalid(
-                    key,
-                    format!(
-                        "a second {:?} hand: a scene has at most one of each side",
-                        model.side()
-                    ),
-                ));
-            }
-            hands.push(SceneHand {
-                path,
-                model: Arc::new(model),
-            });
-        }
-        Ok(hands)
-    }
-
     fn part(&mut self, index: usize, part: PartFile) -> Result<Part, SceneError> {
         let key = |field: &str| format!("parts[{index}].{field}");
-        if part.name.trim().is_empty() {
-            return Err(self.invalid(key("name"), "must not be empty"));
-        }
-        if part.group.trim().is_empty() {
-            return Err(self.invalid(key("group"), "must not be empty"));
-        }
+        self.name(&key("name"), &part.name)?;
+        self.name(&key("group"), &part.group)?;
         let position = self.position(&key("position"), part.position)?;
         let rotation = match part.rotation {
             None => UnitQuaternion::identity(),
@@ -285,8 +262,8 @@ impl Loader<'_> {
         };
         let pose = Isometry3::from_parts(position, rotation);
         let (mesh, mesh_source, tree) = match (part.mesh, part.shape) {
-            (Some(mesh), None) => self.mesh_file(index, &part.name, &mesh, part.scale)?,
-            (None, Some(shape)) if part.scale.is_none() => self.shape(index, &part.name, shape)?,
+            (Some(mesh), None) => self.mesh_file(index, &mesh, part.scale)?,
+            (None, Some(shape)) if part.scale.is_none() => self.shape(index, shape)?,
             (None, Some(_)) => {
                 return Err(self.invalid(
                     key("scale"),

@@ -122,6 +122,8 @@ pub struct StreamFilter<const F: usize> {
     settings: Option<Settings>,
     clock: SampleClock,
     estimate: Option<Estimate<F>>,
+    /// The stream's first timestamp, which [`StreamFilter::apply_stamped`] times from.
+    origin_ns: Option<u64>,
 }
 
 impl<const F: usize> StreamFilter<F> {
@@ -140,7 +142,22 @@ impl<const F: usize> StreamFilter<F> {
             }),
             clock: SampleClock::default(),
             estimate: None,
+            origin_ns: None,
         }
+    }
+
+    /// [`StreamFilter::apply`] to a sample stamped `timestamp_ns` (nanoseconds), timed from the
+    /// stream's first stamp: the seconds, and so the output, depend on the samples' spacing only,
+    /// not on when a replay began (an absolute stamp in f64 seconds rounds to about 0.2 us, and
+    /// differently for every start).
+    pub fn apply_stamped(
+        &mut self,
+        timestamp_ns: u64,
+        sample: Sample<F>,
+    ) -> Result<Filtered<F>, NonFiniteSample> {
+        let origin_ns = *self.origin_ns.get_or_insert(timestamp_ns);
+        let at_s = (i128::from(timestamp_ns) - i128::from(origin_ns)) as f64 * 1e-9;
+        self.apply(at_s, sample)
     }
 
     /// Forgets the samples so far: tracking was lost, or the hand reset.

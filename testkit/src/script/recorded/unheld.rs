@@ -19,23 +19,18 @@ const RELEASE_LIFT: f64 = 0.03;
 /// released parts takes to settle.
 const SETTLE_WAIT: f64 = 0.4;
 
-/// Which way the flat hand's thumb points while its palm faces +x.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Thumb {
-    /// Down, the fingers along +y.
-    Down,
-    /// Up, the fingers along -y: the hand's little-finger edge is its lowest.
-    Up,
-}
+/// How long the recording of a push off a support goes on after the hand has withdrawn
+/// (seconds): longer than the pushed part takes to tip over and land below.
+const FALL_WAIT: f64 = 0.6;
 
-/// A push by the flat hand, fingers straight, palm towards +x: it starts [`PUSH_GAP`] before the
+/// A push by the flat hand, fingers straight along -y, thumb up, palm towards +x (its
+/// little-finger edge is its lowest, so that it reaches down to a part standing on a table): it
+/// starts [`PUSH_GAP`] before the
 /// part's near face with its palm's middle level with the part's middle raised by `raise`,
 /// holds, moves in at [`PUSH_SPEED`] until it aims `depth` into the part (the part is pushed as
 /// far, unless something stops it), holds, and withdraws to where it started.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct FlatPush {
-    /// Which way the thumb points.
-    pub(super) thumb: Thumb,
     /// How far above the part's middle the palm's middle is (metres).
     pub(super) raise: f64,
     /// How far into the part the hand aims (metres).
@@ -45,22 +40,16 @@ pub(super) struct FlatPush {
 impl FlatPush {
     /// The trajectory against `part`.
     pub(super) fn keyframes(self, part: &Part) -> Vec<Keyframe> {
-        // Palm (the hand's -z) towards +x, fingers along +y, thumb down; turned half a turn
-        // about x for the thumb up.
+        // Palm (the hand's -z) towards +x, fingers along +y, thumb down, turned half a turn
+        // about x.
         let palm_towards_x = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -FRAC_PI_2);
-        let (rotation, palm_middle) = match self.thumb {
-            Thumb::Down => (palm_towards_x, -PALM_MIDDLE),
-            Thumb::Up => (
-                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI) * palm_towards_x,
-                PALM_MIDDLE,
-            ),
-        };
+        let rotation = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), PI) * palm_towards_x;
         let (near, _) = extent(part, &Vector3::x());
         let centre = part.pose.translation.vector;
         let start = pose(
             [
                 near - PUSH_GAP - PALM_FACE,
-                centre.y + palm_middle,
+                centre.y + PALM_MIDDLE,
                 centre.z + self.raise,
             ],
             rotation,
@@ -72,6 +61,14 @@ impl FlatPush {
         then(&mut keys, 0.1, |_| {});
         then(&mut keys, 0.3, |k| k.tracker = start);
         then(&mut keys, 0.05, |_| {});
+        keys
+    }
+
+    /// The trajectory against `part`, then [`FALL_WAIT`] of stillness while the part, pushed off
+    /// what supported it, falls.
+    pub(super) fn keyframes_then_fall(self, part: &Part) -> Vec<Keyframe> {
+        let mut keys = self.keyframes(part);
+        then(&mut keys, FALL_WAIT, |_| {});
         keys
     }
 }

@@ -5,18 +5,22 @@
 //! 1. the bounding spheres give a lower bound: a pair provably farther than the bound asked for
 //!    ([`DopTree::distance_below`]) ends here;
 //! 2. the closest triangles of the pair's last query ([`DistanceMemory`]), measured at the new
-//!    pose, give an upper bound: at a nearby pose it is already (nearly) the answer;
+//!    pose, give an upper bound: at a nearby pose it is already (nearly) the answer; after a
+//!    jump (B moved far against the last distance and its size) the memory is forgotten and the
+//!    query runs cold;
 //! 3. the front where the pair's last walk ended ([`DistanceMemory`]) is carried to the new pose:
 //!    its node pairs whose lower bounds, less the motion since, still exceed the best distance
-//!    stay closed; the others are where the walk starts (from the roots without a front);
-//! 4. the depth-first walk (`walk`) opens only the node pairs whose lower bound (`bounds`: the
-//!    nodes' spheres, their boxes or DOPs along the best pair's direction, their DOPs re-aligned
-//!    in O(k)) is below the best distance found so far, nearer pairs first, measures the
+//!    stay closed; the others are where the walk starts, each measured again at the new pose
+//!    before it is opened (from the roots without a front);
+//! 4. the walk (`walk`) opens only the node pairs whose lower bound (`bounds`: the nodes'
+//!    spheres, their boxes or DOPs along the best pair's direction, their DOPs re-aligned in
+//!    O(k)) is below the best distance found so far, nearest first (`queue`), measures the
 //!    triangle pairs of the leaves it reaches exactly, and records the pairs it leaves closed as
 //!    the new front.
 
 mod bounds;
 mod memory;
+mod queue;
 mod walk;
 
 use nalgebra::{Isometry3, Point3};
@@ -84,7 +88,6 @@ impl DopTree {
             k => unreachable!("orientation sets have a supported k, not {k}"),
         };
         let [ia, ib] = closest.pair?;
-        memory.remember(self, other, [ia, ib]);
         let inverse = b_to_a.inverse();
         Some(ClosestPoints {
             distance: closest.distance,
@@ -113,20 +116,13 @@ fn closest<const K: usize>(
         })
     });
     let mut closest = Closest::within(d_max);
-    if let Some(last) = memory.last_pair(a, b) {
+    let pose = (&pair.rotation, &pair.translation);
+    if let Some(last) = memory.begin(a, b, pose.0, pose.1) {
         pair.measure_triangles(last, &mut closest, stats);
     }
-    let (stack, front, from_roots) =
-        memory.start_walk(a, b, &pair.rotation, &pair.translation, closest.distance);
-    let complete = pair.walk_closest(&mut closest, stack, front, from_roots, stats);
-    memory.finish_walk(
-        a,
-        b,
-        &pair.rotation,
-        &pair.translation,
-        complete,
-        from_roots,
-    );
+    let (queue, front, from_roots) = memory.start_walk(b, pose.0, pose.1, closest.distance);
+    let complete = pair.walk_closest(&mut closest, queue, front, from_roots, stats);
+    memory.finish((a, b), pose, &closest, complete, from_roots);
     closest
 }
 

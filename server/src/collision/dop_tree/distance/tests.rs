@@ -210,6 +210,25 @@ fn a_memory_of_other_trees_or_a_jump_changes_no_answer() {
 }
 
 #[test]
+fn after_a_jump_a_carried_memory_does_a_cold_querys_work() {
+    let mut rng = ChaCha8Rng::seed_from_u64(15);
+    let (a, b) = (torus(0.3, 24, 12), torus(0.2, 16, 8));
+    let (ta, tb) = (DopTree::build(&a), DopTree::build(&b));
+    let mut memory = DistanceMemory::default();
+    for _ in 0..100 {
+        let pose = random_pose(&mut rng, 2.0);
+        let (mut carried, mut cold) = (QueryStats::default(), QueryStats::default());
+        let found = ta.distance(&tb, &pose, &mut memory, &mut carried);
+        let fresh = ta.distance(&tb, &pose, &mut DistanceMemory::default(), &mut cold);
+        assert_eq!(found, fresh);
+        assert_eq!(
+            (carried.bv_tests, carried.tri_tests),
+            (cold.bv_tests, cold.tri_tests)
+        );
+    }
+}
+
+#[test]
 fn pairs_within_a_clearance_are_those_the_brute_force_finds() {
     let mut rng = ChaCha8Rng::seed_from_u64(16);
     let meshes: Vec<TriMesh> = (0..6)

@@ -1,15 +1,20 @@
-//! The walk of a distance query: depth first over node pairs, nearer pairs first, each opened
-//! only while its lower bound is below the best distance found; the leaves' triangle pairs
-//! measured exactly.
+//! The walk of a distance query: over node pairs, nearest first (`queue`), each opened only
+//! while its lower bound is below the best distance found; the leaves' triangle pairs measured
+//! exactly.
 
 use nalgebra::Point3;
 
 use super::super::realign::{AffineRealign, RealignCache, Scratch, with_scratch};
 use super::super::traverse::TreePair;
-use super::bounds::{Direction, triangles_gap};
+use super::super::tree::DEFAULT_LEAF_SIZE;
+use super::bounds::{BoundedTriangle, Direction, triangles_gap};
 use super::memory::BoundedPair;
+use super::queue::OpenQueue;
 use crate::collision::QueryStats;
 use crate::collision::distance::{TriangleDistance, triangle_distance};
+
+/// How many of a leaf's triangles are bounded at once: the default leaf size.
+const LEAF_CHUNK: usize = DEFAULT_LEAF_SIZE;
 
 /// The closest triangle pair found so far, in A's frame.
 #[derive(Debug, Clone, Copy)]
@@ -51,7 +56,7 @@ impl Closest {
 /// One walk's state: the best pair, the pairs still to open, the pairs left closed.
 struct Walk<'w> {
     closest: &'w mut Closest,
-    stack: &'w mut Vec<BoundedPair>,
+    queue: &'w mut OpenQueue,
     front: &'w mut Vec<BoundedPair>,
     from_roots: bool,
 }
@@ -73,20 +78,20 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         closest.offer(found, [ia as u32, ib as u32]);
     }
 
-    /// Walks the node pairs on `stack` (or from the root pair, with `from_roots`), improving
+    /// Walks the node pairs in `queue` (or from the root pair, with `from_roots`), improving
     /// `closest` and recording in `front` every pair it leaves closed with its bound. Returns
     /// whether the walk ran to its end (it stops at a distance of 0), so that the front is whole.
     pub(super) fn walk_closest(
         &self,
         closest: &mut Closest,
-        stack: &mut Vec<BoundedPair>,
+        queue: &mut OpenQueue,
         front: &mut Vec<BoundedPair>,
         from_roots: bool,
         stats: &mut QueryStats,
     ) -> bool {
         let mut walk = Walk {
             closest,
-            stack,
+            queue,
             front,
             from_roots,
         };
@@ -129,7 +134,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         };
         let Walk {
             closest,
-            stack,
+            queue,
             front,
             from_roots,
         } = walk;
@@ -142,13 +147,37 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                 closest.distance,
                 stats,
             );
-            stack.push((0, 0, bound));
+            queue.push(0, 0, bound);
         }
-        while let Some((ia, ib, bound)) = stack.pop() {
-            // The best distance may have improved since the pair was pushed.
+        // The carried pairs, measured again at this pose: most are still apart and stay whole in
+        // the front.
+        let carried = std::mem::take(&mut queue.carried);
+        for &(ia, ib, carried_bound) in &carried {
+            let bound = self
+                .lower_bound::<FUSED>(
+                    &mut cache,
+                    (ia, ib),
+                    direction.as_ref(),
+                    closest.distance,
+                    stats,
+                )
+                .max(carried_bound);
             if bound >= closest.distance {
                 front.push((ia, ib, bound));
-                continue;
+            } else {
+                queue.push(ia, ib, bound);
+            }
+        }
+        queue.carried = carried;
+        queue.carried.clear();
+        while let Some(pending) = queue.pop() {
+            let (ia, ib) = (pending.ia, pending.ib);
+            // The best distance may have improved since the pair was queued.
+            if pending.bound >= closest.distance {
+                // Nearest first: every pair still queued is at least as far.
+                front.push((ia, ib, pending.bound));
+                queue.drain_into(front);
+                break;
             }
             stats.nodes_visited += 1;
             let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
@@ -174,7 +203,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                     stats,
                 )
             });
-            // Nearer pair on top of the stack: it is walked first and tightens the best soonest.
+            // The nearer pair queued last: among overlapping pairs it is opened first.
             let (near, far) = if y < x {
                 ((second, y), (first, x))
             } else {
@@ -184,7 +213,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                 if bound >= closest.distance {
                     front.push((pa, pb, bound));
                 } else {
-                    stack.push((pa, pb, bound));
+                    queue.push(pa, pb, bound);
                 }
             }
         }
@@ -215,21 +244,36 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     ) -> f64 {
         let (la, lb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
         let mut least = f64::INFINITY;
-        for tb in lb.first..lb.first + lb.count {
-            let moved = self.b_triangle_in_a(tb as usize);
-            for ta in la.first..la.first + la.count {
-                let triangle = &self.a.triangles[ta as usize];
-                let gap = triangles_gap(triangle, &moved, direction.map(|d| &d.u));
-                if gap >= closest.distance {
-                    least = least.min(gap);
-                    continue;
-                }
-                stats.tri_tests += 1;
-                let found = triangle_distance(triangle, &moved);
-                least = least.min(found.distance);
-                closest.offer(found, [ta, tb]);
-                if closest.distance == 0.0 {
-                    return 0.0;
+        let u = direction.map(|d| &d.u);
+        let end_a = la.first + la.count;
+        // A's triangles a chunk at a time, each bounded once for all of B's.
+        for start in (la.first..end_a).step_by(LEAF_CHUNK) {
+            let count = (end_a - start).min(LEAF_CHUNK as u32) as usize;
+            let mut on_a = [BoundedTriangle::default(); LEAF_CHUNK];
+            for (i, bounded) in on_a[..count].iter_mut().enumerate() {
+                *bounded = BoundedTriangle::new(self.a.triangles[start as usize + i], u);
+            }
+            for tb in lb.first..lb.first + lb.count {
+                let moved = BoundedTriangle::new(self.b_triangle_in_a(tb as usize), u);
+                for (ta, triangle) in (start..).zip(&on_a[..count]) {
+                    if closest.pair == Some([ta, tb]) {
+                        // Measured already (the last query's closest pair, measured first): it
+                        // is the best.
+                        least = least.min(closest.distance);
+                        continue;
+                    }
+                    let gap = triangles_gap(triangle, &moved, closest.distance);
+                    if gap >= closest.distance {
+                        least = least.min(gap);
+                        continue;
+                    }
+                    stats.tri_tests += 1;
+                    let found = triangle_distance(&triangle.corners, &moved.corners);
+                    least = least.min(found.distance);
+                    closest.offer(found, [ta, tb]);
+                    if closest.distance == 0.0 {
+                        return 0.0;
+                    }
                 }
             }
         }
