@@ -134,6 +134,8 @@ pub struct E2eReport {
     /// Samples per second the server answers when each sample is sent as soon as the previous
     /// one is answered: measured `vas` exchanges divided by their total time.
     pub vas_samples_per_s: f64,
+    /// With `--shove`: how many measured samples' answers found the peg held.
+    pub held_samples: Option<usize>,
 }
 
 /// Runs the benchmark against the server on `prefix`.
@@ -175,6 +177,8 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
 
     let timeout = Duration::from_millis(args.answer_timeout_ms);
     let [mut raw, mut c, mut vas]: [PathTimes; 3] = Default::default();
+    // Measured samples whose answer found a part held: shoves of an empty hand measure nothing.
+    let mut held = 0usize;
     let mut inputs = inputs.numbered();
     for index in 0..warmup + args.samples {
         let measured = index >= warmup;
@@ -190,7 +194,23 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
             }
         }
         let sample = inputs.next_sample();
-        vas.record(measured, round_trip(&mut server, sample, timeout, drop)?);
+        let mut holds = false;
+        let note_held = |frame: Frame| {
+            if let Frame::Parts(parts) = frame {
+                holds = parts.parts.iter().any(|part| part.is_grasped());
+            }
+        };
+        vas.record(
+            measured,
+            round_trip(&mut server, sample, timeout, note_held)?,
+        );
+        held += usize::from(measured && holds);
+    }
+    if args.shove.is_some() && held == 0 {
+        bail!(
+            "the peg was never held while shoved: the grasp before the shoves failed on the \
+             server's scene (is its tracking filter on? It makes the scripted hand trail its glove)"
+        );
     }
     // The C library's client goes before the echo's prefix is removed.
     drop(c_echo);
@@ -208,6 +228,7 @@ pub fn run(args: &E2eArgs) -> anyhow::Result<()> {
             / vas.latencies.iter().sum::<Duration>().as_secs_f64(),
         rows: rows.into_iter().flatten().collect(),
         c_library_p99_added_us,
+        held_samples: args.shove.is_some().then_some(held),
     };
     print!("{}", render(&report));
     args.output.write(&report, || plot(&report))
@@ -298,6 +319,9 @@ fn render(report: &E2eReport) -> String {
     }
     if let Some(added) = report.c_library_p99_added_us {
         text += &format!("c p99 - raw p99 = {added:.1} us (what the C library adds)\n");
+    }
+    if let Some(held) = report.held_samples {
+        text += &format!("the peg held in {held} of the measured samples' answers\n");
     }
     text += &format!(
         "vas sustains {:.0} samples/s, each sent once the one before was answered\n",
