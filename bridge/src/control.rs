@@ -25,8 +25,6 @@ use zenoh::query::{Query, Queryable};
 use crate::server::{CONTROL_TIMEOUT, Follower, Shared};
 use crate::wire;
 
-/// Longest wait for a query: bounds how late a stop is noticed.
-const TICK: Duration = Duration::from_millis(100);
 /// How long a scene may take to load or reset (a reset rebuilds the scene's state).
 const LOAD_TIMEOUT: Duration = Duration::from_secs(60);
 
@@ -38,15 +36,7 @@ pub fn run(
     shared: &Shared,
 ) {
     let mut follower = Follower::new(prefix, Roles::CONTROL);
-    while !shared.stopping() {
-        let query = match queryable.recv_timeout(TICK) {
-            Ok(Some(query)) => query,
-            Ok(None) => continue,
-            Err(error) => {
-                tracing::error!(%error, "the control queryable closed");
-                return;
-            }
-        };
+    while let Some(query) = shared.next(&queryable, "control queryable") {
         let answer = match follower.client(shared) {
             Some(client) => answer(&query, client, shared),
             None => Err("the bridge cannot reach the vas services".to_owned()),

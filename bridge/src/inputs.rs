@@ -7,8 +7,6 @@
 //! the bridge's ([`crate::stats`]); the first of each run is a warning, later ones debug logs.
 //! It blocks on the zenoh subscriber, not on a poll, so that a sample reaches iceoryx2 at once.
 
-use std::time::Duration;
-
 use vas_client::{Client, ClientError, Roles};
 use vas_protocol::{ControlRequest, GloveSample, HandJointsSample, TrackerSample};
 use zenoh::handlers::FifoChannelHandler;
@@ -18,9 +16,6 @@ use zenoh::sample::Sample;
 use crate::keys::Input;
 use crate::server::{CONTROL_TIMEOUT, Follower, Shared};
 use crate::wire::{self, Refusal};
-
-/// Longest wait for a sample: bounds how late a stop or a new server is noticed.
-const TICK: Duration = Duration::from_millis(100);
 
 /// Which users' samples the bridge takes.
 #[derive(Debug)]
@@ -83,15 +78,7 @@ pub fn run(
         known: None,
     };
     let mut warned = false;
-    while !shared.stopping() {
-        let sample = match subscriber.recv_timeout(TICK) {
-            Ok(Some(sample)) => sample,
-            Ok(None) => continue,
-            Err(error) => {
-                tracing::error!(%error, "the input subscriber closed");
-                return;
-            }
-        };
+    while let Some(sample) = shared.next(&subscriber, "input subscriber") {
         let Some(client) = follower.client(shared) else {
             shared.stats.refused_by_server();
             continue;

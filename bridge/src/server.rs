@@ -13,6 +13,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 use vas_client::{Client, ClientError, Roles, Wake};
+use zenoh::handlers::FifoChannelHandler;
 
 use crate::latest::Latest;
 use crate::stats::Stats;
@@ -21,6 +22,8 @@ use crate::stats::Stats;
 pub const CONTROL_TIMEOUT: Duration = Duration::from_secs(2);
 /// How long one look for a server lasts while there is none.
 const LOOK: Duration = Duration::from_millis(250);
+/// Longest wait for a zenoh sample or query: bounds how late a stop or a new server is noticed.
+const TICK: Duration = Duration::from_millis(100);
 /// How long a thread waits before it tries again after an iceoryx2 error.
 pub const RETRY: Duration = Duration::from_millis(500);
 
@@ -51,6 +54,22 @@ impl Shared {
     /// The current epoch.
     pub fn epoch(&self) -> u64 {
         self.epoch.load(Ordering::Acquire)
+    }
+
+    /// The next item `handler` receives, waiting a tick at a time; `None` once the bridge stops
+    /// or the channel closes (logged as `what` closed).
+    pub fn next<T>(&self, handler: &FifoChannelHandler<T>, what: &str) -> Option<T> {
+        while !self.stopping() {
+            match handler.recv_timeout(TICK) {
+                Ok(Some(item)) => return Some(item),
+                Ok(None) => continue,
+                Err(error) => {
+                    tracing::error!(%error, "the {what} closed");
+                    return None;
+                }
+            }
+        }
+        None
     }
 }
 
