@@ -193,14 +193,19 @@ impl<R> TreePair<'_, R> {
         let planes = |node: &Node, triangles| if node.is_leaf() { triangles } else { &[][..] };
         let planes_a = planes(node_a, triangles_a);
         let planes_b = planes(node_b, triangles_b);
-        // A node's projections on `direction` (in its tree's frame) plus `offset`.
-        let range = |node: &Node, triangles, direction: &Vector3<f64>, offset: f64| {
+        // A node's projections on `direction` (in its tree's frame) plus `offset`, or `None` as
+        // soon as the corners projected so far give `hopeless` (see below).
+        let range = |node: &Node,
+                     triangles,
+                     direction: &Vector3<f64>,
+                     offset: f64,
+                     hopeless: &dyn Fn((f64, f64)) -> bool| {
             if node.is_leaf() || extent == Extent::Exact {
-                projection_range(triangles, direction, offset)
+                projection_range_until(triangles, direction, offset, hopeless)
             } else {
                 let centre = direction.dot(&node.sphere.centre()) + offset;
                 let radius = f64::from(node.sphere.radius);
-                (centre - radius, centre + radius)
+                Some((centre - radius, centre + radius))
             }
         };
         // Both sides are projected here in each tree's own frame, while the triangle test poses
@@ -230,8 +235,28 @@ impl<R> TreePair<'_, R> {
             } else {
                 (exact, self.rotation.transpose() * exact)
             };
-            let (low_a, high_a) = range(node_a, triangles_a, &in_a, 0.0);
-            let (low_b, high_b) = range(node_b, triangles_b, &in_b, in_a.dot(&self.translation));
+            let offset_b = in_a.dot(&self.translation);
+            // The gaps below beat `widest` only while the other node's corners stay beyond the
+            // plane's own leaf: the other node's projection stops at the first triangle that
+            // rules both out. A partial range only widens as corners come in, so the planes
+            // skipped are exactly those the complete ranges would reject.
+            let beats = widest;
+            let hopeless = |(low_a, high_a): (f64, f64), (low_b, high_b): (f64, f64)| {
+                !(low_b - high_a - rounding > beats || low_a - high_b - rounding > beats)
+            };
+            let never = |_: (f64, f64)| false;
+            let ranges = if along_b {
+                let b = range(node_b, triangles_b, &in_b, offset_b, &never);
+                let b = b.expect("a range that never stops is complete");
+                range(node_a, triangles_a, &in_a, 0.0, &|a| hopeless(a, b)).map(|a| (a, b))
+            } else {
+                let a = range(node_a, triangles_a, &in_a, 0.0, &never);
+                let a = a.expect("a range that never stops is complete");
+                range(node_b, triangles_b, &in_b, offset_b, &|b| hopeless(a, b)).map(|b| (a, b))
+            };
+            let Some(((low_a, high_a), (low_b, high_b))) = ranges else {
+                continue;
+            };
             // In A's frame the other tree is B (beyond along +normal when B is above); in B's
             // frame it is A.
             let (above, below) = (low_b - high_a - rounding, low_a - high_b - rounding);
@@ -260,13 +285,24 @@ fn face_normal(t: &Triangle) -> Option<Vector3<f64>> {
     (length > 0.0 && length.is_finite()).then(|| normal / length)
 }
 
-/// The least and greatest of `direction . p + offset` over the triangles' corners `p`.
-fn projection_range(triangles: &[Triangle], direction: &Vector3<f64>, offset: f64) -> (f64, f64) {
+/// The least and greatest of `direction . p + offset` over the triangles' corners `p`; `None`
+/// as soon as the range of the triangles projected so far is `hopeless`.
+fn projection_range_until(
+    triangles: &[Triangle],
+    direction: &Vector3<f64>,
+    offset: f64,
+    hopeless: &dyn Fn((f64, f64)) -> bool,
+) -> Option<(f64, f64)> {
     let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
-    for p in triangles.iter().flatten() {
-        let x = direction.x * p.x + direction.y * p.y + direction.z * p.z + offset;
-        low = low.min(x);
-        high = high.max(x);
+    for triangle in triangles {
+        for p in triangle {
+            let x = direction.x * p.x + direction.y * p.y + direction.z * p.z + offset;
+            low = low.min(x);
+            high = high.max(x);
+        }
+        if hopeless((low, high)) {
+            return None;
+        }
     }
-    (low, high)
+    Some((low, high))
 }
