@@ -170,6 +170,9 @@ pub struct HeldPart {
     pub wrench: Wrench,
     /// The obstacles the part touches, by part id, sorted, each with one of its contacts.
     pub touching: Vec<(PartId, ContactAt)>,
+    /// The parts the sliding world proved apart from this one at its visible pose, each at the
+    /// pose it was tested at: the collision loop need not test them again there.
+    pub apart: Vec<(PartId, Isometry3<f64>)>,
 }
 
 impl HeldPart {

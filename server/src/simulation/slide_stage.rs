@@ -235,6 +235,9 @@ impl SlideStage {
             .collect();
         touching.sort_by_key(|&(part, _)| part);
         touching.dedup_by_key(|&mut (part, _)| part);
+        let apart = (slide.world.proved_apart(&visible).into_iter())
+            .map(|(index, pose)| (obstacle_part(slide.part, index), pose))
+            .collect();
         Some(HeldPart {
             part: slide.part,
             ghost: slide.ghost,
@@ -243,6 +246,7 @@ impl SlideStage {
             hand_root: visible * slide.ghost.inverse() * slide.root,
             wrench,
             touching,
+            apart,
         })
     }
 

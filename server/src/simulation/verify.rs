@@ -31,7 +31,8 @@ use super::frames::{
 use super::hand_bodies::HandBodies;
 use crate::collision::DopTree;
 use crate::collision::pipeline::{
-    CollidingPair, CollisionModel, CollisionPipeline, Detail, ObjectDesc, ObjectId, PipelineConfig,
+    CollidingPair, CollisionModel, CollisionPipeline, Detail, KnownApart, ObjectDesc, ObjectId,
+    PipelineConfig,
 };
 use crate::geometry::ConvexHull;
 use crate::grasping::{FlexVector, GraspEvent, HandModel, PartId};
@@ -211,6 +212,7 @@ impl Verifier {
         candidate: CandidateFrame,
     ) -> (VerifiedFrame, Vec<(PartId, Isometry3<f64>)>) {
         let colliding_before = self.colliding.clone();
+        self.pipeline.set_known_apart(self.known_apart(&candidate));
         let mut moved_parts: Vec<PartId> = Vec::new();
         for (id, pose) in candidate.part_poses.iter().enumerate() {
             let changed = self
@@ -278,6 +280,23 @@ impl Verifier {
         self.accept(&candidate, &refused, &accepted);
         let frame = self.frame(candidate, &accepted);
         (frame, refused)
+    }
+
+    /// What the sliding worlds proved of the held parts at their proposed poses: the pipeline
+    /// skips those pairs while both parts stay there (a part put back is tested as usual).
+    fn known_apart(&self, candidate: &CandidateFrame) -> Vec<KnownApart> {
+        let object = |part: PartId| self.parts.get(part as usize).copied();
+        (candidate.hands.iter())
+            .filter_map(|hand| hand.held.as_ref())
+            .flat_map(|held| {
+                (held.apart.iter()).filter_map(move |&(other, pose)| {
+                    Some(KnownApart {
+                        a: (object(held.part)?, held.visible),
+                        b: (object(other)?, pose),
+                    })
+                })
+            })
+            .collect()
     }
 
     /// Queues a move; false for a pose the pipeline refuses (not finite), which stays unmoved.

@@ -176,6 +176,8 @@ pub struct PairwiseWorld<C: DistanceCollider> {
     memories: Vec<C::Memory>,
     pairs: Vec<TouchingPair>,
     stats: WorldStats,
+    /// The part pose of the last collision query that found the part free.
+    last_free: Option<Pose>,
     /// Whether a first-hit query may split a long traversal across the current rayon pool
     /// ([`ExactTest::intersects_split`]).
     split_long_queries: bool,
@@ -193,6 +195,7 @@ impl<C: DistanceCollider> PairwiseWorld<C> {
             obstacles,
             pairs: Vec::new(),
             stats: WorldStats::default(),
+            last_free: None,
             split_long_queries: false,
         }
     }
@@ -208,6 +211,23 @@ impl<C: DistanceCollider> PairwiseWorld<C> {
     /// The obstacles, in the order contacts name them.
     pub fn obstacles(&self) -> &[Obstacle<C>] {
         &self.obstacles
+    }
+
+    /// The obstacles (by index, with their poses) that the last collision query to find the part
+    /// free proved apart from it, if that query was at `part_pose`; otherwise none. A query tests
+    /// every obstacle near the part, so a free answer proves each of them apart, except those
+    /// with an allowance, which may overlap the part by design and are left out. The collision
+    /// loop then need not test those pairs again at the same poses.
+    pub fn proved_apart(&self, part_pose: &Pose) -> Vec<(usize, Pose)> {
+        if self.last_free != Some(*part_pose) {
+            return Vec::new();
+        }
+        let centre = part_pose * self.pivot;
+        (self.obstacles.iter().enumerate())
+            .filter(|(_, obstacle)| obstacle.allowance.is_none())
+            .filter(|(_, obstacle)| obstacle.near(&centre, self.radius))
+            .map(|(index, obstacle)| (index, obstacle.pose))
+            .collect()
     }
 
     /// Counters and times so far.
@@ -268,6 +288,9 @@ impl<C: DistanceCollider> SlideWorld for PairwiseWorld<C> {
             }
         }
         self.stats.collision_time += start.elapsed();
+        if !hit {
+            self.last_free = Some(*part_pose);
+        }
         hit
     }
 

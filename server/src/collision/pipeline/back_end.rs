@@ -2,9 +2,9 @@
 //! if need be, its exact test on one thread, the pairs shared out among the pool's threads a chunk
 //! at a time ([`SharedPairs`]) and the last exact tests one at a time.
 
-use super::objects::{Slot, models, relative_pose};
+use super::objects::{Slot, live, models, relative_pose};
 use super::pool::help_once;
-use super::{Detail, ExactTest, PairEntry, PairKey, PipelineConfig};
+use super::{Detail, ExactTest, KnownApartPairs, PairEntry, PairKey, PipelineConfig};
 use crate::collision::QueryStats;
 use crate::collision::separating_plane::PlaneSearch;
 use std::collections::VecDeque;
@@ -159,6 +159,7 @@ fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 /// What the back end reads while it tests the pairs of a frame, on any thread.
 pub(super) struct BackEnd<'a, C> {
     slots: &'a [Slot<C>],
+    known_apart: &'a KnownApartPairs,
     /// `None` when the separating-plane stage is off.
     plane_search: Option<PlaneSearch>,
     split_min_bv_tests: u64,
@@ -172,9 +173,15 @@ pub(super) struct BackEnd<'a, C> {
 
 impl<'a, C: ExactTest> BackEnd<'a, C> {
     /// The back end of a frame over `slots`.
-    pub(super) fn new(slots: &'a [Slot<C>], config: &PipelineConfig, detail: Detail) -> Self {
+    pub(super) fn new(
+        slots: &'a [Slot<C>],
+        known_apart: &'a KnownApartPairs,
+        config: &PipelineConfig,
+        detail: Detail,
+    ) -> Self {
         BackEnd {
             slots,
+            known_apart,
             plane_search: config.separating_plane.then_some(config.plane_search),
             // On one thread, a split traversal would only add its overhead.
             split_min_bv_tests: if rayon::current_num_threads() > 1 {
@@ -275,7 +282,8 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
     }
 
     /// Runs the separating-plane stage on the pairs. A pair that collided when last tested skips
-    /// it: the pre-check would most likely fail, after many loops.
+    /// it: the pre-check would most likely fail, after many loops. A pair known apart at its
+    /// objects' current poses counts as separated.
     fn pre_check(&self, entries: &mut [&mut PairEntry]) -> Tally {
         let start = Instant::now();
         let mut tally = Tally {
@@ -285,7 +293,9 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
         for entry in entries.iter_mut() {
             entry.b_to_a = relative_pose(self.slots, entry.pair);
             entry.separated = false;
-            if let Some(search) = &self.plane_search
+            if entry.contact.is_none() && self.is_known_apart(entry.pair) {
+                entry.separated = true;
+            } else if let Some(search) = &self.plane_search
                 && entry.contact.is_none()
             {
                 let [a, b] = models(self.slots, entry.pair);
@@ -297,6 +307,13 @@ impl<'a, C: ExactTest> BackEnd<'a, C> {
         }
         tally.plane_time = start.elapsed();
         tally
+    }
+
+    /// Whether the pair was proved apart outside the pipeline with both objects where they are.
+    fn is_known_apart(&self, pair: PairKey) -> bool {
+        self.known_apart.get(&pair).is_some_and(|[pose_a, pose_b]| {
+            live(self.slots, pair.0).pose == *pose_a && live(self.slots, pair.1).pose == *pose_b
+        })
     }
 
     /// The exact test of a pair the pre-check did not separate.

@@ -10,7 +10,8 @@
 //! let through, and its time.
 //!
 //! A pair that collided when last tested skips the pre-check (it would most likely fail to find a
-//! plane, after many loops) and goes straight to the exact test.
+//! plane, after many loops) and goes straight to the exact test. A pair the caller knows to be
+//! apart at the objects' current poses ([`CollisionPipeline::set_known_apart`]) skips both.
 //!
 //! The back end is parallel on the current rayon pool: the threads claim the pairs of a frame a
 //! chunk at a time until none is left (dynamic load balancing), each pair going through its
@@ -83,6 +84,19 @@ impl Default for PipelineConfig {
 /// A pair of object slots, smaller index first.
 type PairKey = (u32, u32);
 
+/// Two objects proved apart outside the pipeline, by the same exact test on the same models, at
+/// the poses given: a grasped part's sliding world tests every pose it shows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KnownApart {
+    /// One object and the pose it was tested at.
+    pub a: (ObjectId, Isometry3<f64>),
+    /// The other object and the pose it was tested at.
+    pub b: (ObjectId, Isometry3<f64>),
+}
+
+/// The pairs known apart, by pair, with the two poses (in the pair's order) they were tested at.
+type KnownApartPairs = FxHashMap<PairKey, [Isometry3<f64>; 2]>;
+
 /// A pair of interest whose boxes overlap: what is kept of it between frames, and what the last
 /// frame that tested it found. The pipeline keeps one for every such pair (see
 /// [`CollisionPipeline::run_frame`]), and the back end tests it in place, so that no serial pass
@@ -129,6 +143,7 @@ pub struct CollisionPipeline<C> {
     /// from the few pairs whose contact started or ended, so that a frame's report costs in
     /// proportion to the colliding pairs, not to all the pairs of the table.
     colliding: BTreeSet<PairKey>,
+    known_apart: KnownApartPairs,
     queue: Vec<u32>,
     queued: Vec<bool>,
     warmer: PoolWarmer,
@@ -145,6 +160,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
             interest: InterestMatrix::new(),
             pairs: FxHashMap::default(),
             colliding: BTreeSet::new(),
+            known_apart: FxHashMap::default(),
             queue: Vec::new(),
             queued: Vec::new(),
             warmer: PoolWarmer::default(),
@@ -262,6 +278,26 @@ impl<C: ExactTest> CollisionPipeline<C> {
         }
     }
 
+    /// Replaces the pairs known to be apart: from now on, a pair among them whose two objects
+    /// are exactly at the poses given, and which did not collide when last tested, counts as
+    /// separated without a pre-check or an exact test. Facts naming a removed object are dropped.
+    /// The test that proved them must be the pipeline's own exact test on the same models: the
+    /// pipeline then answers as it would have.
+    pub fn set_known_apart(&mut self, facts: impl IntoIterator<Item = KnownApart>) {
+        self.known_apart.clear();
+        for KnownApart { a, b } in facts {
+            if self.object(a.0).is_err() || self.object(b.0).is_err() || a.0 == b.0 {
+                continue;
+            }
+            let (pair, poses) = if a.0.index < b.0.index {
+                ((a.0.index, b.0.index), [a.1, b.1])
+            } else {
+                ((b.0.index, a.0.index), [b.1, a.1])
+            };
+            self.known_apart.insert(pair, poses);
+        }
+    }
+
     /// Number of objects in the scene.
     pub fn len(&self) -> usize {
         self.slots.len() - self.free.len()
@@ -352,7 +388,7 @@ impl<C: ExactTest> CollisionPipeline<C> {
                 everything_moved || queued[entry.pair.0 as usize] || queued[entry.pair.1 as usize]
             })
             .collect();
-        let back_end = BackEnd::new(&self.slots, &self.config, detail);
+        let back_end = BackEnd::new(&self.slots, &self.known_apart, &self.config, detail);
         let boxes = BoxStage {
             broad_phase: &mut self.broad_phase,
             slots: &self.slots,

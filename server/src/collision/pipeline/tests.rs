@@ -378,6 +378,62 @@ fn bad_poses_and_stale_ids_are_refused() {
 }
 
 #[test]
+fn pairs_known_apart_skip_the_exact_test_only_at_their_poses() {
+    // Two unit balls whose boxes overlap at a corner: without the pre-check, every frame that
+    // moves one of them tests the pair exactly.
+    let config = PipelineConfig {
+        separating_plane: false,
+        ..PipelineConfig::default()
+    };
+    let mut pipeline = CollisionPipeline::<DopTree>::new(config);
+    let ball = model::<DopTree>(&shape(Vector3::new(1.0, 1.0, 1.0), 0.0));
+    let desc = |pose: Isometry3<f64>| ObjectDesc {
+        model: Arc::clone(&ball),
+        pose,
+        group: GroupId(0),
+        is_static: false,
+    };
+    let at = |x: f64, y: f64| Isometry3::translation(x, y, 0.0);
+    let fixed = pipeline.add(desc(at(0.0, 0.0))).unwrap();
+    let moving = pipeline.add(desc(at(1.6, 1.6))).unwrap();
+    let first = pipeline.run_frame(Detail::Pairs);
+    assert_eq!((first.stats.exact.pairs_in, first.colliding.len()), (1, 0));
+
+    // Known apart where both are: no exact test, and still apart.
+    let apart = at(1.6, 1.5);
+    pipeline.queue_move(moving, apart).unwrap();
+    pipeline.set_known_apart([KnownApart {
+        a: (moving, apart),
+        b: (fixed, at(0.0, 0.0)),
+    }]);
+    let skipped = pipeline.run_frame(Detail::Pairs);
+    assert_eq!(
+        (skipped.stats.exact.pairs_in, skipped.colliding.len()),
+        (0, 0)
+    );
+
+    // Moved into the other ball, the fact (for the old pose) no longer holds: tested, colliding.
+    pipeline.queue_move(moving, at(0.5, 0.0)).unwrap();
+    let tested = pipeline.run_frame(Detail::Pairs);
+    assert_eq!(tested.stats.exact.pairs_in, 1);
+    let pair = tested
+        .colliding
+        .iter()
+        .map(|p| (p.a, p.b))
+        .collect::<Vec<_>>();
+    assert_eq!(pair, vec![(fixed, moving)]);
+
+    // A fact never hides a pair that collided when last tested.
+    pipeline.queue_move(moving, at(0.4, 0.0)).unwrap();
+    pipeline.set_known_apart([KnownApart {
+        a: (fixed, at(0.0, 0.0)),
+        b: (moving, at(0.4, 0.0)),
+    }]);
+    let still = pipeline.run_frame(Detail::Pairs);
+    assert_eq!((still.stats.exact.pairs_in, still.colliding.len()), (1, 1));
+}
+
+#[test]
 fn answers_do_not_depend_on_the_separating_plane_stage() {
     let mut scene = Scene::<DopTree>::new(25);
     let mut with_plane = CollisionPipeline::new(PipelineConfig::default());
