@@ -162,6 +162,9 @@ pub fn bars(rows: &[Row]) -> Vec<Bar> {
         .filter(|r| r.procedure == "random")
         .filter_map(|r| ratio(r, RANDOM_BAR))
         .collect();
+    // A cost in work, not time: the bounding-volume tests and triangle distances a query makes
+    // are what the memory decides, and both are counted exactly, where two means of a few
+    // microseconds differ by the timer's noise alone (the times are reported beside).
     let carried = rows
         .iter()
         .filter(ours)
@@ -170,19 +173,24 @@ pub fn bars(rows: &[Row]) -> Vec<Bar> {
             let cold = rows.iter().find(|o| {
                 o.pair == r.pair && o.procedure == r.procedure && o.method == "doptree-cold"
             })?;
+            let (work, cold_work) = (r.stats.as_ref()?, cold.stats.as_ref()?);
             Some((
                 format!(
-                    "{}: {} us carried, {} us cold",
+                    "{}: {} / {} bv / triangle tests carried, {} / {} cold ({} against {} us)",
                     r.pair,
+                    format_number(work.bv_tests),
+                    format_number(work.tri_tests),
+                    format_number(cold_work.bv_tests),
+                    format_number(cold_work.tri_tests),
                     format_number(r.mean_us),
                     format_number(cold.mean_us)
                 ),
-                r.mean_us <= cold.mean_us,
+                work.bv_tests <= cold_work.bv_tests && work.tri_tests <= cold_work.tri_tests,
             ))
         })
         .collect::<Vec<_>>();
     let carried = Bar {
-        name: "random: a carried memory costs no more than a cold query".into(),
+        name: "random: a carried memory costs no more work than a cold query".into(),
         met: (!carried.is_empty()).then(|| carried.iter().all(|(_, ok)| *ok)),
         detail: carried
             .into_iter()
