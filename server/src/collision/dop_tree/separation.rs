@@ -236,22 +236,19 @@ impl<R> TreePair<'_, R> {
                 (exact, self.rotation.transpose() * exact)
             };
             let offset_b = in_a.dot(&self.translation);
-            // The gaps below beat `widest` only while the other node's corners stay beyond the
-            // plane's own leaf: the other node's projection stops at the first triangle that
-            // rules both out. A partial range only widens as corners come in, so the planes
-            // skipped are exactly those the complete ranges would reject.
+            // The plane's own node is a leaf, projected whole. The gaps below beat `widest` only
+            // while the other node's corners stay beyond it: the other node's projection stops
+            // at the first triangle that rules both out. A partial range only widens as corners
+            // come in, so the planes skipped are exactly those the complete ranges would reject.
             let beats = widest;
             let hopeless = |(low_a, high_a): (f64, f64), (low_b, high_b): (f64, f64)| {
                 !(low_b - high_a - rounding > beats || low_a - high_b - rounding > beats)
             };
-            let never = |_: (f64, f64)| false;
             let ranges = if along_b {
-                let b = range(node_b, triangles_b, &in_b, offset_b, &never);
-                let b = b.expect("a range that never stops is complete");
+                let b = projection_range(triangles_b, &in_b, offset_b);
                 range(node_a, triangles_a, &in_a, 0.0, &|a| hopeless(a, b)).map(|a| (a, b))
             } else {
-                let a = range(node_a, triangles_a, &in_a, 0.0, &never);
-                let a = a.expect("a range that never stops is complete");
+                let a = projection_range(triangles_a, &in_a, 0.0);
                 range(node_b, triangles_b, &in_b, offset_b, &|b| hopeless(a, b)).map(|b| (a, b))
             };
             let Some(((low_a, high_a), (low_b, high_b))) = ranges else {
@@ -285,8 +282,14 @@ fn face_normal(t: &Triangle) -> Option<Vector3<f64>> {
     (length > 0.0 && length.is_finite()).then(|| normal / length)
 }
 
-/// The least and greatest of `direction . p + offset` over the triangles' corners `p`; `None`
-/// as soon as the range of the triangles projected so far is `hopeless`.
+/// The least and greatest of `direction . p + offset` over the triangles' corners `p`.
+fn projection_range(triangles: &[Triangle], direction: &Vector3<f64>, offset: f64) -> (f64, f64) {
+    projection_range_until(triangles, direction, offset, &|_| false)
+        .expect("a projection that never gives up is complete")
+}
+
+/// [`projection_range`], or `None` as soon as the range of the triangles projected so far is
+/// `hopeless`.
 fn projection_range_until(
     triangles: &[Triangle],
     direction: &Vector3<f64>,
