@@ -5,7 +5,7 @@ use nalgebra::{Point3, Vector3};
 
 use super::super::realign::{AffineRealign, RealignCache, rounding_margin};
 use super::super::separation::BOX_TEST_MAX_TRIANGLES;
-use super::super::traverse::{TreePair, overlap_slack};
+use super::super::traverse::TreePair;
 use crate::collision::QueryStats;
 use crate::collision::oriented_box::OrientedBox;
 use crate::collision::triangle::Triangle;
@@ -27,6 +27,41 @@ pub(super) struct Direction {
     b_cone: ([u8; 3], [f64; 3]),
     /// `u · t`: where B's origin lies along `u`.
     along_translation: f64,
+}
+
+/// A lower bound on the distance between two sets, with the unit line (A's frame) along which
+/// their projections are at least that far apart: as B moves, the bound falls only by how far
+/// B's points move along that line, which for a part turning beside another (its near side
+/// moving across the gap, not into it) is a small part of their motion. A zero line: the bound
+/// is not one line's gap, and every motion counts in full.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Gap {
+    pub(super) bound: f64,
+    pub(super) along: Vector3<f64>,
+}
+
+impl Gap {
+    /// A bound that no one line carries.
+    pub(super) fn anywhere(bound: f64) -> Self {
+        Gap {
+            bound,
+            along: Vector3::zeros(),
+        }
+    }
+
+    /// The gap along the unit line `along`.
+    fn along(bound: f64, along: Vector3<f64>) -> Self {
+        Gap { bound, along }
+    }
+
+    /// The larger of the two bounds.
+    pub(super) fn max(self, other: Gap) -> Gap {
+        if other.bound > self.bound {
+            other
+        } else {
+            self
+        }
+    }
 }
 
 impl<const K: usize> TreePair<'_, AffineRealign<K>> {
@@ -51,7 +86,8 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     /// centres and along `direction`, for larger ones their DOPs' gap along `direction`; only
     /// when none prunes, the DOPs re-aligned to A's unit directions, the widest gap along one of
     /// them. The DOP bounds lose the bound of their `f32` rounding, so that no bound exceeds the
-    /// true distance (the boxes are padded for theirs).
+    /// true distance (the boxes are padded for theirs). Each is a gap along one line, which the
+    /// bound keeps.
     #[inline(always)]
     pub(super) fn lower_bound<const FUSED: bool>(
         &self,
@@ -60,15 +96,23 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         direction: Option<&Direction>,
         best: f64,
         stats: &mut QueryStats,
-    ) -> f64 {
+    ) -> Gap {
         stats.bv_tests += 1;
         let (sa, sb) = (
             self.a.nodes[ia as usize].sphere,
             self.b.nodes[ib as usize].sphere,
         );
-        let centre_b = self.rotation * sb.centre() + self.translation;
-        let spheres = (sa.centre() - centre_b).norm() - f64::from(sa.radius) - f64::from(sb.radius);
-        if spheres >= best {
+        let between = self.rotation * sb.centre() + self.translation - sa.centre();
+        let length = between.norm();
+        let spheres = Gap {
+            bound: length - f64::from(sa.radius) - f64::from(sb.radius),
+            along: if length > 0.0 {
+                between / length
+            } else {
+                Vector3::zeros()
+            },
+        };
+        if spheres.bound >= best {
             return spheres;
         }
         let rounding = self.dop_rounding();
@@ -77,16 +121,20 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         let directed = if boxed {
             self.boxes_gap((ia, ib), direction, best)
         } else {
-            direction.map_or(f64::MIN, |direction| {
-                self.dops_gap_along((ia, ib), direction) - rounding
+            direction.map_or(Gap::anywhere(f64::MIN), |direction| {
+                Gap::along(
+                    self.dops_gap_along((ia, ib), direction) - rounding,
+                    direction.u,
+                )
             })
         };
-        if directed >= best {
+        if directed.bound >= best {
             return directed;
         }
         let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
         let e = cache.get::<K, FUSED, _>(&self.realigner, self.b, ib, stats);
-        let dops = -f64::from(overlap_slack(da, e)) - rounding;
+        let (slack, axis) = tightest_axis(da, e);
+        let dops = Gap::along(-f64::from(slack) - rounding, self.a.set.normal(axis));
         spheres.max(directed).max(dops)
     }
 
@@ -121,38 +169,52 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     /// first of at least `best`. The boxes' extents are padded for their own rounding, so the
     /// gaps are true bounds.
     #[inline(always)]
-    fn boxes_gap(&self, (ia, ib): (u32, u32), direction: Option<&Direction>, best: f64) -> f64 {
+    fn boxes_gap(&self, (ia, ib): (u32, u32), direction: Option<&Direction>, best: f64) -> Gap {
         let box_a = self.a.boxes[ia as usize].oriented();
         let box_b = self.b.boxes[ib as usize].oriented();
         // Along `w` in A's frame, `w_b` being the same direction in B's.
-        let gap_along = |w: &Vector3<f64>, w_b: &Vector3<f64>| {
-            let (low_a, high_a) = box_a.projection(w, 0.0);
+        let gap_along = |w: Vector3<f64>, w_b: &Vector3<f64>| {
+            let (low_a, high_a) = box_a.projection(&w, 0.0);
             let (low_b, high_b) = box_b.projection(w_b, w.dot(&self.translation));
-            (low_b - high_a).max(low_a - high_b)
+            Gap::along((low_b - high_a).max(low_a - high_b), w)
         };
         let in_b = |w: &Vector3<f64>| self.rotation.tr_mul(w);
         let thinnest = |b: &OrientedBox| b.axes.column(b.extents.imin()).into_owned();
-        let mut gap = f64::MIN;
+        let mut gap = Gap::anywhere(f64::MIN);
         if let Some(w) =
             (self.rotation * box_b.center + self.translation - box_a.center).try_normalize(0.0)
         {
-            gap = gap_along(&w, &in_b(&w));
+            gap = gap_along(w, &in_b(&w));
         }
-        if gap < best
+        if gap.bound < best
             && let Some(direction) = direction
         {
-            gap = gap.max(gap_along(&direction.u, &in_b(&direction.u)));
+            gap = gap.max(gap_along(direction.u, &in_b(&direction.u)));
         }
-        if gap < best {
+        if gap.bound < best {
             let w = thinnest(&box_a);
-            gap = gap.max(gap_along(&w, &in_b(&w)));
+            gap = gap.max(gap_along(w, &in_b(&w)));
         }
-        if gap < best {
+        if gap.bound < best {
             let w_b = thinnest(&box_b);
-            gap = gap.max(gap_along(&(self.rotation * w_b), &w_b));
+            gap = gap.max(gap_along(self.rotation * w_b, &w_b));
         }
         gap
     }
+}
+
+/// The least `a_i + e_i` and its axis `i`: how deeply the DOPs overlap along their tightest axis
+/// (negative when they are disjoint: the gap along A's normal `i`).
+#[inline(always)]
+fn tightest_axis<const K: usize>(a: &[f32; K], e: &[f32; K]) -> (f32, usize) {
+    let mut least = (f32::INFINITY, 0);
+    for i in 0..K {
+        let s = a[i] + e[i];
+        if s < least.0 {
+            least = (s, i);
+        }
+    }
+    least
 }
 
 /// A triangle (A's frame) with what its lower bounds reuse: the range of its corners along the
@@ -182,6 +244,11 @@ impl BoundedTriangle {
             .try_normalize(0.0)
             .map(|n| (n, bounded.range(&n)));
         bounded
+    }
+
+    /// Its corners' span along the direction it was bounded along, if any.
+    pub(super) fn along_u(&self) -> Option<(f64, f64)> {
+        self.along_u
     }
 
     /// The least and the greatest of its corners' projections on `w`.

@@ -5,11 +5,17 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::super::node_bounds::NodeSphere;
 use super::super::tree::DopTree;
+use super::bounds::Gap;
 use super::queue::OpenQueue;
 use super::walk::Closest;
 
 /// A node pair with a lower bound on its distance.
-pub(super) type BoundedPair = (u32, u32, f64);
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BoundedPair {
+    pub(super) ia: u32,
+    pub(super) ib: u32,
+    pub(super) gap: Gap,
+}
 
 /// What the last distance queries between two objects found: keep one per pair of objects (it is
 /// `Send`, and cheap when empty) and pass it to every query of that pair.
@@ -36,6 +42,8 @@ pub struct DistanceMemory {
     /// (a reopened pair is replaced by its children), so it is dropped once it has grown to
     /// [`FRONT_GROWTH`] times that, and the walk starts from the roots again.
     roots_front_len: usize,
+    /// The bounding-volume tests of the last walk from the roots.
+    roots_work: u64,
     /// Walks from the carried front since the last walk from the roots.
     carried_walks: usize,
     /// Buffers reused across queries: the walk's queue and the front it records.
@@ -84,7 +92,10 @@ impl Motion {
     fn since(last: &LastQuery, rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Self {
         let turn = rotation - last.rotation;
         Motion {
-            turn_norm: turn.norm(),
+            // The difference of two rotations has the spectral norm 2 sin(a/2) (a the angle
+            // between them), its Frobenius norm over sqrt 2; the small term covers matrices
+            // rounded off exact rotations.
+            turn_norm: turn.norm() * std::f64::consts::FRAC_1_SQRT_2 * (1.0 + 1e-9) + 1e-12,
             turn,
             shift: translation - last.translation,
         }
@@ -95,6 +106,18 @@ impl Motion {
     fn within(&self, sphere: &NodeSphere) -> f64 {
         (self.turn * sphere.centre() + self.shift).norm()
             + self.turn_norm * f64::from(sphere.radius)
+    }
+
+    /// How far `gap`'s bound on a pair with B's node in `sphere` may have fallen: how far the
+    /// node's points moved along the gap's line (`w · (turn c + shift)` for its centre, at most
+    /// `|turnᵀ w| r` more for the others), or anywhere when it has none.
+    fn across(&self, gap: &Gap, sphere: &NodeSphere) -> f64 {
+        if gap.along == Vector3::zeros() {
+            return self.within(sphere);
+        }
+        let turned = self.turn.tr_mul(&gap.along);
+        (turned.dot(&sphere.centre()) + gap.along.dot(&self.shift)).abs()
+            + turned.norm() * f64::from(sphere.radius)
     }
 }
 
@@ -129,8 +152,9 @@ impl DistanceMemory {
     /// Sets up a walk of `a` and `b` with B at (`rotation`, `translation`) in A's frame, the best
     /// distance known being `best`: the pairs of the last front that the motion since may have
     /// brought below `best` are set aside in the queue's carried pairs with their carried
-    /// bounds; those still proved apart go straight to the new front. Returns the queue and the new front, and whether the walk
-    /// must start from the roots instead (no front, or most of it to open again).
+    /// bounds; those still proved apart go straight to the new front. Returns the queue and the
+    /// new front, and whether the walk must start from the roots instead (no front, or so much
+    /// of it to measure again that the roots cost no more).
     pub(super) fn start_walk(
         &mut self,
         b: &DopTree,
@@ -149,16 +173,31 @@ impl DistanceMemory {
             return (&mut self.queue, &mut self.next_front, true);
         };
         let motion = Motion::since(&last, rotation, translation);
-        for &(ia, ib, bound) in &self.front {
-            let bound = bound - motion.within(&b.nodes[ib as usize].sphere);
-            if bound >= best {
-                self.next_front.push((ia, ib, bound));
+        // Every point of B is in the root's sphere: one bound for the pairs far enough apart.
+        let anywhere = motion.within(&b.nodes[0].sphere);
+        for &pair in &self.front {
+            let moved = if pair.gap.bound - anywhere >= best {
+                anywhere
             } else {
-                self.queue.carried.push((ia, ib, bound));
+                motion.across(&pair.gap, &b.nodes[pair.ib as usize].sphere)
+            };
+            let carried = BoundedPair {
+                gap: Gap {
+                    bound: pair.gap.bound - moved,
+                    along: pair.gap.along,
+                },
+                ..pair
+            };
+            if carried.gap.bound >= best {
+                self.next_front.push(carried);
+            } else {
+                self.queue.carried.push(carried);
             }
         }
-        if 2 * self.queue.carried.len() > self.front.len() {
-            // Most of the front must be opened again: the roots are a shorter way.
+        if 2 * self.queue.carried.len() as u64 > self.roots_work.max(64) {
+            // Measuring the carried pairs again would cost about what the last walk from the
+            // roots did (a pair measured again costs a test, and many open a few more): the
+            // roots are as short a way, and leave a fresh front.
             self.queue.clear();
             self.next_front.clear();
             return (&mut self.queue, &mut self.next_front, true);
@@ -168,17 +207,18 @@ impl DistanceMemory {
 
     /// Ends a query of `a` and `b` with B at (`rotation`, `translation`) that found `closest`:
     /// keeps the front the walk recorded when it is `complete` (the walk ran to its end), forgets
-    /// the old one otherwise.
+    /// the old one otherwise; a walk `from_roots` leaves its `work` (bounding-volume tests) as
+    /// the measure of what a carried walk must save.
     pub(super) fn finish(
         &mut self,
         (a, b): (&DopTree, &DopTree),
         (rotation, translation): (&Matrix3<f64>, &Vector3<f64>),
         closest: &Closest,
-        complete: bool,
-        from_roots: bool,
+        (complete, from_roots, work): (bool, bool, u64),
     ) {
         if complete && from_roots {
             self.roots_front_len = self.next_front.len();
+            self.roots_work = work;
         }
         self.carried_walks = if from_roots {
             0
@@ -198,5 +238,63 @@ impl DistanceMemory {
             distance: closest.distance,
         });
         self.pair = closest.pair.or(self.pair);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Point3, UnitQuaternion, Vector3};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::super::super::node_bounds::NodeSphere;
+    use super::{Gap, LastQuery, Motion};
+
+    /// Neither motion bound is ever beaten by a point of the sphere: its displacement (anywhere)
+    /// and its displacement along a gap's line stay within them, for turns from tiny to large;
+    /// and along a line the bound is the smaller.
+    #[test]
+    fn no_point_of_a_sphere_moves_farther_than_its_bounds() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let unit =
+            |rng: &mut ChaCha8Rng| Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).normalize();
+        for case in 0..5_000 {
+            let angle = [1e-4, 1e-2, 0.5, 3.0][case % 4];
+            let before =
+                UnitQuaternion::from_scaled_axis(unit(&mut rng) * rng.random_range(0.0..3.0));
+            let after = UnitQuaternion::from_scaled_axis(unit(&mut rng) * angle) * before;
+            let shift = unit(&mut rng) * rng.random_range(0.0..angle);
+            let last = LastQuery {
+                ids: (0, 0),
+                rotation: *before.to_rotation_matrix().matrix(),
+                translation: Vector3::zeros(),
+                distance: 1.0,
+            };
+            let motion = Motion::since(&last, after.to_rotation_matrix().matrix(), &shift);
+            let centre = Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0));
+            let points: Vec<Point3<f64>> = (0..8)
+                .map(|_| Point3::from(centre + unit(&mut rng) * rng.random_range(0.0..2.0)))
+                .collect();
+            let sphere = NodeSphere::around(points.iter());
+            let gap = Gap {
+                bound: 0.0,
+                along: unit(&mut rng),
+            };
+            let (anywhere, across) = (motion.within(&sphere), motion.across(&gap, &sphere));
+            assert!(
+                across <= anywhere + 1e-12,
+                "case {case}: {across} > {anywhere}"
+            );
+            for p in &points {
+                let moved = (after * p.coords + shift) - before * p.coords;
+                assert!(
+                    moved.norm() <= anywhere * (1.0 + 1e-9) + 1e-12,
+                    "case {case}"
+                );
+                let along = moved.dot(&gap.along).abs();
+                assert!(along <= across * (1.0 + 1e-9) + 1e-12, "case {case}");
+            }
+            assert_eq!(motion.across(&Gap::anywhere(0.0), &sphere), anywhere);
+        }
     }
 }

@@ -9,13 +9,16 @@
 //!    jump (B moved far against the last distance and its size) the memory is forgotten and the
 //!    query runs cold;
 //! 3. the front where the pair's last walk ended ([`DistanceMemory`]) is carried to the new pose:
-//!    its node pairs whose lower bounds, less the motion since, still exceed the best distance
-//!    stay closed; the others are where the walk starts, each measured again at the new pose
-//!    before it is opened (from the roots without a front);
+//!    its node pairs whose lower bounds, less how far the motion since moved B's node along the
+//!    line each bound was measured along, still exceed the best distance stay closed; the
+//!    others are where the walk starts, each measured again at the new pose before it is opened
+//!    (from the roots without a front, or when measuring them again would cost about what the
+//!    last walk from the roots did);
 //! 4. the walk (`walk`) opens only the node pairs whose lower bound (`bounds`: the nodes'
 //!    spheres, their boxes or DOPs along the best pair's direction, their DOPs re-aligned in
 //!    O(k)) is below the best distance found so far, nearest first (`queue`), measures the
-//!    triangle pairs of the leaves it reaches exactly, and records the pairs it leaves closed as
+//!    triangle pairs of the leaves it reaches exactly (but not those that can only tie the best,
+//!    within a rounding), and records the pairs it leaves closed, with their bounds' lines, as
 //!    the new front.
 
 mod bounds;
@@ -120,9 +123,11 @@ fn closest<const K: usize>(
     if let Some(last) = memory.begin(a, b, pose.0, pose.1) {
         pair.measure_triangles(last, &mut closest, stats);
     }
+    let tests_before = stats.bv_tests;
     let (queue, front, from_roots) = memory.start_walk(b, pose.0, pose.1, closest.distance);
     let complete = pair.walk_closest(&mut closest, queue, front, from_roots, stats);
-    memory.finish((a, b), pose, &closest, complete, from_roots);
+    let walk = stats.bv_tests - tests_before;
+    memory.finish((a, b), pose, &closest, (complete, from_roots, walk));
     closest
 }
 

@@ -7,7 +7,7 @@ use nalgebra::Point3;
 use super::super::realign::{AffineRealign, RealignCache, Scratch, with_scratch};
 use super::super::traverse::TreePair;
 use super::super::tree::DEFAULT_LEAF_SIZE;
-use super::bounds::{BoundedTriangle, Direction, triangles_gap};
+use super::bounds::{BoundedTriangle, Direction, Gap, triangles_gap};
 use super::memory::BoundedPair;
 use super::queue::OpenQueue;
 use crate::collision::QueryStats;
@@ -15,6 +15,9 @@ use crate::collision::distance::{TriangleDistance, triangle_distance};
 
 /// How many of a leaf's triangles are bounded at once: the default leaf size.
 const LEAF_CHUNK: usize = DEFAULT_LEAF_SIZE;
+
+/// How much closer than the best (relatively) a triangle pair must possibly be to be measured.
+const TIE: f64 = 1e-14;
 
 /// The closest triangle pair found so far, in A's frame.
 #[derive(Debug, Clone, Copy)]
@@ -39,6 +42,18 @@ impl Closest {
                 on_a: found.on_first,
                 on_b: found.on_second,
             };
+        }
+    }
+
+    /// The bound from which a triangle pair is not measured: the best distance, less a relative
+    /// [`TIE`] once a pair is measured. Triangles sharing the closest corner or edge (a corner
+    /// of one part nearest the other: every triangle around it) are exactly as far as the best,
+    /// and their bounds fall short of it by a rounding; measuring them would change the answer
+    /// by less than the measure's own rounding.
+    fn tie(&self) -> f64 {
+        match self.pair {
+            Some(_) => self.distance * (1.0 - TIE),
+            None => self.distance,
         }
     }
 
@@ -152,20 +167,20 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         // The carried pairs, measured again at this pose: most are still apart and stay whole in
         // the front.
         let carried = std::mem::take(&mut queue.carried);
-        for &(ia, ib, carried_bound) in &carried {
-            let bound = self
+        for &pair in &carried {
+            let gap = self
                 .lower_bound::<FUSED>(
                     &mut cache,
-                    (ia, ib),
+                    (pair.ia, pair.ib),
                     direction.as_ref(),
                     closest.distance,
                     stats,
                 )
-                .max(carried_bound);
-            if bound >= closest.distance {
-                front.push((ia, ib, bound));
+                .max(pair.gap);
+            if gap.bound >= closest.distance {
+                front.push(BoundedPair { gap, ..pair });
             } else {
-                queue.push(ia, ib, bound);
+                queue.push(pair.ia, pair.ib, gap);
             }
         }
         queue.carried = carried;
@@ -173,9 +188,13 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         while let Some(pending) = queue.pop() {
             let (ia, ib) = (pending.ia, pending.ib);
             // The best distance may have improved since the pair was queued.
-            if pending.bound >= closest.distance {
+            if pending.gap.bound >= closest.distance {
                 // Nearest first: every pair still queued is at least as far.
-                front.push((ia, ib, pending.bound));
+                front.push(BoundedPair {
+                    ia,
+                    ib,
+                    gap: pending.gap,
+                });
                 queue.drain_into(front);
                 break;
             }
@@ -183,11 +202,11 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
             let (na, nb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
             if na.is_leaf() && nb.is_leaf() {
                 let before = closest.distance;
-                let bound = self.closest_in_leaves(ia, ib, direction.as_ref(), closest, stats);
+                let gap = self.closest_in_leaves(ia, ib, direction.as_ref(), closest, stats);
                 if closest.distance == 0.0 {
                     return false;
                 }
-                front.push((ia, ib, bound));
+                front.push(BoundedPair { ia, ib, gap });
                 if closest.distance < before {
                     direction = self.best_direction(closest);
                 }
@@ -204,16 +223,20 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                 )
             });
             // The nearer pair queued last: among overlapping pairs it is opened first.
-            let (near, far) = if y < x {
+            let (near, far) = if y.bound < x.bound {
                 ((second, y), (first, x))
             } else {
                 ((first, x), (second, y))
             };
-            for ((pa, pb), bound) in [far, near] {
-                if bound >= closest.distance {
-                    front.push((pa, pb, bound));
+            for ((pa, pb), gap) in [far, near] {
+                if gap.bound >= closest.distance {
+                    front.push(BoundedPair {
+                        ia: pa,
+                        ib: pb,
+                        gap,
+                    });
                 } else {
-                    queue.push(pa, pb, bound);
+                    queue.push(pa, pb, gap);
                 }
             }
         }
@@ -232,8 +255,10 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     }
 
     /// Measures the triangle pairs of two leaves that their projections (`triangles_gap`) do not
-    /// already prove no closer than the best; returns a lower bound on the leaves' distance (the
-    /// least of the measures and of the bounds that spared a measure).
+    /// already prove no closer than the best; returns a lower bound on the leaves' distance: the
+    /// gap of all their triangles along the best pair's direction when it keeps them apart (a
+    /// gap along one line, which a motion across it barely narrows), else the least of the
+    /// measures and of the bounds that spared a measure.
     fn closest_in_leaves(
         &self,
         ia: u32,
@@ -241,10 +266,17 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         direction: Option<&Direction>,
         closest: &mut Closest,
         stats: &mut QueryStats,
-    ) -> f64 {
+    ) -> Gap {
         let (la, lb) = (&self.a.nodes[ia as usize], &self.b.nodes[ib as usize]);
         let mut least = f64::INFINITY;
         let u = direction.map(|d| &d.u);
+        // The leaves' spans along `u`.
+        let (mut span_a, mut span_b) = ((f64::MAX, f64::MIN), (f64::MAX, f64::MIN));
+        let widen = |span: &mut (f64, f64), triangle: &BoundedTriangle| {
+            if let Some((low, high)) = triangle.along_u() {
+                *span = (span.0.min(low), span.1.max(high));
+            }
+        };
         let end_a = la.first + la.count;
         // A's triangles a chunk at a time, each bounded once for all of B's.
         for start in (la.first..end_a).step_by(LEAF_CHUNK) {
@@ -252,9 +284,11 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
             let mut on_a = [BoundedTriangle::default(); LEAF_CHUNK];
             for (i, bounded) in on_a[..count].iter_mut().enumerate() {
                 *bounded = BoundedTriangle::new(self.a.triangles[start as usize + i], u);
+                widen(&mut span_a, bounded);
             }
             for tb in lb.first..lb.first + lb.count {
                 let moved = BoundedTriangle::new(self.b_triangle_in_a(tb as usize), u);
+                widen(&mut span_b, &moved);
                 for (ta, triangle) in (start..).zip(&on_a[..count]) {
                     if closest.pair == Some([ta, tb]) {
                         // Measured already (the last query's closest pair, measured first): it
@@ -262,8 +296,9 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                         least = least.min(closest.distance);
                         continue;
                     }
-                    let gap = triangles_gap(triangle, &moved, closest.distance);
-                    if gap >= closest.distance {
+                    let tie = closest.tie();
+                    let gap = triangles_gap(triangle, &moved, tie);
+                    if gap >= tie {
                         least = least.min(gap);
                         continue;
                     }
@@ -272,11 +307,18 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                     least = least.min(found.distance);
                     closest.offer(found, [ta, tb]);
                     if closest.distance == 0.0 {
-                        return 0.0;
+                        return Gap::anywhere(0.0);
                     }
                 }
             }
         }
-        least
+        let along_u = (span_b.0 - span_a.1).max(span_a.0 - span_b.1);
+        match u {
+            Some(u) if along_u >= closest.distance => Gap {
+                bound: along_u,
+                along: *u,
+            },
+            _ => Gap::anywhere(least),
+        }
     }
 }
