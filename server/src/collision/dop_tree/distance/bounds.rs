@@ -5,7 +5,7 @@ use nalgebra::{Point3, Vector3};
 
 use super::super::realign::{AffineRealign, RealignCache, rounding_margin};
 use super::super::separation::BOX_TEST_MAX_TRIANGLES;
-use super::super::traverse::TreePair;
+use super::super::traverse::{TreePair, overlap_slack};
 use crate::collision::QueryStats;
 use crate::collision::oriented_box::OrientedBox;
 use crate::collision::triangle::Triangle;
@@ -86,8 +86,8 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     /// centres and along `direction`, for larger ones their DOPs' gap along `direction`; only
     /// when none prunes, the DOPs re-aligned to A's unit directions, the widest gap along one of
     /// them. The DOP bounds lose the bound of their `f32` rounding, so that no bound exceeds the
-    /// true distance (the boxes are padded for theirs). Each is a gap along one line, which the
-    /// bound keeps.
+    /// true distance (the boxes are padded for theirs). Each is a gap along one line, which a
+    /// bound of at least `best` keeps (the pair stays closed, in the front).
     #[inline(always)]
     pub(super) fn lower_bound<const FUSED: bool>(
         &self,
@@ -104,16 +104,12 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         );
         let between = self.rotation * sb.centre() + self.translation - sa.centre();
         let length = between.norm();
-        let spheres = Gap {
-            bound: length - f64::from(sa.radius) - f64::from(sb.radius),
-            along: if length > 0.0 {
-                between / length
-            } else {
-                Vector3::zeros()
-            },
-        };
-        if spheres.bound >= best {
-            return spheres;
+        let spheres = length - f64::from(sa.radius) - f64::from(sb.radius);
+        if spheres >= best {
+            return match length > 0.0 {
+                true => Gap::along(spheres, between / length),
+                false => Gap::anywhere(spheres),
+            };
         }
         let rounding = self.dop_rounding();
         let boxed = self.a.node_triangles(ia).len() <= BOX_TEST_MAX_TRIANGLES
@@ -133,9 +129,15 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         }
         let da: &[f32; K] = self.a.node_offsets(ia as usize).try_into().unwrap();
         let e = cache.get::<K, FUSED, _>(&self.realigner, self.b, ib, stats);
-        let (slack, axis) = tightest_axis(da, e);
-        let dops = Gap::along(-f64::from(slack) - rounding, self.a.set.normal(axis));
-        spheres.max(directed).max(dops)
+        let slack = overlap_slack(da, e);
+        let dops = -f64::from(slack) - rounding;
+        if dops >= best {
+            // Closed along one of A's normals: the one whose sum is the least found.
+            let axis = (0..K).position(|i| da[i] + e[i] == slack).unwrap_or(0);
+            return Gap::along(dops, self.a.set.normal(axis));
+        }
+        // Below the best: the pair is opened, and its line is never asked for.
+        Gap::anywhere(spheres.max(directed.bound).max(dops))
     }
 
     /// How much the `f32` offsets and their re-alignment may be off: the margin of offsets as
@@ -201,20 +203,6 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         }
         gap
     }
-}
-
-/// The least `a_i + e_i` and its axis `i`: how deeply the DOPs overlap along their tightest axis
-/// (negative when they are disjoint: the gap along A's normal `i`).
-#[inline(always)]
-fn tightest_axis<const K: usize>(a: &[f32; K], e: &[f32; K]) -> (f32, usize) {
-    let mut least = (f32::INFINITY, 0);
-    for i in 0..K {
-        let s = a[i] + e[i];
-        if s < least.0 {
-            least = (s, i);
-        }
-    }
-    least
 }
 
 /// A triangle (A's frame) with what its lower bounds reuse: the range of its corners along the

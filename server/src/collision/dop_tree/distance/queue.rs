@@ -20,7 +20,7 @@ use super::memory::BoundedPair;
 pub(super) struct Pending {
     pub(super) ia: u32,
     pub(super) ib: u32,
-    pub(super) gap: Gap,
+    pub(super) bound: f64,
     /// What the queue orders by, smallest first: the bits of the bound with every overlap
     /// counted as 0 (the bits of non-negative floats order as the floats do, and integers
     /// compare faster in the heap's sifts).
@@ -70,18 +70,14 @@ impl OpenQueue {
         self.carried.clear();
     }
 
-    /// Queues A's node `ia` and B's node `ib` at `gap`.
-    pub(super) fn push(&mut self, ia: u32, ib: u32, gap: Gap) {
+    /// Queues A's node `ia` and B's node `ib` at `bound`.
+    pub(super) fn push(&mut self, ia: u32, ib: u32, bound: f64) {
         self.pushed = self.pushed.wrapping_add(1);
         self.heap.push(Pending {
             ia,
             ib,
-            gap,
-            key: if gap.bound > 0.0 {
-                gap.bound.to_bits()
-            } else {
-                0
-            },
+            bound,
+            key: if bound > 0.0 { bound.to_bits() } else { 0 },
             order: self.pushed,
         });
     }
@@ -91,12 +87,12 @@ impl OpenQueue {
         self.heap.pop()
     }
 
-    /// Moves every pair waiting to `front`, with its gap, in no order.
+    /// Moves every pair waiting to `front`, with its bound, in no order.
     pub(super) fn drain_into(&mut self, front: &mut Vec<BoundedPair>) {
         front.extend(self.heap.drain().map(|p| BoundedPair {
             ia: p.ia,
             ib: p.ib,
-            gap: p.gap,
+            gap: Gap::anywhere(p.bound),
         }));
     }
 
@@ -115,7 +111,7 @@ mod tests {
     fn nearest_first_and_overlaps_last_pushed_first() {
         let mut queue = OpenQueue::default();
         for (i, bound) in [0.5, -0.2, 0.1, -0.4, 0.3, 0.0].into_iter().enumerate() {
-            queue.push(i as u32, 0, Gap::anywhere(bound));
+            queue.push(i as u32, 0, bound);
         }
         assert_eq!(queue.len(), 6);
         let order: Vec<u32> = std::iter::from_fn(|| queue.pop()).map(|p| p.ia).collect();

@@ -162,7 +162,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                 closest.distance,
                 stats,
             );
-            queue.push(0, 0, bound);
+            queue.push(0, 0, bound.bound);
         }
         // The carried pairs, measured again at this pose: most are still apart and stay whole in
         // the front.
@@ -180,7 +180,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
             if gap.bound >= closest.distance {
                 front.push(BoundedPair { gap, ..pair });
             } else {
-                queue.push(pair.ia, pair.ib, gap);
+                queue.push(pair.ia, pair.ib, gap.bound);
             }
         }
         queue.carried = carried;
@@ -188,12 +188,12 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         while let Some(pending) = queue.pop() {
             let (ia, ib) = (pending.ia, pending.ib);
             // The best distance may have improved since the pair was queued.
-            if pending.gap.bound >= closest.distance {
+            if pending.bound >= closest.distance {
                 // Nearest first: every pair still queued is at least as far.
                 front.push(BoundedPair {
                     ia,
                     ib,
-                    gap: pending.gap,
+                    gap: Gap::anywhere(pending.bound),
                 });
                 queue.drain_into(front);
                 break;
@@ -236,7 +236,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                         gap,
                     });
                 } else {
-                    queue.push(pa, pb, gap);
+                    queue.push(pa, pb, gap.bound);
                 }
             }
         }
