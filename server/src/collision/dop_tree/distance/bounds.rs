@@ -50,7 +50,7 @@ impl Gap {
     }
 
     /// The gap along the unit line `along`.
-    fn along(bound: f64, along: Vector3<f64>) -> Self {
+    pub(super) fn along(bound: f64, along: Vector3<f64>) -> Self {
         Gap { bound, along }
     }
 
@@ -176,9 +176,9 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         let box_b = self.b.boxes[ib as usize].oriented();
         // Along `w` in A's frame, `w_b` being the same direction in B's.
         let gap_along = |w: Vector3<f64>, w_b: &Vector3<f64>| {
-            let (low_a, high_a) = box_a.projection(&w, 0.0);
-            let (low_b, high_b) = box_b.projection(w_b, w.dot(&self.translation));
-            Gap::along((low_b - high_a).max(low_a - high_b), w)
+            let a = box_a.projection(&w, 0.0);
+            let b = box_b.projection(w_b, w.dot(&self.translation));
+            Gap::along(ranges_gap(a, b), w)
         };
         let in_b = |w: &Vector3<f64>| self.rotation.tr_mul(w);
         let thinnest = |b: &OrientedBox| b.axes.column(b.extents.imin()).into_owned();
@@ -250,6 +250,12 @@ impl BoundedTriangle {
     }
 }
 
+/// The gap between two ranges of projections on one line (`low`, `high`), whichever lies
+/// beyond the other; negative when they overlap.
+pub(super) fn ranges_gap((low_1, high_1): (f64, f64), (low_2, high_2): (f64, f64)) -> f64 {
+    (low_2 - high_1).max(low_1 - high_2)
+}
+
 /// A lower bound on the distance between two triangles bounded along the same direction,
 /// cheaper than measuring it: the gap between their corners' projections on a few lines,
 /// stopping at the first of at least `best`. The lines, cheapest first: the direction of the
@@ -258,27 +264,24 @@ impl BoundedTriangle {
 /// through their centroids (side by side). Each gap is of both triangles' projections, so a
 /// normal that rounding has tilted still gives a true bound.
 pub(super) fn triangles_gap(t1: &BoundedTriangle, t2: &BoundedTriangle, best: f64) -> f64 {
-    let apart = |(low_1, high_1): (f64, f64), (low_2, high_2): (f64, f64)| {
-        (low_2 - high_1).max(low_1 - high_2)
-    };
     let mut gap = match (t1.along_u, t2.along_u) {
-        (Some(range_1), Some(range_2)) => apart(range_1, range_2),
+        (Some(range_1), Some(range_2)) => ranges_gap(range_1, range_2),
         _ => f64::MIN,
     };
     if gap < best
         && let Some((n, own)) = t2.normal
     {
-        gap = gap.max(apart(t1.range(&n), own));
+        gap = gap.max(ranges_gap(t1.range(&n), own));
     }
     if gap < best
         && let Some((n, own)) = t1.normal
     {
-        gap = gap.max(apart(own, t2.range(&n)));
+        gap = gap.max(ranges_gap(own, t2.range(&n)));
     }
     if gap < best
         && let Some(w) = (t2.centroid - t1.centroid).try_normalize(0.0)
     {
-        gap = gap.max(apart(t1.range(&w), t2.range(&w)));
+        gap = gap.max(ranges_gap(t1.range(&w), t2.range(&w)));
     }
     gap
 }

@@ -184,7 +184,7 @@ impl DistanceMemory {
             let carried = BoundedPair {
                 gap: Gap {
                     bound: pair.gap.bound - moved,
-                    along: pair.gap.along,
+                    ..pair.gap
                 },
                 ..pair
             };

@@ -7,7 +7,7 @@ use nalgebra::Point3;
 use super::super::realign::{AffineRealign, RealignCache, Scratch, with_scratch};
 use super::super::traverse::TreePair;
 use super::super::tree::DEFAULT_LEAF_SIZE;
-use super::bounds::{BoundedTriangle, Direction, Gap, triangles_gap};
+use super::bounds::{BoundedTriangle, Direction, Gap, ranges_gap, triangles_gap};
 use super::memory::BoundedPair;
 use super::queue::OpenQueue;
 use crate::collision::QueryStats;
@@ -155,14 +155,14 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
         } = walk;
         let mut direction = self.best_direction(closest);
         if *from_roots {
-            let bound = self.lower_bound::<FUSED>(
+            let roots = self.lower_bound::<FUSED>(
                 &mut cache,
                 (0, 0),
                 direction.as_ref(),
                 closest.distance,
                 stats,
             );
-            queue.push(0, 0, bound.bound);
+            queue.push(0, 0, roots.bound);
         }
         // The carried pairs, measured again at this pose: most are still apart and stay whole in
         // the front.
@@ -312,12 +312,9 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                 }
             }
         }
-        let along_u = (span_b.0 - span_a.1).max(span_a.0 - span_b.1);
+        let along_u = ranges_gap(span_a, span_b);
         match u {
-            Some(u) if along_u >= closest.distance => Gap {
-                bound: along_u,
-                along: *u,
-            },
+            Some(u) if along_u >= closest.distance => Gap::along(along_u, *u),
             _ => Gap::anywhere(least),
         }
     }
