@@ -206,12 +206,16 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
 }
 
 /// A triangle (A's frame) with what its lower bounds reuse: the range of its corners along the
-/// direction of the best pair (when there is one), its unit normal (none when it is degenerate)
-/// with their range along it, and its centroid.
+/// direction of the best pair (when there is one), and once a bound needs more than that
+/// ([`BoundedTriangle::complete`]), its unit normal (none when it is degenerate) with their range
+/// along it, and its centroid. Near the answer the direction's ranges settle most pairs, so the
+/// rest is worked out only for the triangles that need it.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct BoundedTriangle {
     pub(super) corners: Triangle,
     along_u: Option<(f64, f64)>,
+    /// Whether `normal` and `centroid` are worked out.
+    complete: bool,
     normal: Option<(Vector3<f64>, (f64, f64))>,
     centroid: Vector3<f64>,
 }
@@ -219,19 +223,26 @@ pub(super) struct BoundedTriangle {
 impl BoundedTriangle {
     /// `corners` bounded along `u` (unit), the direction of the best pair so far.
     pub(super) fn new(corners: Triangle, u: Option<&Vector3<f64>>) -> Self {
-        let [p, q, r] = &corners;
         let mut bounded = BoundedTriangle {
             corners,
-            along_u: None,
-            normal: None,
-            centroid: (p.coords + q.coords + r.coords) / 3.0,
+            ..BoundedTriangle::default()
         };
         bounded.along_u = u.map(|u| bounded.range(u));
-        bounded.normal = (q - p)
+        bounded
+    }
+
+    /// Works out its normal, the range along it and its centroid, once.
+    fn complete(&mut self) {
+        if self.complete {
+            return;
+        }
+        let [p, q, r] = &self.corners;
+        self.centroid = (p.coords + q.coords + r.coords) / 3.0;
+        self.normal = (q - p)
             .cross(&(r - p))
             .try_normalize(0.0)
-            .map(|n| (n, bounded.range(&n)));
-        bounded
+            .map(|n| (n, self.range(&n)));
+        self.complete = true;
     }
 
     /// Its corners' span along the direction it was bounded along, if any.
@@ -261,16 +272,20 @@ pub(super) fn ranges_gap((low_1, high_1): (f64, f64), (low_2, high_2): (f64, f64
 /// stopping at the first of at least `best`. The lines, cheapest first: the direction of the
 /// best pair (both ranges already known: near the answer, where most pairs are bounded, it is
 /// nearly the surfaces' normal), each triangle's normal (triangles face to face), the line
-/// through their centroids (side by side). Each gap is of both triangles' projections, so a
-/// normal that rounding has tilted still gives a true bound.
-pub(super) fn triangles_gap(t1: &BoundedTriangle, t2: &BoundedTriangle, best: f64) -> f64 {
+/// through their centroids (side by side); the triangles are completed only when the first
+/// falls short. Each gap is of both triangles' projections, so a normal that rounding has
+/// tilted still gives a true bound.
+pub(super) fn triangles_gap(t1: &mut BoundedTriangle, t2: &mut BoundedTriangle, best: f64) -> f64 {
     let mut gap = match (t1.along_u, t2.along_u) {
         (Some(range_1), Some(range_2)) => ranges_gap(range_1, range_2),
         _ => f64::MIN,
     };
-    if gap < best
-        && let Some((n, own)) = t2.normal
-    {
+    if gap >= best {
+        return gap;
+    }
+    t1.complete();
+    t2.complete();
+    if let Some((n, own)) = t2.normal {
         gap = gap.max(ranges_gap(t1.range(&n), own));
     }
     if gap < best
@@ -326,12 +341,12 @@ mod tests {
             );
             let exact = triangle_distance(&t1, &t2).distance;
             let u = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).try_normalize(0.0);
-            let (b1, b2) = (
-                BoundedTriangle::new(t1, u.as_ref()),
-                BoundedTriangle::new(t2, u.as_ref()),
-            );
             for best in [f64::INFINITY, exact, 0.5 * exact] {
-                let gap = triangles_gap(&b1, &b2, best);
+                let (mut b1, mut b2) = (
+                    BoundedTriangle::new(t1, u.as_ref()),
+                    BoundedTriangle::new(t2, u.as_ref()),
+                );
+                let gap = triangles_gap(&mut b1, &mut b2, best);
                 assert!(
                     gap <= exact + 1e-12 * (1.0 + reach),
                     "case {case}: gap {gap} over the distance {exact}: {t1:?} {t2:?}"

@@ -287,9 +287,9 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                 widen(&mut span_a, bounded);
             }
             for tb in lb.first..lb.first + lb.count {
-                let moved = BoundedTriangle::new(self.b_triangle_in_a(tb as usize), u);
+                let mut moved = BoundedTriangle::new(self.b_triangle_in_a(tb as usize), u);
                 widen(&mut span_b, &moved);
-                for (ta, triangle) in (start..).zip(&on_a[..count]) {
+                for (ta, triangle) in (start..).zip(&mut on_a[..count]) {
                     if closest.pair == Some([ta, tb]) {
                         // Measured already (the last query's closest pair, measured first): it
                         // is the best.
@@ -297,7 +297,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                         continue;
                     }
                     let tie = closest.tie();
-                    let gap = triangles_gap(triangle, &moved, tie);
+                    let gap = triangles_gap(triangle, &mut moved, tie);
                     if gap >= tie {
                         least = least.min(gap);
                         continue;
