@@ -16,7 +16,7 @@ mod within;
 pub use super::dop_tree::DistanceMemory;
 pub use brute_force::brute_force_distance;
 pub use closest::ClosestPoints;
-pub use triangles::{TriangleDistance, triangle_distance};
+pub use triangles::{TriangleDistance, separated_triangle_distance, triangle_distance};
 pub use within::{PairWithin, PairsWithin};
 
 #[cfg(test)]

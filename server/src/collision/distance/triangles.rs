@@ -38,6 +38,12 @@ pub fn triangle_distance(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
     best
 }
 
+/// The exact distance between `t1` and `t2` when they are known apart (a line separates their
+/// projections by a clear margin): the features alone, without the intersection test.
+pub fn separated_triangle_distance(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
+    closest_features(t1, t2)
+}
+
 /// The least of the edge-edge and corner-face distances: the distance of the two triangles when
 /// they do not intersect.
 fn closest_features(t1: &Triangle, t2: &Triangle) -> TriangleDistance {

@@ -143,7 +143,7 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     /// How much the `f32` offsets and their re-alignment may be off: the margin of offsets as
     /// large as the two trees' plus the translation between them.
     #[inline(always)]
-    fn dop_rounding(&self) -> f64 {
+    pub(super) fn dop_rounding(&self) -> f64 {
         let scale = f64::from(self.a.max_abs_offset)
             + f64::from(self.b.max_abs_offset)
             + self.translation.norm();

@@ -11,7 +11,9 @@ use super::bounds::{BoundedTriangle, Direction, Gap, ranges_gap, triangles_gap};
 use super::memory::BoundedPair;
 use super::queue::OpenQueue;
 use crate::collision::QueryStats;
-use crate::collision::distance::{TriangleDistance, triangle_distance};
+use crate::collision::distance::{
+    TriangleDistance, separated_triangle_distance, triangle_distance,
+};
 
 /// How many of a leaf's triangles are bounded at once: the default leaf size.
 const LEAF_CHUNK: usize = DEFAULT_LEAF_SIZE;
@@ -277,6 +279,8 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                 *span = (span.0.min(low), span.1.max(high));
             }
         };
+        // A gap beyond the coordinates' rounding proves two triangles apart.
+        let apart = self.dop_rounding();
         let end_a = la.first + la.count;
         // A's triangles a chunk at a time, each bounded once for all of B's.
         for start in (la.first..end_a).step_by(LEAF_CHUNK) {
@@ -303,7 +307,11 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
                         continue;
                     }
                     stats.tri_tests += 1;
-                    let found = triangle_distance(&triangle.corners, &moved.corners);
+                    let found = if gap > apart {
+                        separated_triangle_distance(&triangle.corners, &moved.corners)
+                    } else {
+                        triangle_distance(&triangle.corners, &moved.corners)
+                    };
                     least = least.min(found.distance);
                     closest.offer(found, [ta, tb]);
                     if closest.distance == 0.0 {
