@@ -141,7 +141,8 @@ impl<const K: usize> TreePair<'_, AffineRealign<K>> {
     }
 
     /// How much the `f32` offsets and their re-alignment may be off: the margin of offsets as
-    /// large as the two trees' plus the translation between them.
+    /// large as the two trees' plus the translation between them. Far above the `f64` rounding
+    /// of any corner in A's frame, it is also the gap that proves two triangles apart.
     #[inline(always)]
     pub(super) fn dop_rounding(&self) -> f64 {
         let scale = f64::from(self.a.max_abs_offset)
@@ -215,7 +216,7 @@ pub(super) struct BoundedTriangle {
     pub(super) corners: Triangle,
     along_u: Option<(f64, f64)>,
     /// Whether `normal` and `centroid` are worked out.
-    complete: bool,
+    completed: bool,
     normal: Option<(Vector3<f64>, (f64, f64))>,
     centroid: Vector3<f64>,
 }
@@ -233,7 +234,7 @@ impl BoundedTriangle {
 
     /// Works out its normal, the range along it and its centroid, once.
     fn complete(&mut self) {
-        if self.complete {
+        if self.completed {
             return;
         }
         let [p, q, r] = &self.corners;
@@ -242,7 +243,7 @@ impl BoundedTriangle {
             .cross(&(r - p))
             .try_normalize(0.0)
             .map(|n| (n, self.range(&n)));
-        self.complete = true;
+        self.completed = true;
     }
 
     /// Its corners' span along the direction it was bounded along, if any.
