@@ -47,67 +47,90 @@ pub fn separated_triangle_distance(t1: &Triangle, t2: &Triangle) -> TriangleDist
 /// The least of the edge-edge and corner-face distances: the distance of the two triangles when
 /// they do not intersect.
 fn closest_features(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
-    let mut best = TriangleDistance {
-        distance: f64::INFINITY,
-        on_first: t1[0],
-        on_second: t2[0],
-    };
-    let mut consider = |p: Point3<f64>, q: Point3<f64>| {
-        let d = (p - q).norm_squared();
-        if d < best.distance {
-            best = TriangleDistance {
-                distance: d,
-                on_first: p,
-                on_second: q,
-            };
-        }
-    };
-    for i in 0..3 {
-        for j in 0..3 {
-            let (p, q) = closest_on_segments(&t1[i], &t1[(i + 1) % 3], &t2[j], &t2[(j + 1) % 3]);
-            consider(p, q);
-        }
-    }
-    if let Some(face) = Face::of(t2) {
-        for corner in t1 {
-            if let Some(q) = face.foot_inside(corner) {
-                consider(*corner, q);
+    let (sides_1, sides_2) = (Sides::of(t1), Sides::of(t2));
+    // The squared distance of the nearest features so far, and their points.
+    let mut best = (f64::INFINITY, t1[0], t2[0]);
+    for ((p0, u), &a) in t1.iter().zip(&sides_1.edges).zip(&sides_1.squared) {
+        for ((q0, v), &c) in t2.iter().zip(&sides_2.edges).zip(&sides_2.squared) {
+            let (s, t, squared) = closest_parameters((u, a), (v, c), &(p0 - q0));
+            if squared < best.0 {
+                best = (squared, p0 + u * s, q0 + v * t);
             }
         }
     }
-    if let Some(face) = Face::of(t1) {
-        for corner in t2 {
-            if let Some(p) = face.foot_inside(corner) {
-                consider(p, *corner);
+    for (face, corners, face_first) in [(sides_2.face(), t1, false), (sides_1.face(), t2, true)] {
+        let Some(face) = face else { continue };
+        for corner in corners {
+            if let Some(foot) = face.foot_inside(corner) {
+                let squared = (corner - foot).norm_squared();
+                if squared < best.0 {
+                    best = match face_first {
+                        true => (squared, foot, *corner),
+                        false => (squared, *corner, foot),
+                    };
+                }
             }
         }
     }
-    best.distance = best.distance.sqrt();
-    best
+    TriangleDistance {
+        distance: best.0.sqrt(),
+        on_first: best.1,
+        on_second: best.2,
+    }
 }
 
-/// The closest points of segments `p0 p1` and `q0 q1` (either may be a single point): the
-/// minimum of the squared distance over both parameters, clamped to the segments.
-fn closest_on_segments(
-    p0: &Point3<f64>,
-    p1: &Point3<f64>,
-    q0: &Point3<f64>,
-    q1: &Point3<f64>,
-) -> (Point3<f64>, Point3<f64>) {
-    let u = p1 - p0;
-    let v = q1 - q0;
-    let w = p0 - q0;
-    let (a, b, c) = (u.dot(&u), u.dot(&v), v.dot(&v));
-    let (d, e) = (u.dot(&w), v.dot(&w));
-    let at = |s: f64, t: f64| (p0 + u * s, q0 + v * t);
+/// A triangle's edges (corner `i` to corner `i + 1`) and their squared lengths, worked out once
+/// for its nine edge pairs and its face.
+struct Sides<'t> {
+    corners: &'t Triangle,
+    edges: [Vector3<f64>; 3],
+    squared: [f64; 3],
+}
+
+impl<'t> Sides<'t> {
+    fn of(corners: &'t Triangle) -> Self {
+        let edges: [Vector3<f64>; 3] = std::array::from_fn(|i| corners[(i + 1) % 3] - corners[i]);
+        let squared = edges.map(|e| e.norm_squared());
+        Sides {
+            corners,
+            edges,
+            squared,
+        }
+    }
+
+    /// The triangle's face; `None` when it is degenerate (no area, or not finite).
+    fn face(&self) -> Option<Face<'_>> {
+        // (b - a) x (c - a), with c - a the third edge reversed.
+        let normal = self.edges[2].cross(&self.edges[0]);
+        let area2 = normal.norm_squared();
+        (area2 != 0.0 && area2.is_finite()).then_some(Face {
+            sides: self,
+            normal,
+            area2,
+        })
+    }
+}
+
+/// The parameters `(s, t)` of the closest points `p0 + u s` and `q0 + v t` of two segments
+/// (either may be a single point), from their directions and squared lengths `(u, a)`, `(v, c)`
+/// and `w = p0 - q0`, with the points' squared distance: the minimum of the convex quadratic
+/// over the unit square.
+fn closest_parameters(
+    (u, a): (&Vector3<f64>, f64),
+    (v, c): (&Vector3<f64>, f64),
+    w: &Vector3<f64>,
+) -> (f64, f64, f64) {
+    let gap = |s: f64, t: f64| (w + u * s - v * t).norm_squared();
+    let with_gap = |(s, t): (f64, f64)| (s, t, gap(s, t));
+    let (b, d, e) = (u.dot(v), u.dot(w), v.dot(w));
     if a == 0.0 && c == 0.0 {
-        return at(0.0, 0.0);
+        return with_gap((0.0, 0.0));
     }
     if a == 0.0 {
-        return at(0.0, (e / c).clamp(0.0, 1.0));
+        return with_gap((0.0, (e / c).clamp(0.0, 1.0)));
     }
     if c == 0.0 {
-        return at((-d / a).clamp(0.0, 1.0), 0.0);
+        return with_gap(((-d / a).clamp(0.0, 1.0), 0.0));
     }
     // The unclamped minimiser over s (for the best t), clamped; then t for that s, clamped, and
     // s again for that t: exact for the convex quadratic when the segments are not parallel.
@@ -125,23 +148,23 @@ fn closest_on_segments(
         t = 1.0;
         s = ((b - d) / a).clamp(0.0, 1.0);
     }
-    let interior = at(s, t);
+    let interior = with_gap((s, t));
     if denominator > PARALLEL * a * c {
         return interior;
     }
     // Nearly parallel: the division above loses its digits, but the minimum is then on the
     // square's border too (to within the rounding), at one of the four one-sided minimisers.
-    let gap = |pair: &(Point3<f64>, Point3<f64>)| (pair.0 - pair.1).norm_squared();
     [
-        at(0.0, (e / c).clamp(0.0, 1.0)),
-        at(1.0, ((b + e) / c).clamp(0.0, 1.0)),
-        at((-d / a).clamp(0.0, 1.0), 0.0),
-        at(((b - d) / a).clamp(0.0, 1.0), 1.0),
+        (0.0, (e / c).clamp(0.0, 1.0)),
+        (1.0, ((b + e) / c).clamp(0.0, 1.0)),
+        ((-d / a).clamp(0.0, 1.0), 0.0),
+        (((b - d) / a).clamp(0.0, 1.0), 1.0),
     ]
     .into_iter()
+    .map(with_gap)
     .fold(
         interior,
-        |best, pair| if gap(&pair) < gap(&best) { pair } else { best },
+        |best, other| if other.2 < best.2 { other } else { best },
     )
 }
 
@@ -149,42 +172,22 @@ fn closest_on_segments(
 /// parallel: the interior minimiser's division would lose most of its digits.
 const PARALLEL: f64 = 1e-12;
 
-/// The foot of `point` on the plane of `triangle` when it falls inside the triangle (closed);
-/// `None` outside or for a degenerate triangle.
-fn projection_inside(point: &Point3<f64>, triangle: &Triangle) -> Option<Point3<f64>> {
-    Face::of(triangle)?.foot_inside(point)
-}
-
 /// A triangle with a face: its normal (not unit) computed once for the feet of several points.
-struct Face<'t> {
-    corners: &'t Triangle,
+struct Face<'s> {
+    sides: &'s Sides<'s>,
     normal: Vector3<f64>,
     /// The normal's squared length: twice the area, squared.
     area2: f64,
 }
 
-impl<'t> Face<'t> {
-    /// The face of `triangle`; `None` when it is degenerate (no area, or not finite).
-    fn of(triangle: &'t Triangle) -> Option<Self> {
-        let [a, b, c] = triangle;
-        let normal = (b - a).cross(&(c - a));
-        let area2 = normal.norm_squared();
-        (area2 != 0.0 && area2.is_finite()).then_some(Face {
-            corners: triangle,
-            normal,
-            area2,
-        })
-    }
-
+impl Face<'_> {
     /// The foot of `point` on the face's plane when it falls inside the triangle (closed).
     fn foot_inside(&self, point: &Point3<f64>) -> Option<Point3<f64>> {
-        let [a, b, c] = self.corners;
+        let Sides { corners, edges, .. } = self.sides;
         let normal = &self.normal;
-        let foot = point - normal * (normal.dot(&(point - a)) / self.area2);
-        let inside = |from: &Point3<f64>, to: &Point3<f64>| {
-            (to - from).cross(&(foot - from)).dot(normal) >= 0.0
-        };
-        (inside(a, b) && inside(b, c) && inside(c, a)).then_some(foot)
+        let foot = point - normal * (normal.dot(&(point - corners[0])) / self.area2);
+        let inside = |i: usize| edges[i].cross(&(foot - corners[i])).dot(normal) >= 0.0;
+        (inside(0) && inside(1) && inside(2)).then_some(foot)
     }
 }
 
@@ -231,13 +234,16 @@ fn plane_crossing(
 
 /// Distance from `point` to the closed triangle.
 fn point_triangle_distance(point: &Point3<f64>, triangle: &Triangle) -> f64 {
-    if let Some(foot) = projection_inside(point, triangle) {
+    let sides = Sides::of(triangle);
+    if let Some(foot) = sides.face().and_then(|face| face.foot_inside(point)) {
         return (point - foot).norm();
     }
+    let still = (&Vector3::zeros(), 0.0);
     (0..3)
         .map(|i| {
-            let (p, q) = closest_on_segments(point, point, &triangle[i], &triangle[(i + 1) % 3]);
-            (p - q).norm()
+            let edge = (&sides.edges[i], sides.squared[i]);
+            closest_parameters(still, edge, &(point - triangle[i])).2
         })
         .fold(f64::INFINITY, f64::min)
+        .sqrt()
 }
