@@ -49,15 +49,7 @@ pub fn separated_triangle_distance(t1: &Triangle, t2: &Triangle) -> TriangleDist
 fn closest_features(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
     let (sides_1, sides_2) = (Sides::of(t1), Sides::of(t2));
     // The squared distance of the nearest features so far, and their points.
-    let mut best = (f64::INFINITY, t1[0], t2[0]);
-    for ((p0, u), &a) in t1.iter().zip(&sides_1.edges).zip(&sides_1.squared) {
-        for ((q0, v), &c) in t2.iter().zip(&sides_2.edges).zip(&sides_2.squared) {
-            let (s, t, squared) = closest_parameters((u, a), (v, c), &(p0 - q0));
-            if squared < best.0 {
-                best = (squared, p0 + u * s, q0 + v * t);
-            }
-        }
-    }
+    let mut best = nearest_edge_pair(&sides_1, &sides_2);
     for (face, corners, face_first) in [(sides_2.face(), t1, false), (sides_1.face(), t2, true)] {
         let Some(face) = face else { continue };
         for corner in corners {
@@ -77,6 +69,75 @@ fn closest_features(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
         on_first: best.1,
         on_second: best.2,
     }
+}
+
+/// The edge pairs of two triangles, edge `i` of the first with edge `j` of the second at
+/// `3 i + j`.
+const EDGE_PAIRS: usize = 9;
+
+/// One quantity of each of the nine edge pairs.
+type PerPair = [f64; EDGE_PAIRS];
+
+/// The nearest of the nine edge pairs: its points' squared distance and the points. The pairs
+/// are solved side by side, each quantity an array over them (vector code), as
+/// [`closest_parameters`] solves one, so the answers are the same to the bit; the rare pairs
+/// that its other branches decide (a degenerate edge, nearly parallel edges) are solved again
+/// by it. Ties go to the first pair.
+fn nearest_edge_pair(sides_1: &Sides, sides_2: &Sides) -> (f64, Point3<f64>, Point3<f64>) {
+    let u = per_pair(|i, _, x| sides_1.edges[i][x]);
+    let v = per_pair(|_, j, x| sides_2.edges[j][x]);
+    let w = per_pair(|i, j, x| sides_1.corners[i][x] - sides_2.corners[j][x]);
+    let a: PerPair = std::array::from_fn(|k| sides_1.squared[k / 3]);
+    let c: PerPair = std::array::from_fn(|k| sides_2.squared[k % 3]);
+    let dot = |p: &[PerPair; 3], q: &[PerPair; 3]| -> PerPair {
+        std::array::from_fn(|k| p[0][k] * q[0][k] + p[1][k] * q[1][k] + p[2][k] * q[2][k])
+    };
+    let (b, d, e) = (dot(&u, &v), dot(&u, &w), dot(&v, &w));
+    let (mut s, mut t) = ([0.0; EDGE_PAIRS], [0.0; EDGE_PAIRS]);
+    let mut regular = [true; EDGE_PAIRS];
+    for k in 0..EDGE_PAIRS {
+        let denominator = a[k] * c[k] - b[k] * b[k];
+        let interior = if denominator > 0.0 {
+            ((b[k] * e[k] - c[k] * d[k]) / denominator).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let t_interior = (b[k] * interior + e[k]) / c[k];
+        let at_low = (-d[k] / a[k]).clamp(0.0, 1.0);
+        let at_high = ((b[k] - d[k]) / a[k]).clamp(0.0, 1.0);
+        s[k] = if t_interior < 0.0 {
+            at_low
+        } else if t_interior > 1.0 {
+            at_high
+        } else {
+            interior
+        };
+        t[k] = t_interior.clamp(0.0, 1.0);
+        regular[k] = a[k] != 0.0 && c[k] != 0.0 && denominator > PARALLEL * a[k] * c[k];
+    }
+    for k in (0..EDGE_PAIRS).filter(|&k| !regular[k]) {
+        let at = |x: &[PerPair; 3]| Vector3::new(x[0][k], x[1][k], x[2][k]);
+        (s[k], t[k], _) = closest_parameters((&at(&u), a[k]), (&at(&v), c[k]), &at(&w));
+    }
+    let squared: PerPair = std::array::from_fn(|k| {
+        let gap = |x: usize| w[x][k] + u[x][k] * s[k] - v[x][k] * t[k];
+        gap(0) * gap(0) + gap(1) * gap(1) + gap(2) * gap(2)
+    });
+    let nearest = (1..EDGE_PAIRS).fold(
+        0,
+        |best, k| if squared[k] < squared[best] { k } else { best },
+    );
+    let (i, j) = (nearest / 3, nearest % 3);
+    (
+        squared[nearest],
+        sides_1.corners[i] + sides_1.edges[i] * s[nearest],
+        sides_2.corners[j] + sides_2.edges[j] * t[nearest],
+    )
+}
+
+/// The three coordinates of a quantity `f(i, j, x)` of each edge pair (`x` the coordinate).
+fn per_pair(f: impl Fn(usize, usize, usize) -> f64) -> [PerPair; 3] {
+    std::array::from_fn(|x| std::array::from_fn(|k| f(k / 3, k % 3, x)))
 }
 
 /// A triangle's edges (corner `i` to corner `i + 1`) and their squared lengths, worked out once
@@ -246,4 +307,57 @@ fn point_triangle_distance(point: &Point3<f64>, triangle: &Triangle) -> f64 {
         })
         .fold(f64::INFINITY, f64::min)
         .sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Point3, Vector3};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::{Sides, Triangle, closest_parameters, nearest_edge_pair};
+
+    /// The edge pairs solved one at a time, in order, the first nearest kept.
+    fn nearest_one_by_one(t1: &Triangle, t2: &Triangle) -> (f64, Point3<f64>, Point3<f64>) {
+        let (sides_1, sides_2) = (Sides::of(t1), Sides::of(t2));
+        let mut best = (f64::INFINITY, t1[0], t2[0]);
+        for ((p0, u), &a) in t1.iter().zip(&sides_1.edges).zip(&sides_1.squared) {
+            for ((q0, v), &c) in t2.iter().zip(&sides_2.edges).zip(&sides_2.squared) {
+                let (s, t, squared) = closest_parameters((u, a), (v, c), &(p0 - q0));
+                if squared < best.0 {
+                    best = (squared, p0 + u * s, q0 + v * t);
+                }
+            }
+        }
+        best
+    }
+
+    /// The side-by-side solver answers exactly as the one-pair solver, on random pairs and on
+    /// the cases its other branches decide: degenerate edges and parallel ones.
+    #[test]
+    fn edge_pairs_side_by_side_answer_as_one_by_one() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for case in 0..20_000 {
+            let mut corner =
+                |reach: f64| Point3::from(Vector3::from_fn(|_, _| rng.random_range(-reach..reach)));
+            let t1: Triangle = [corner(1.0), corner(1.0), corner(1.0)];
+            let shift = Vector3::new(0.0, 0.0, [0.0, 0.1, 2.0][case % 3]);
+            let mut t2: Triangle = [corner(1.5), corner(1.5), corner(1.5)];
+            match case % 8 {
+                // A copy moved: every edge parallel to its counterpart.
+                0 => t2 = t1.map(|p| p + shift + Vector3::new(0.3, 0.0, 0.0)),
+                // An edge of no length, or a triangle that is a point.
+                1 => t2[1] = t2[0],
+                2 => t2 = [t2[0]; 3],
+                // Corners in a line.
+                3 => t2[2] = t2[0] + (t2[1] - t2[0]) * 0.25,
+                _ => {}
+            }
+            let (side_by_side, one_by_one) = (
+                nearest_edge_pair(&Sides::of(&t1), &Sides::of(&t2)),
+                nearest_one_by_one(&t1, &t2),
+            );
+            assert_eq!(side_by_side, one_by_one, "case {case}: {t1:?} {t2:?}");
+        }
+    }
 }
