@@ -155,7 +155,8 @@ fn touching_and_intersecting_pairs_answer_zero_at_a_shared_point() {
     }
 }
 
-fn random_triangle(rng: &mut ChaCha8Rng, centre: Vector3<f64>, size: f64) -> Triangle {
+/// A triangle with corners within `size` of `centre` along each axis; one in eight degenerate.
+pub(super) fn random_triangle(rng: &mut ChaCha8Rng, centre: Vector3<f64>, size: f64) -> Triangle {
     let mut corner = || {
         let offset = Vector3::new(
             rng.random_range(-size..size),

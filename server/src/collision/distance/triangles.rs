@@ -312,9 +312,10 @@ fn point_triangle_distance(point: &Point3<f64>, triangle: &Triangle) -> f64 {
 #[cfg(test)]
 mod tests {
     use nalgebra::{Point3, Vector3};
-    use rand::{Rng, SeedableRng};
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
+    use super::super::tests::random_triangle;
     use super::{Sides, Triangle, closest_parameters, nearest_edge_pair};
 
     /// The edge pairs solved one at a time, in order, the first nearest kept.
@@ -338,11 +339,9 @@ mod tests {
     fn edge_pairs_side_by_side_answer_as_one_by_one() {
         let mut rng = ChaCha8Rng::seed_from_u64(9);
         for case in 0..20_000 {
-            let mut corner =
-                |reach: f64| Point3::from(Vector3::from_fn(|_, _| rng.random_range(-reach..reach)));
-            let t1: Triangle = [corner(1.0), corner(1.0), corner(1.0)];
+            let t1 = random_triangle(&mut rng, Vector3::zeros(), 1.0);
+            let mut t2 = random_triangle(&mut rng, Vector3::zeros(), 1.5);
             let shift = Vector3::new(0.0, 0.0, [0.0, 0.1, 2.0][case % 3]);
-            let mut t2: Triangle = [corner(1.5), corner(1.5), corner(1.5)];
             match case % 8 {
                 // A copy moved: every edge parallel to its counterpart.
                 0 => t2 = t1.map(|p| p + shift + Vector3::new(0.3, 0.0, 0.0)),
