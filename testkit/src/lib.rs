@@ -70,7 +70,13 @@ fn build_binaries() -> PathBuf {
         None => panic!("unexpected target directory {}", profile_dir.display()),
     };
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let status = Command::new(cargo)
+    let mut build = Command::new(cargo);
+    for (name, _) in std::env::vars_os() {
+        if name.to_str().is_some_and(set_by_cargo_for_this_test) {
+            build.env_remove(name);
+        }
+    }
+    let status = build
         .args([
             "build",
             "--profile",
@@ -87,6 +93,24 @@ fn build_binaries() -> PathBuf {
         "building the workspace's binaries and examples failed"
     );
     profile_dir
+}
+
+/// Whether `cargo test` set the variable `name` for this test process alone (its package's
+/// name, version and directories, its binaries, its `OUT_DIR`). Build scripts such as ring's
+/// declare some of them with `rerun-if-env-changed`, so a nested build that inherited them would
+/// see them changed from the outer `cargo test` and rebuild ring and everything above it (zenoh,
+/// the viewer, the bridge) once for every test package.
+fn set_by_cargo_for_this_test(name: &str) -> bool {
+    const EXACT: [&str; 6] = [
+        "CARGO",
+        "CARGO_CRATE_NAME",
+        "CARGO_PRIMARY_PACKAGE",
+        "CARGO_TARGET_TMPDIR",
+        "CARGO_RUSTC_CURRENT_DIR",
+        "OUT_DIR",
+    ];
+    const PREFIXES: [&str; 3] = ["CARGO_PKG_", "CARGO_BIN_", "CARGO_MANIFEST_"];
+    EXACT.contains(&name) || PREFIXES.iter().any(|prefix| name.starts_with(prefix))
 }
 
 /// A prefix for one test: the process id keeps concurrent test runs apart, the test name keeps
