@@ -26,9 +26,10 @@ pub struct TriangleDistance {
 
 /// The exact distance between `t1` and `t2` and their closest points.
 pub fn triangle_distance(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
-    let mut best = closest_features(t1, t2);
+    let (sides_1, sides_2) = (Sides::of(t1), Sides::of(t2));
+    let mut best = closest_features(&sides_1, &sides_2);
     if best.distance > 0.0 && triangles_intersect(t1, t2) {
-        let at = piercing_point(t1, t2);
+        let at = piercing_point(&sides_1, &sides_2);
         best = TriangleDistance {
             distance: 0.0,
             on_first: at,
@@ -41,15 +42,15 @@ pub fn triangle_distance(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
 /// The exact distance between `t1` and `t2` when they are known apart (a line separates their
 /// projections by a clear margin): the features alone, without the intersection test.
 pub fn separated_triangle_distance(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
-    closest_features(t1, t2)
+    closest_features(&Sides::of(t1), &Sides::of(t2))
 }
 
 /// The least of the edge-edge and corner-face distances: the distance of the two triangles when
 /// they do not intersect.
-fn closest_features(t1: &Triangle, t2: &Triangle) -> TriangleDistance {
-    let (sides_1, sides_2) = (Sides::of(t1), Sides::of(t2));
+fn closest_features(sides_1: &Sides, sides_2: &Sides) -> TriangleDistance {
     // The squared distance of the nearest features so far, and their points.
-    let mut best = nearest_edge_pair(&sides_1, &sides_2);
+    let mut best = nearest_edge_pair(sides_1, sides_2);
+    let (t1, t2) = (sides_1.corners, sides_2.corners);
     for (face, corners, face_first) in [(sides_2.face(), t1, false), (sides_1.face(), t2, true)] {
         let Some(face) = face else { continue };
         for corner in corners {
@@ -160,9 +161,14 @@ impl<'t> Sides<'t> {
     }
 
     /// The triangle's face; `None` when it is degenerate (no area, or not finite).
+    /// The normal `(b - a) x (c - a)` (`c - a` is the third edge reversed), of length twice the
+    /// area; zero for a degenerate triangle.
+    fn normal(&self) -> Vector3<f64> {
+        self.edges[2].cross(&self.edges[0])
+    }
+
     fn face(&self) -> Option<Face<'_>> {
-        // (b - a) x (c - a), with c - a the third edge reversed.
-        let normal = self.edges[2].cross(&self.edges[0]);
+        let normal = self.normal();
         let area2 = normal.norm_squared();
         (area2 != 0.0 && area2.is_finite()).then_some(Face {
             sides: self,
@@ -255,13 +261,13 @@ impl Face<'_> {
 /// A point shared by two intersecting triangles: where an edge of one meets the other (some edge
 /// does, unless they are coplanar, when the closest features already touch); of the crossings of
 /// the planes, the one nearest to the other triangle, so rounding picks the best candidate.
-fn piercing_point(t1: &Triangle, t2: &Triangle) -> Point3<f64> {
-    let mut best = (f64::INFINITY, t1[0]);
-    for (edges, other) in [(t1, t2), (t2, t1)] {
-        let normal = (other[1] - other[0]).cross(&(other[2] - other[0]));
+fn piercing_point(sides_1: &Sides, sides_2: &Sides) -> Point3<f64> {
+    let mut best = (f64::INFINITY, sides_1.corners[0]);
+    for (edges, other) in [(sides_1, sides_2), (sides_2, sides_1)] {
+        let normal = other.normal();
         for i in 0..3 {
-            let (p, q) = (edges[i], edges[(i + 1) % 3]);
-            let Some(crossing) = plane_crossing(&p, &q, &other[0], &normal) else {
+            let (p, q) = (edges.corners[i], edges.corners[(i + 1) % 3]);
+            let Some(crossing) = plane_crossing(&p, &q, &other.corners[0], &normal) else {
                 continue;
             };
             let gap = point_triangle_distance(&crossing, other);
@@ -293,9 +299,8 @@ fn plane_crossing(
     })
 }
 
-/// Distance from `point` to the closed triangle.
-fn point_triangle_distance(point: &Point3<f64>, triangle: &Triangle) -> f64 {
-    let sides = Sides::of(triangle);
+/// Distance from `point` to the closed triangle of `sides`.
+fn point_triangle_distance(point: &Point3<f64>, sides: &Sides) -> f64 {
     if let Some(foot) = sides.face().and_then(|face| face.foot_inside(point)) {
         return (point - foot).norm();
     }
@@ -303,7 +308,7 @@ fn point_triangle_distance(point: &Point3<f64>, triangle: &Triangle) -> f64 {
     (0..3)
         .map(|i| {
             let edge = (&sides.edges[i], sides.squared[i]);
-            closest_parameters(still, edge, &(point - triangle[i])).2
+            closest_parameters(still, edge, &(point - sides.corners[i])).2
         })
         .fold(f64::INFINITY, f64::min)
         .sqrt()
