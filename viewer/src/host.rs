@@ -39,13 +39,17 @@ impl Hosts {
     }
 
     /// Whether `authority` (a `Host` header's value, `host[:port]`) names this viewer.
+    ///
+    /// The port must be written as browsers write it, in plain decimal digits without leading
+    /// zeros: a number parser would also take `+8080` or `08080`, forms no browser sends, which
+    /// only a hand-made request would use to slip past the check.
     pub fn accepts(&self, authority: &str) -> bool {
-        let (host, port) = match authority.rsplit_once(':') {
+        let (host, port_matches) = match authority.rsplit_once(':') {
             // An IPv6 address without a port ends in `]`; its colons are not a port's.
-            Some((host, port)) if !port.contains(']') => (host, port.parse::<u16>().ok()),
-            _ => (authority, Some(self.default_port)),
+            Some((host, port)) if !port.contains(']') => (host, port == self.port.to_string()),
+            _ => (authority, self.port == self.default_port),
         };
-        if port != Some(self.port) {
+        if !port_matches {
             return false;
         }
         let host = host.to_ascii_lowercase();
@@ -90,6 +94,10 @@ mod tests {
             "192.168.1.5:8080",
             "localhost.:8080",
             "127.0.0.1:8080:8080",
+            "127.0.0.1:+8080",
+            "127.0.0.1:08080",
+            "127.0.0.1: 8080",
+            "127.0.0.1:",
             "",
             ":8080",
         ] {
