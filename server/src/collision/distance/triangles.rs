@@ -160,13 +160,13 @@ impl<'t> Sides<'t> {
         }
     }
 
-    /// The triangle's face; `None` when it is degenerate (no area, or not finite).
     /// The normal `(b - a) x (c - a)` (`c - a` is the third edge reversed), of length twice the
     /// area; zero for a degenerate triangle.
     fn normal(&self) -> Vector3<f64> {
         self.edges[2].cross(&self.edges[0])
     }
 
+    /// The triangle's face; `None` when it is degenerate (no area, or not finite).
     fn face(&self) -> Option<Face<'_>> {
         let normal = self.normal();
         let area2 = normal.norm_squared();
